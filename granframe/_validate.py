@@ -1,0 +1,107 @@
+"""Validators shared by the attrs configuration classes.
+
+Every message has the same shape -- ``<owner>: parameter '<name>' = <value!r>
+is invalid; <what is allowed>`` -- so a user always learns which parameter,
+which value and what would have been accepted.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from typing import Any, Callable
+
+import attrs
+
+
+def reject(owner: str, name: str, value: Any, allowed: str, *, error=ValueError):
+    """Raise ``error`` with granframe's standard message."""
+    shown = repr(value)
+    if len(shown) > 80:
+        shown = shown[:77] + "..."
+    raise error(f"{owner}: parameter '{name}' = {shown} is invalid; {allowed}")
+
+
+def _owner(instance) -> str:
+    return type(instance).__name__
+
+
+def is_real(value) -> bool:
+    """True for finite-or-not real scalars, excluding ``bool``."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def is_integer(value) -> bool:
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+
+
+def real(lower: float = -math.inf, upper: float = math.inf, *,
+         lower_open: bool = False, upper_open: bool = False) -> Callable:
+    """attrs validator: a finite real number in the given interval."""
+    lo = "(" if lower_open else "["
+    hi = ")" if upper_open else "]"
+    interval = f"{lo}{lower:g}, {upper:g}{hi}"
+
+    def validate(instance, attribute: attrs.Attribute, value):
+        owner = _owner(instance)
+        if not is_real(value):
+            reject(owner, attribute.name, value,
+                   f"must be a real number in {interval}", error=TypeError)
+        try:
+            v = float(value)
+        except OverflowError:
+            v = math.inf
+        if not math.isfinite(v):
+            reject(owner, attribute.name, value, f"must be finite, in {interval}")
+        if v < lower or v > upper or (lower_open and v == lower) or (upper_open and v == upper):
+            reject(owner, attribute.name, value, f"must lie in {interval}")
+
+    return validate
+
+
+def integer(lower: int | None = None, upper: int | None = None, *,
+            even: bool = False, choices: tuple[int, ...] | None = None) -> Callable:
+    """attrs validator: an integer (not bool) with optional bounds, parity or choices."""
+
+    def describe() -> str:
+        if choices is not None:
+            return f"must be one of {list(choices)}"
+        parts = ["an even integer" if even else "an integer"]
+        if lower is not None:
+            parts.append(f">= {lower}")
+        if upper is not None:
+            parts.append(f"<= {upper}")
+        return "must be " + " ".join(parts)
+
+    def validate(instance, attribute: attrs.Attribute, value):
+        owner = _owner(instance)
+        if not is_integer(value):
+            reject(owner, attribute.name, value, describe(), error=TypeError)
+        v = int(value)
+        bad = ((lower is not None and v < lower) or (upper is not None and v > upper)
+               or (even and v % 2) or (choices is not None and v not in choices))
+        if bad:
+            reject(owner, attribute.name, value, describe())
+
+    return validate
+
+
+def to_float(value):
+    """attrs converter: real numbers become ``float``; anything else passes to the validator."""
+    if not is_real(value):
+        return value
+    try:
+        return float(value)
+    except OverflowError:  # an integer too large for a float: the validator reports it
+        return value
+
+
+def to_int(value):
+    """attrs converter: integers (including NumPy's) become ``int``."""
+    return int(value) if is_integer(value) else value
+
+
+def boolean(instance, attribute: attrs.Attribute, value):
+    """attrs validator: exactly ``True`` or ``False``."""
+    if not isinstance(value, bool):
+        reject(_owner(instance), attribute.name, value, "must be True or False", error=TypeError)

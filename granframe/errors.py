@@ -1,0 +1,18 @@
+"""Exceptions and warnings raised by granframe.
+
+Invalid user input always raises :class:`ValueError` or :class:`TypeError`
+(built-in types, so callers need not import granframe to catch them); the
+subclasses below only add context for plugin problems.
+"""
+
+
+class PluginError(ValueError):
+    """A plugin could not be loaded, or two plugins claim the same name."""
+
+
+class UnknownNameError(ValueError):
+    """A registry was asked for a name nobody registered."""
+
+
+class AliasingWarning(UserWarning):
+    """A velocity grid was built below the anti-aliasing bound on explicit request."""

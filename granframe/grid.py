@@ -1,0 +1,207 @@
+"""Velocity grid of the Fourier spectral method and the moments of f on it.
+
+The conventions follow section 2 of the review (Carrillo, Hu, Ma, Rey):
+f is supported (approximately) in the ball B_S, the relative velocity g is
+truncated to B_R with R = 2S, and f is periodised on the box
+D_L = [-L, L]^d with
+
+    L >= (3 + sqrt(2)) S / 2                      (anti-aliasing bound, [FPT05])
+
+and approximated by the truncated Fourier series
+
+    f_N(v) = sum_{k=-N/2}^{N/2-1} fhat_k exp(i pi k.v / L).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import warnings
+
+import attrs
+import numpy
+
+from granframe import _validate as check
+from granframe.errors import AliasingWarning
+
+#: Factor c in the anti-aliasing bound L >= c S of the review, c = (3 + sqrt 2)/2.
+ANTI_ALIASING_FACTOR = (3.0 + math.sqrt(2.0)) / 2.0
+
+
+def _optional_positive(instance, attribute, value):
+    if value is not None:
+        check.real(0.0, math.inf, lower_open=True)(instance, attribute, value)
+
+
+@attrs.frozen
+class VelocityGrid:
+    """Uniform periodic velocity grid of ``n_modes**dimension`` points.
+
+    Parameters
+    ----------
+    dimension : int
+        Velocity dimension d, 2 or 3.
+    n_modes : int
+        Number N of Fourier modes (and grid points) per axis; even, at least 4.
+    support_radius : float
+        Radius S of the ball that (approximately) contains the support of f.
+    half_width : float, optional
+        Half width L of the periodic box [-L, L]^d. Defaults to the
+        anti-aliasing bound (3 + sqrt 2) S / 2 of [FPT05].
+    truncation_radius : float, optional
+        Radius R of the ball B_R to which the relative velocity is truncated.
+        Defaults to R = 2S.
+    allow_aliasing : bool
+        Must be ``True`` to accept ``half_width`` below the anti-aliasing bound
+        or ``truncation_radius`` below 2S; an :class:`AliasingWarning` is then
+        issued. Without it such values raise :class:`ValueError`.
+
+    Notes
+    -----
+    Grid points are v_j = -L + j h, j = 0, ..., N-1, with spacing h = 2L/N, so
+    that v = 0 is the point j = N/2. With this choice the Fourier coefficient
+    fhat_k = (2L)^{-d} int_{D_L} f(v) exp(-i pi k.v/L) dv is, by the
+    rectangle rule (spectrally accurate for periodic f),
+    fhat_k = (-1)^{k_1+...+k_d} DFT(f)_k / N^d.
+
+    References
+    ----------
+    .. [FPT05] F. Filbet, L. Pareschi, G. Toscani, "Accurate numerical methods
+       for the collisional motion of (heated) granular flows", J. Comput. Phys.
+       202 (2005).
+    """
+
+    dimension: int = attrs.field(converter=check.to_int, validator=check.integer(choices=(2, 3)))
+    n_modes: int = attrs.field(converter=check.to_int, validator=check.integer(lower=4, even=True))
+    support_radius: float = attrs.field(
+        converter=check.to_float, validator=check.real(0.0, math.inf, lower_open=True))
+    half_width: float = attrs.field(default=None, converter=check.to_float,
+                                    validator=_optional_positive)
+    truncation_radius: float = attrs.field(default=None, converter=check.to_float,
+                                           validator=_optional_positive)
+    allow_aliasing: bool = attrs.field(default=False, validator=check.boolean, kw_only=True)
+
+    def __attrs_post_init__(self):
+        S = self.support_radius
+        bound = ANTI_ALIASING_FACTOR * S
+        if self.half_width is None:
+            object.__setattr__(self, "half_width", bound)
+        if self.truncation_radius is None:
+            object.__setattr__(self, "truncation_radius", 2.0 * S)
+        override = "pass allow_aliasing=True to accept it knowingly"
+        problems = []
+        if self.half_width < bound * (1.0 - 1e-12):
+            problems.append((
+                "half_width", self.half_width,
+                f"must be >= (3+sqrt(2))/2 * support_radius = {bound:.6g} to avoid aliasing"))
+        if self.truncation_radius < 2.0 * S * (1.0 - 1e-12):
+            problems.append((
+                "truncation_radius", self.truncation_radius,
+                f"must be >= 2 * support_radius = {2.0 * S:.6g} so that no collision "
+                "between particles in the support is cut off"))
+        for name, value, allowed in problems:
+            if not self.allow_aliasing:
+                check.reject("VelocityGrid", name, value, f"{allowed}; {override}")
+            warnings.warn(f"VelocityGrid: {name} = {value!r} is below the safe bound: "
+                          f"{allowed}. Results may be aliased.", AliasingWarning, stacklevel=3)
+
+    # -- geometry -------------------------------------------------------------------
+    @property
+    def spacing(self) -> float:
+        """Grid spacing h = 2L/N."""
+        return 2.0 * self.half_width / self.n_modes
+
+    @property
+    def cell_volume(self) -> float:
+        """Volume h^d of one grid cell (the rectangle-rule weight)."""
+        return self.spacing ** self.dimension
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return (self.n_modes,) * self.dimension
+
+    @property
+    def safe_half_width(self) -> float:
+        """The anti-aliasing bound (3 + sqrt 2) S / 2."""
+        return ANTI_ALIASING_FACTOR * self.support_radius
+
+    def points(self, xp=numpy):
+        """1-D grid points v_j = -L + j h, j = 0..N-1, in namespace ``xp``."""
+        return -self.half_width + self.spacing * xp.arange(self.n_modes, dtype=xp.float64)
+
+    def wavenumbers(self, xp=numpy):
+        """Integer Fourier indices k in DFT order (0, 1, ..., N/2-1, -N/2, ..., -1).
+
+        The physical frequency of mode k is pi k / L.
+        """
+        n = self.n_modes
+        return xp.concatenate([xp.arange(n // 2), xp.arange(-n // 2, 0)]).astype(xp.float64)
+
+    def mesh(self, xp=numpy):
+        """Sparse (broadcastable) coordinate arrays v_1, ..., v_d of shape N^d."""
+        v = self.points(xp)
+        return tuple(
+            xp.reshape(v, tuple(self.n_modes if a == b else 1 for b in range(self.dimension)))
+            for a in range(self.dimension))
+
+    def speed_squared(self, xp=numpy):
+        """|v|^2 on the grid, shape N^d."""
+        return functools.reduce(lambda a, b: a + b, (c * c for c in self.mesh(xp)))
+
+    # -- moments ----------------------------------------------------------------------
+    def _check_shape(self, f):
+        if tuple(f.shape) != self.shape:
+            check.reject("VelocityGrid", "f.shape", tuple(f.shape),
+                         f"must equal the grid shape {self.shape}")
+
+    def mass(self, f, xp=numpy) -> float:
+        """rho = int f dv, by the rectangle rule h^d sum_j f_j."""
+        self._check_shape(f)
+        return float(xp.sum(f)) * self.cell_volume
+
+    def momentum(self, f, xp=numpy):
+        """rho u = int v f dv, a length-d NumPy array."""
+        self._check_shape(f)
+        return numpy.array([float(xp.sum(c * f)) for c in self.mesh(xp)]) * self.cell_volume
+
+    def bulk_velocity(self, f, xp=numpy):
+        """u = (int v f dv) / rho."""
+        return self.momentum(f, xp) / self.mass(f, xp)
+
+    def kinetic_energy(self, f, xp=numpy) -> float:
+        """E = int |v|^2/2 f dv (the review's E(f), section 1)."""
+        self._check_shape(f)
+        return 0.5 * float(xp.sum(self.speed_squared(xp) * f)) * self.cell_volume
+
+    def _central_moment(self, f, power: int, xp) -> float:
+        u = self.bulk_velocity(f, xp)
+        c2 = functools.reduce(lambda a, b: a + b,
+                              ((c - float(ui)) ** 2 for c, ui in zip(self.mesh(xp), u)))
+        return float(xp.sum(c2 ** (power // 2) * f)) * self.cell_volume
+
+    def temperature(self, f, xp=numpy) -> float:
+        """T = int |v - u|^2 f dv / (d rho)."""
+        return self._central_moment(f, 2, xp) / (self.dimension * self.mass(f, xp))
+
+    def kurtosis(self, f, xp=numpy) -> float:
+        """kappa = rho int |v-u|^4 f / (int |v-u|^2 f)^2; (d+2)/d for a Maxwellian."""
+        m2 = self._central_moment(f, 2, xp)
+        return self.mass(f, xp) * self._central_moment(f, 4, xp) / m2 ** 2
+
+    def sonine_a2(self, f, xp=numpy) -> float:
+        """Second Sonine coefficient a2 = d/(d+2) kappa - 1 (0 for a Maxwellian)."""
+        return self.dimension / (self.dimension + 2.0) * self.kurtosis(f, xp) - 1.0
+
+    def maxwellian(self, density=1.0, velocity=None, temperature=1.0, xp=numpy):
+        """M(v) = rho (2 pi T)^{-d/2} exp(-|v-u|^2/(2T)) sampled on the grid."""
+        u = numpy.zeros(self.dimension) if velocity is None else numpy.asarray(velocity, float)
+        if u.shape != (self.dimension,):
+            check.reject("VelocityGrid.maxwellian", "velocity", velocity,
+                         f"must have {self.dimension} components")
+        for name, value in (("density", density), ("temperature", temperature)):
+            if not check.is_real(value) or not (0.0 < float(value) < math.inf):
+                check.reject("VelocityGrid.maxwellian", name, value, "must be a positive real number")
+        c2 = functools.reduce(lambda a, b: a + b,
+                              ((c - float(ui)) ** 2 for c, ui in zip(self.mesh(xp), u)))
+        return (density * (2.0 * math.pi * temperature) ** (-self.dimension / 2)
+                * xp.exp(-c2 / (2.0 * temperature)))

@@ -1,0 +1,56 @@
+"""Hook specifications of granframe's plugin system.
+
+Each family of implementations has one hook. Every hook receives a
+``registry`` (a :class:`granframe.registry.FamilyRegistry` bound to the
+calling plugin) and returns nothing; the plugin calls
+``registry.add(name, factory, description=...)`` once per implementation.
+All implementations of a hook are called (there is no "first result wins"),
+each exactly once per plugin manager, in pluggy's order (last registered
+first). Plugins import the marker as ``from granframe import hookimpl``.
+"""
+
+import pluggy
+
+PROJECT = "granframe"
+hookspec = pluggy.HookspecMarker(PROJECT)
+hookimpl = pluggy.HookimplMarker(PROJECT)
+
+
+@hookspec
+def granframe_register_collision_kernels(registry):
+    """Add collision kernels B(|g|, cos theta, E).
+
+    A factory returns an object with the interface of
+    :class:`granframe.kernels.VariableHardSpheres`.
+    """
+
+
+@hookspec
+def granframe_register_restitution_laws(registry):
+    """Add restitution laws e(|g|); factories return
+    :class:`granframe.restitution.RestitutionLaw` instances."""
+
+
+@hookspec
+def granframe_register_quadratures(registry):
+    """Add quadrature rules; factories return
+    :class:`granframe.quadrature.Quadrature` instances (radial, circle or sphere)."""
+
+
+@hookspec
+def granframe_register_collision_operators(registry):
+    """Add collision operators; a factory is called as
+    ``factory(grid, kernel, restitution, backend, **options)`` and returns a
+    :class:`granframe.operators.CollisionOperator`."""
+
+
+@hookspec
+def granframe_register_time_integrators(registry):
+    """Add time integrators; factories return
+    :class:`granframe.integrators.TimeIntegrator` instances."""
+
+
+@hookspec
+def granframe_register_array_backends(registry):
+    """Add array backends; factories return
+    :class:`granframe.backends.ArrayBackend` instances."""

@@ -1,0 +1,223 @@
+"""Discovery and registries of implementations.
+
+:func:`get_plugin_manager` follows pluggy's host pattern: add the hook
+specifications, load third-party plugins from the entry-point group
+``granframe``, then register granframe's own built-in module, which goes
+through exactly the same hooks. :class:`Registries` calls every hook
+implementation once with a :class:`FamilyRegistry` bound to that plugin, so
+every registered name knows where it came from.
+
+Plugins listed (comma-separated entry-point names, ``builtin`` for
+granframe's own) in the environment variable ``GRANFRAME_DISABLE_PLUGINS``
+are not loaded.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib.metadata
+import inspect
+import os
+import re
+from typing import Any, Callable
+
+import attrs
+import pluggy
+
+from granframe import hookspecs
+from granframe._version import __version__
+from granframe.errors import PluginError, UnknownNameError
+
+ENTRY_POINT_GROUP = "granframe"
+DISABLE_ENV = "GRANFRAME_DISABLE_PLUGINS"
+BUILTIN_PLUGIN = "builtin"
+
+#: Family name -> hook name. Family names are the keys users see.
+FAMILIES = {
+    "collision_kernels": "granframe_register_collision_kernels",
+    "restitution_laws": "granframe_register_restitution_laws",
+    "quadratures": "granframe_register_quadratures",
+    "collision_operators": "granframe_register_collision_operators",
+    "time_integrators": "granframe_register_time_integrators",
+    "array_backends": "granframe_register_array_backends",
+}
+
+_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+
+
+@attrs.frozen
+class Source:
+    """Where an implementation comes from: plugin name, distribution and its version."""
+
+    plugin: str
+    distribution: str | None = None
+    version: str | None = None
+
+    def __str__(self) -> str:
+        if self.distribution is None:
+            return f"plugin '{self.plugin}'"
+        return f"plugin '{self.plugin}' of {self.distribution} {self.version}"
+
+
+@attrs.frozen
+class Entry:
+    """One registered implementation."""
+
+    family: str
+    name: str
+    factory: Callable = attrs.field(repr=False)
+    description: str
+    source: Source
+
+    def create(self, **params) -> Any:
+        """Call the factory, turning a wrong parameter name into a clear ``TypeError``."""
+        try:
+            signature = inspect.signature(self.factory)
+        except (TypeError, ValueError):  # builtins without a signature: let the call decide
+            signature = None
+        if signature is not None:
+            try:
+                signature.bind(**params)
+            except TypeError as exc:
+                accepted = [p for p in signature.parameters if not p.startswith("_")]
+                raise TypeError(f"{self.family} '{self.name}': {exc}; accepted parameters: "
+                                f"{', '.join(accepted) or 'none'}") from None
+        return self.factory(**params)
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "description": self.description,
+                "source": attrs.asdict(self.source)}
+
+
+def _first_line(text: str | None) -> str:
+    for line in (text or "").strip().splitlines():
+        if line.strip():
+            return line.strip()
+    return ""
+
+
+class FamilyRegistry:
+    """What a hook implementation receives: ``registry.add(name, factory, description=None)``."""
+
+    def __init__(self, registries: Registries, family: str, source: Source):
+        self._registries = registries
+        self.family = family
+        self.source = source
+
+    def add(self, name: str, factory: Callable, *, description: str | None = None) -> None:
+        """Register ``factory`` under ``name`` (snake_case, unique within the family).
+
+        ``description`` defaults to the first line of the factory's docstring.
+        """
+        if not isinstance(name, str) or not _NAME.match(name):
+            raise PluginError(f"{self.source}: {self.family} name {name!r} is invalid; "
+                              "names are snake_case: a lowercase letter then [a-z0-9_]")
+        if not callable(factory):
+            raise PluginError(f"{self.source}: factory for {self.family} '{name}' is not callable")
+        text = description if description is not None else _first_line(factory.__doc__)
+        self._registries._add(Entry(self.family, name, factory, text, self.source))
+
+
+class Registries:
+    """Every family's implementations, collected from one plugin manager."""
+
+    def __init__(self, plugin_manager: pluggy.PluginManager, sources: dict[str, Source]):
+        self.plugin_manager = plugin_manager
+        self._entries: dict[str, dict[str, Entry]] = {family: {} for family in FAMILIES}
+        for family, hook_name in FAMILIES.items():
+            for impl in getattr(plugin_manager.hook, hook_name).get_hookimpls():
+                source = sources.get(impl.plugin_name, Source(impl.plugin_name))
+                arguments = {"registry": FamilyRegistry(self, family, source)}
+                impl.function(*(arguments[name] for name in impl.argnames))
+
+    def _add(self, entry: Entry) -> None:
+        known = self._entries[entry.family]
+        if entry.name in known:
+            raise PluginError(f"{entry.family} '{entry.name}' is registered twice: by "
+                              f"{known[entry.name].source} and by {entry.source}; disable one "
+                              f"with {DISABLE_ENV}=<plugin name>")
+        known[entry.name] = entry
+
+    def _family(self, family: str) -> dict[str, Entry]:
+        if family not in self._entries:
+            raise UnknownNameError(f"parameter 'family' = {family!r} is invalid; "
+                                   f"known families: {', '.join(FAMILIES)}")
+        return self._entries[family]
+
+    def names(self, family: str) -> list[str]:
+        return sorted(self._family(family))
+
+    def entries(self, family: str) -> list[Entry]:
+        return [self._family(family)[n] for n in self.names(family)]
+
+    def get(self, family: str, name: str) -> Entry:
+        entries = self._family(family)
+        if not isinstance(name, str):
+            raise TypeError(f"{family}: name = {name!r} is invalid; must be a string, one of "
+                            f"{', '.join(sorted(entries)) or '(none registered)'}")
+        if name not in entries:
+            raise UnknownNameError(
+                f"{family}: name {name!r} is not registered; known: "
+                f"{', '.join(sorted(entries)) or '(none registered)'}")
+        return entries[name]
+
+    def create(self, family: str, name: str, **params) -> Any:
+        """Build implementation ``name`` of ``family`` with ``params``."""
+        return self.get(family, name).create(**params)
+
+    def to_json(self) -> dict:
+        """The stable JSON document printed by ``granframe plugins --json`` (docs/plugins.md)."""
+        return {
+            "schema": "granframe.plugins/1",
+            "granframe_version": __version__,
+            "families": {family: [e.to_dict() for e in self.entries(family)] for family in FAMILIES},
+        }
+
+
+def disabled_plugins() -> set[str]:
+    """Plugin names listed in ``GRANFRAME_DISABLE_PLUGINS``."""
+    return {n.strip() for n in os.environ.get(DISABLE_ENV, "").split(",") if n.strip()}
+
+
+def get_plugin_manager() -> tuple[pluggy.PluginManager, dict[str, Source]]:
+    """Plugin manager with entry-point plugins and the built-ins, plus their sources."""
+    from granframe import _builtin
+
+    pm = pluggy.PluginManager(hookspecs.PROJECT)
+    pm.add_hookspecs(hookspecs)
+    blocked = disabled_plugins()
+    for name in blocked:
+        pm.set_blocked(name)
+    sources: dict[str, Source] = {}
+    for ep in importlib.metadata.entry_points(group=ENTRY_POINT_GROUP):
+        if pm.is_blocked(ep.name):
+            continue
+        dist = ep.dist
+        source = Source(ep.name, dist.name if dist else None, dist.version if dist else None)
+        if ep.name in sources:
+            raise PluginError(f"two plugins are named '{ep.name}': {sources[ep.name]} and "
+                              f"{source}; uninstall one or disable with {DISABLE_ENV}")
+        try:
+            plugin = ep.load()
+        except Exception as exc:  # any import failure of third-party code, reported with its origin
+            raise PluginError(f"cannot load {source} (entry point {ep.value!r}): {exc!r}; "
+                              f"disable it with {DISABLE_ENV}={ep.name}") from exc
+        try:
+            pm.register(plugin, name=ep.name)
+        except pluggy.PluginValidationError as exc:
+            raise PluginError(f"{source} does not match granframe's hooks: {exc}") from exc
+        sources[ep.name] = source
+    if not pm.is_blocked(BUILTIN_PLUGIN):
+        pm.register(_builtin, name=BUILTIN_PLUGIN)
+        sources[BUILTIN_PLUGIN] = Source(BUILTIN_PLUGIN, "granframe", __version__)
+    try:
+        pm.check_pending()
+    except pluggy.PluginValidationError as exc:
+        raise PluginError(f"{exc} (a misspelled granframe_ hook?)") from exc
+    return pm, sources
+
+
+@functools.lru_cache(maxsize=1)
+def default_registries() -> Registries:
+    """The registries of this process (built on first use, then cached)."""
+    return Registries(*get_plugin_manager())
