@@ -15,7 +15,7 @@ import attrs
 import numpy
 import scipy.fft
 
-from granframe import _validate as check
+from granframe import validators as check
 
 
 def available_cpus() -> int:

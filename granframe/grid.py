@@ -21,7 +21,7 @@ import warnings
 import attrs
 import numpy
 
-from granframe import _validate as check
+from granframe import validators as check
 from granframe.errors import AliasingWarning
 
 #: Factor c in the anti-aliasing bound L >= c S of the review, c = (3 + sqrt 2)/2.

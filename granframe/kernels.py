@@ -15,7 +15,7 @@ from typing import Callable
 import attrs
 import numpy
 
-from granframe import _validate as check
+from granframe import validators as check
 
 #: Constant C of the review's numerical section: 1/(2 pi) in 2D, 1/(4 pi) in 3D
 #: (C_0 = 1/(2 pi) in Test 1; |g|/(4 pi) for 3D hard spheres).

@@ -20,7 +20,7 @@ import numpy
 import scipy.integrate
 import scipy.special
 
-from granframe import _validate as check
+from granframe import validators as check
 
 #: Orders accepted by :func:`scipy.integrate.lebedev_rule` (= exact degree).
 LEBEDEV_ORDERS = (3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31, 35, 41, 47, 53,

@@ -12,7 +12,7 @@ import math
 import attrs
 import numpy
 
-from granframe import _validate as check
+from granframe import validators as check
 
 
 class RestitutionLaw:
@@ -58,6 +58,8 @@ class Toscani(RestitutionLaw):
         return self.strength == 0.0 or self.exponent == 0.0
 
     def _evaluate(self, speed):
+        if self.strength == 0.0:  # elastic; avoids 0 * inf at r = 0 when gamma < 0
+            return numpy.ones_like(speed)
         return 1.0 / (1.0 + self.strength * speed ** self.exponent)
 
 

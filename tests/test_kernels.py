@@ -1,0 +1,53 @@
+import math
+
+import numpy
+import pytest
+
+import granframe
+from granframe.kernels import VariableHardSpheres, hard_spheres, maxwell_molecules
+
+
+def test_review_constants():
+    maxwell = maxwell_molecules()
+    assert maxwell.prefactor(2) == pytest.approx(1 / (2 * math.pi))
+    assert maxwell.prefactor(3) == pytest.approx(1 / (4 * math.pi))
+    assert maxwell(numpy.array([3.0]), 0.2, dimension=2)[0] == pytest.approx(1 / (2 * math.pi))
+    hs = hard_spheres()
+    assert hs(numpy.array([2.0]), -0.5, dimension=3)[0] == pytest.approx(2 / (4 * math.pi))
+    assert hs.exponent == 1.0 and maxwell.is_maxwellian and maxwell.is_isotropic
+
+
+def test_full_kernel():
+    kernel = VariableHardSpheres(0.5, angular=lambda c: 1 + 0.5 * c, energy_exponent=-0.5,
+                                 constant=2.0)
+    value = kernel(numpy.array([4.0]), numpy.array([0.5]), energy=9.0, dimension=3)
+    assert value[0] == pytest.approx(2.0 * 2.0 * 1.25 / 3.0)
+    assert not kernel.is_isotropic
+
+
+@pytest.mark.parametrize("kwargs,error,fragment", [
+    (dict(exponent=1.5), ValueError, "'exponent' = 1.5"),
+    (dict(exponent=-0.1), ValueError, "'exponent' = -0.1"),
+    (dict(exponent="hard"), TypeError, "'exponent' = 'hard'"),
+    (dict(constant=0.0), ValueError, "'constant' = 0.0"),
+    (dict(angular=3.0), TypeError, "'angular' = 3.0"),
+    (dict(angular=lambda c: c), ValueError, "'angular'.*bounded below by a positive"),
+    (dict(angular=lambda c: 1 / (1 - c)), ValueError, "'angular'"),
+    (dict(angular=lambda: 1.0), TypeError, "'angular'.*must accept"),
+    (dict(energy_exponent=math.inf), ValueError, "'energy_exponent' = inf"),
+])
+def test_invalid_kernels(kwargs, error, fragment):
+    with pytest.raises(error, match=fragment):
+        VariableHardSpheres(**kwargs)
+
+
+def test_energy_factor_needs_positive_energy():
+    kernel = VariableHardSpheres(energy_exponent=0.5)
+    assert kernel.energy_factor(4.0) == 2.0
+    with pytest.raises(ValueError, match="'energy' = -1.0"):
+        kernel.energy_factor(-1.0)
+
+
+def test_kernels_by_name():
+    assert granframe.collision_kernel("hard_spheres").exponent == 1.0
+    assert granframe.collision_kernel("vhs", exponent=0.5).exponent == 0.5
