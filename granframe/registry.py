@@ -125,7 +125,8 @@ class Registries:
         self.plugin_manager = plugin_manager
         self._entries: dict[str, dict[str, Entry]] = {family: {} for family in FAMILIES}
         for family, hook_name in FAMILIES.items():
-            for impl in getattr(plugin_manager.hook, hook_name).get_hookimpls():
+            # pluggy's call order: last registered first, so the built-ins come first.
+            for impl in reversed(getattr(plugin_manager.hook, hook_name).get_hookimpls()):
                 source = sources.get(impl.plugin_name, Source(impl.plugin_name))
                 arguments = {"registry": FamilyRegistry(self, family, source)}
                 impl.function(*(arguments[name] for name in impl.argnames))

@@ -26,7 +26,8 @@ def make_distribution(tmp_path, monkeypatch):
 
     def make(dist_name: str, module_name: str, source: str, entry_point: str | None = None):
         site = tmp_path / f"site_{dist_name}"
-        info = site / f"{dist_name}-0.1.dist-info"
+        # installers write the normalised name (PEP 491): "a-b" -> "a_b"
+        info = site / f"{dist_name.replace('-', '_')}-0.1.dist-info"
         info.mkdir(parents=True)
         (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {dist_name}\nVersion: 0.1\n")
         (info / "entry_points.txt").write_text(
