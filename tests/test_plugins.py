@@ -173,3 +173,10 @@ def test_cli_reports_a_broken_plugin_without_traceback(make_distribution):
     assert out.returncode == 2
     assert "granframe: error: cannot load plugin 'granframe_broken'" in out.stderr
     assert "Traceback" not in out.stderr
+
+
+def test_core_imports_neither_pyfftw_nor_cupy():
+    code = ("import sys, granframe; granframe.default_registries(); "
+            "print(sorted(m for m in ('pyfftw', 'cupy') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
