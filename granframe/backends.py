@@ -41,10 +41,24 @@ class ArrayBackend:
     given ``axes``; ``asarray`` moves data onto the backend's device,
     ``to_numpy`` back to host memory, and ``synchronize`` waits for queued
     work (a no-op on the CPU) so that timings are honest.
+
+    For hot loops, :meth:`real_fft` returns a reusable :class:`RealFFT` with
+    its own buffers, and ``concurrency`` says how many such pipelines the
+    backend runs well side by side (CPU threads; 1 on a GPU), each with
+    ``threads_per_pipeline`` FFT threads.
     """
 
     name: str
     xp: ModuleType
+    concurrency: int = 1
+
+    @property
+    def threads_per_pipeline(self) -> int:
+        return 1
+
+    def real_fft(self, shape, axes, threads: int = 1) -> "RealFFT":
+        """A planned real transform pair over ``axes`` of arrays of ``shape``."""
+        return RealFFT(self, tuple(shape), tuple(axes))
 
     def asarray(self, a, dtype=None):
         return self.xp.asarray(a, dtype=dtype)
@@ -66,6 +80,41 @@ class ArrayBackend:
 
     def irfftn(self, a, s, axes=None):
         raise NotImplementedError
+
+
+class RealFFT:
+    """Planned real-to-complex transform pair with buffers, reused across calls.
+
+    Write the real input into ``real`` and call :meth:`forward`, or the
+    half spectrum into ``spectrum`` and call :meth:`inverse`. Both return the
+    result array, which may be a buffer of the plan (valid until the next
+    call) or a new array; either may overwrite its input. Both directions are
+    *unnormalised*: ``forward`` gives X_k = sum_j x_j exp(-2 pi i j.k/N) and
+    ``inverse`` gives x_j = sum_k X_k exp(+2 pi i j.k/N), i.e. numpy's
+    ``irfftn`` times the number of points; callers fold the 1/N^d into their
+    own factors instead of paying an extra pass. This generic version calls
+    the backend's ``rfftn``/``irfftn``; backends with real planners (FFTW,
+    cuFFT) override it.
+    """
+
+    def __init__(self, backend: ArrayBackend, shape: tuple, axes: tuple):
+        xp = backend.xp
+        self.backend, self.shape, self.axes = backend, shape, axes
+        half = list(shape)
+        half[axes[-1]] = shape[axes[-1]] // 2 + 1
+        self.real = xp.zeros(shape, dtype=xp.float64)
+        self.spectrum = xp.zeros(tuple(half), dtype=xp.complex128)
+        self._sizes = tuple(shape[a] for a in axes)
+
+    def forward(self):
+        return self.backend.rfftn(self.real, axes=self.axes)
+
+    def inverse(self):
+        return self.backend.irfftn(self.spectrum, s=self._sizes, axes=self.axes) * self._count
+
+    @property
+    def _count(self) -> int:
+        return int(numpy.prod(self._sizes))
 
 
 @attrs.frozen
@@ -91,6 +140,10 @@ class NumpyBackend(ArrayBackend):
     def workers(self) -> int:
         return available_cpus() if self.threads is None else self.threads
 
+    @property
+    def concurrency(self) -> int:
+        return self.workers
+
     def fftn(self, a, axes=None):
         return scipy.fft.fftn(a, axes=axes, workers=self.workers)
 
@@ -102,3 +155,21 @@ class NumpyBackend(ArrayBackend):
 
     def irfftn(self, a, s, axes=None):
         return scipy.fft.irfftn(a, s=s, axes=axes, workers=self.workers)
+
+    def real_fft(self, shape, axes, threads: int = 1) -> RealFFT:
+        return _ScipyRealFFT(self, tuple(shape), tuple(axes), threads)
+
+
+class _ScipyRealFFT(RealFFT):
+    """pocketfft transforms on ``threads`` threads, overwriting the input."""
+
+    def __init__(self, backend, shape, axes, threads):
+        super().__init__(backend, shape, axes)
+        self.threads = threads
+
+    def forward(self):
+        return scipy.fft.rfftn(self.real, axes=self.axes, workers=self.threads)
+
+    def inverse(self):
+        return scipy.fft.irfftn(self.spectrum, s=self._sizes, axes=self.axes, norm="forward",
+                                workers=self.threads, overwrite_x=True)

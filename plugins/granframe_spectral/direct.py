@@ -1,0 +1,200 @@
+"""Direct Fourier-Galerkin method of Filbet, Pareschi and Toscani.
+
+Review (Carrillo, Hu, Ma, Rey), section 2.1; [FPT05] F. Filbet, L. Pareschi,
+G. Toscani, J. Comput. Phys. 202 (2005). O(N^{2d}) weights, O(N^{2d}) work:
+the slow, obviously-correct reference against which the fast method is checked.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy
+import scipy.special
+
+from granframe import validators as check
+from granframe.operators import CollisionOperator
+
+from granframe_spectral._common import (check_operands, energy_factor, isotropic_sphere_average,
+                                        radial_rule, surface_area)
+
+#: Bytes per (k, m) entry: weight (complex), gather index, triple key, gathered f-hat.
+BYTES_PER_ENTRY = 16 + 8 + 8 + 16
+
+
+def angular_coefficients(kernel, dimension: int, max_degree: int):
+    """Coefficients of b(cos theta) in the zonal basis, and the truncation degree.
+
+    3D: b_n = int_{-1}^{1} b(t) P_n(t) dt (Legendre); 2D:
+    beta_n = int_0^{2 pi} b(cos psi) cos(n psi) dpsi (Fourier). The series is
+    cut after the last coefficient above 1e-15 |b_0| (degree 0 when b is
+    constant).
+    """
+    if kernel.is_isotropic:
+        return numpy.array([2.0 if dimension == 3 else 2.0 * math.pi]), 0
+    n = numpy.arange(max_degree + 1)
+    if dimension == 3:
+        t, w = numpy.polynomial.legendre.leggauss(2 * max_degree + 64)
+        values = kernel.angular_part(t)
+        coeffs = numpy.array([w @ (values * scipy.special.eval_legendre(k, t)) for k in n])
+    else:
+        psi = 2.0 * math.pi * numpy.arange(4 * max_degree + 64) / (4 * max_degree + 64)
+        values = kernel.angular_part(numpy.cos(psi))
+        coeffs = numpy.array([values @ numpy.cos(k * psi) for k in n]) * (2 * math.pi / len(psi))
+    significant = numpy.nonzero(numpy.abs(coeffs) > 1e-15 * abs(coeffs[0]))[0]
+    return coeffs, int(significant.max())
+
+
+class DirectSpectral(CollisionOperator):
+    r"""Direct Fourier-Galerkin collision operator with exact angular integrals.
+
+    Parameters
+    ----------
+    grid, kernel, restitution, backend
+        See :class:`granframe.CollisionOperator`.
+    radial_points : int or None
+        Gauss-Legendre points for the rho-integral of the weights (default 2N + 16,
+        enough to resolve the Bessel oscillations to round-off).
+    angular_degree : int
+        Highest degree of the zonal expansion of b(cos theta) (anisotropic kernels).
+    memory_budget : int
+        Bytes the weights may use; a larger problem is refused with the memory it needs.
+
+    Notes
+    -----
+    On the Nyquist-free modes I = {k : |k_i| <= N/2 - 1},
+
+    .. math::
+
+        \hat Q_k = \sum_{l+m=k;\ l,m\in I} G(l,m)\hat f_l \hat f_m ,\qquad
+        G(l,m) = \int_{B_R} e^{-i\pi m\cdot g/L}\int_{S^{d-1}} B(|g|,\sigma\cdot\hat g)
+        \left(e^{i\pi\frac{1+e}{4L}(l+m)\cdot(g-|g|\sigma)}-1\right)d\sigma\,dg .
+
+    Both angular integrals are done exactly by the Funk-Hecke formula. With
+    x = a k, a = pi rho (1 + e(rho))/(4L), y = x - pi rho m / L and
+    cos(Delta) = x.y/(|x||y|), in 3D
+
+    .. math::
+
+        G = C\int_0^R \rho^{2+\lambda}\Big[8\pi^2\sum_n (2n+1) b_n j_n(|x|) j_n(|y|)
+        P_n(\cos\Delta) - 8\pi^2 b_0\, j_0(\pi\rho|m|/L)\Big] d\rho ,
+
+    and in 2D the same with 2 pi beta_n J_n J_n T_n(cos Delta) (n >= 0, the
+    n >= 1 terms doubled) and loss 2 pi beta_0 J_0(pi rho |m|/L). G depends on
+    k and m only through (|k|^2, |m|^2, k.m), which is evaluated once per
+    distinct triple.
+    """
+
+    def __init__(self, grid, kernel, restitution, backend, *, radial_points=None,
+                 angular_degree=48, memory_budget=4 * 2 ** 30):
+        super().__init__(grid, kernel, restitution, backend)
+        owner = "direct_spectral"
+        d, n = grid.dimension, grid.n_modes
+        radial_points = 2 * n + 16 if radial_points is None else radial_points
+        if not check.is_integer(radial_points) or radial_points < 1:
+            check.reject(owner, "radial_points", radial_points, "must be an integer >= 1")
+        if not check.is_integer(angular_degree) or angular_degree < 0:
+            check.reject(owner, "angular_degree", angular_degree, "must be an integer >= 0")
+        if not check.is_real(memory_budget) or memory_budget <= 0:
+            check.reject(owner, "memory_budget", memory_budget, "must be a positive number of bytes")
+        modes = (n - 1) ** d
+        self.memory_bytes = BYTES_PER_ENTRY * modes ** 2
+        if self.memory_bytes > memory_budget:
+            check.reject(owner, "memory_budget", memory_budget,
+                         f"is too small: the direct method needs {self.memory_bytes / 2 ** 30:.3g} "
+                         f"GiB for its {modes}^2 weights (d = {d}, N = {n}); use fast_spectral "
+                         "or a smaller N")
+        self.radial_points, self.angular_degree = int(radial_points), int(angular_degree)
+        self._build()
+
+    def _build(self):
+        grid, kernel, xp = self.grid, self.kernel, self.backend.xp
+        d, n, L = grid.dimension, grid.n_modes, grid.half_width
+        one = numpy.arange(-(n // 2) + 1, n // 2)
+        modes = numpy.stack(numpy.meshgrid(*([one] * d), indexing="ij"), axis=-1).reshape(-1, d)
+        count = len(modes)
+        # gather index of l = k - m (valid when every |l_i| <= N/2 - 1)
+        diff = modes[:, None, :] - modes[None, :, :]
+        valid = numpy.all(numpy.abs(diff) <= n // 2 - 1, axis=-1)
+        strides = (n - 1) ** numpy.arange(d - 1, -1, -1)
+        l_index = ((numpy.clip(diff, -(n // 2) + 1, n // 2 - 1) + n // 2 - 1) @ strides)
+        del diff
+        kk = numpy.einsum("ij,ij->i", modes, modes)
+        km = modes @ modes.T
+        top = int(kk.max())
+        key = (kk[:, None] * (top + 1) + kk[None, :]) * (2 * top + 1) + (km + top)
+        unique, inverse = numpy.unique(key, return_inverse=True)
+        del key
+        u_kk = unique // ((top + 1) * (2 * top + 1))
+        u_mm = (unique // (2 * top + 1)) % (top + 1)
+        u_km = unique % (2 * top + 1) - top
+        gain = self._gain_weights(numpy.sqrt(u_kk), numpy.sqrt(u_mm), u_km.astype(float))
+        loss = self._loss_weights(numpy.sqrt(numpy.arange(top + 1)))
+        weights = (gain[inverse.reshape(count, count)] - loss[kk][None, :]) * valid
+        self._weights = xp.asarray(weights)
+        self._l_index = xp.asarray(numpy.where(valid, l_index, 0))
+        # positions of the modes in numpy's FFT layout, and the (-1)^{k_1+...+k_d} factor
+        self._fft_index = tuple(xp.asarray(c) for c in (modes % n).T)
+        self._sign = xp.asarray((-1.0) ** modes.sum(axis=1))
+
+    def _radial(self):
+        rho, w = radial_rule(self.grid, self.radial_points)
+        d = self.grid.dimension
+        scale = w * rho ** (d - 1) * self.kernel.prefactor(d) * self.kernel.speed_part(rho)
+        return rho, scale
+
+    def _gain_weights(self, k_norm, m_norm, k_dot_m):
+        d, L = self.grid.dimension, self.grid.half_width
+        coeffs, degree = angular_coefficients(self.kernel, d, self.angular_degree)
+        rho, scale = self._radial()
+        e = self.restitution(rho)
+        out = numpy.zeros(k_norm.shape)
+        for r, s, e_r in zip(rho, scale, e):
+            a, b = math.pi * r * (1.0 + e_r) / (4.0 * L), math.pi * r / L
+            x = a * k_norm
+            y = numpy.sqrt(numpy.maximum(x ** 2 - 2 * a * b * k_dot_m + (b * m_norm) ** 2, 0.0))
+            if degree == 0:
+                series = coeffs[0] * isotropic_sphere_average(x, d) * isotropic_sphere_average(y, d)
+            else:
+                with numpy.errstate(invalid="ignore", divide="ignore"):
+                    cos = numpy.where((x > 0) & (y > 0), (x ** 2 - a * b * k_dot_m) / (x * y), 1.0)
+                cos = numpy.clip(cos, -1.0, 1.0)
+                series = numpy.zeros_like(x)
+                for order in range(degree + 1):
+                    if d == 3:
+                        term = ((2 * order + 1) * coeffs[order]
+                                * scipy.special.spherical_jn(order, x)
+                                * scipy.special.spherical_jn(order, y)
+                                * scipy.special.eval_legendre(order, cos))
+                    else:
+                        term = ((1 if order == 0 else 2) * coeffs[order]
+                                * scipy.special.jv(order, x) * scipy.special.jv(order, y)
+                                * scipy.special.eval_chebyt(order, cos))
+                    series += term
+            out += s * series
+        # 3D: 8 pi^2 sum (2n+1) b_n ...; 2D: 2 pi sum beta_n ...
+        return out * (8.0 * math.pi ** 2 if d == 3 else 2.0 * math.pi)
+
+    def _loss_weights(self, m_norm):
+        d, L = self.grid.dimension, self.grid.half_width
+        coeffs, _ = angular_coefficients(self.kernel, d, self.angular_degree)
+        omega = 2.0 * math.pi * coeffs[0] if d == 3 else coeffs[0]   # int b(sigma.ghat) dsigma
+        rho, scale = self._radial()
+        out = numpy.zeros(m_norm.shape)
+        for r, s in zip(rho, scale):
+            out += s * isotropic_sphere_average(math.pi * r / L * m_norm, d)
+        return out * omega * surface_area(d)
+
+    def __call__(self, f):
+        """Q_I(f, f) on the grid: the Galerkin sum over l + m = k (class notes)."""
+        check_operands("direct_spectral", self.grid, f, self.backend)
+        xp, backend = self.backend.xp, self.backend
+        total = float(self.grid.n_modes) ** self.grid.dimension
+        spectrum = backend.fftn(f)
+        f_hat = spectrum[self._fft_index] * self._sign / total
+        q_hat = xp.einsum("km,km,m->k", self._weights, f_hat[self._l_index], f_hat)
+        out_spectrum = xp.zeros(self.grid.shape, dtype=xp.complex128)
+        out_spectrum[self._fft_index] = q_hat * self._sign * total
+        q = xp.real(backend.ifftn(out_spectrum))
+        factor = energy_factor(self.kernel, self.grid, f, xp)
+        return q * factor if factor != 1.0 else q
