@@ -178,12 +178,13 @@ class FastSpectral(CollisionOperator):
                 g_loss += w * _separable_sum(f0, factors)
         self._g_loss = xp.asarray(g_loss / total)
 
-        # Work split: rho values round-robin over pipelines; pairs in batches.
+        # Work split: contiguous ranges of rho values over pipelines; pairs in batches.
         pipelines = max(1, min(backend.concurrency, len(rho)))
         per_pair = 8 * total + 16 * numpy.prod(half_shape) * (1 + self._terms_per_pair)
-        if batch is None:
-            batch = max(1, min(self.n_pairs, int(2 ** 21 // (16 * numpy.prod(half_shape)))))
-        batch = min(batch, self.n_pairs)
+        if batch is None:  # about 1 MiB per spectrum buffer: whole rho values on small grids
+            batch = max(1, int(2 ** 20 // (16 * numpy.prod(half_shape))))
+            if batch >= self.n_pairs:
+                batch -= batch % self.n_pairs
         needed = pipelines * batch * per_pair + 16 * numpy.prod(half_shape) * (len(rho) + 4)
         if needed > memory_budget:
             batch = int((memory_budget - 16 * numpy.prod(half_shape) * (len(rho) + 4))
@@ -193,7 +194,8 @@ class FastSpectral(CollisionOperator):
                              f"is too small: one pair per pipeline needs "
                              f"{needed / 2 ** 30:.3g} GiB")
         self.batch = batch
-        self._pipelines = [_Pipeline(self, list(range(p, len(rho), pipelines)))
+        bounds = numpy.linspace(0, len(rho), pipelines + 1).round().astype(int)
+        self._pipelines = [_Pipeline(self, (int(bounds[p]), int(bounds[p + 1])))
                            for p in range(pipelines)]
         self._executor = (concurrent.futures.ThreadPoolExecutor(pipelines, "granframe-fast")
                           if pipelines > 1 else None)
@@ -253,74 +255,94 @@ def _separable_sum(coef, factors):
 
 
 class _Pipeline:
-    """One worker's transforms and buffers; sums the gain over its rho values."""
+    """One worker's transforms and buffers; sums the gain over its rho values.
 
-    def __init__(self, op: FastSpectral, rho_indices):
+    Per batch of pairs (rho, +-ghat) it forms X = DFT(f) e^{-i pi rho k.ghat/L}
+    (the separable phase as an outer product of its axis-0 factor and the
+    factor over the other axes), s = IDFT(X) f_N, P = DFT(s), and adds
+    E * P to the accumulator, where E = sum_t c_t e^{i eta_t.k} is the sum of
+    the pair's separable angular terms, formed by one small matrix product.
+    """
+
+    def __init__(self, op: FastSpectral, rho_range):
         backend, grid = op.backend, op.grid
         xp = backend.xp
-        self.op, self.rho_indices = op, rho_indices
+        self.op, self.rho_range = op, rho_range
         d = grid.dimension
         self.batch = op.batch
         self.fft = backend.real_fft((op.batch,) + grid.shape, tuple(range(1, d + 1)),
                                     threads=backend.threads_per_pipeline)
-        n0, rest = op._half_shape[0], int(numpy.prod(op._half_shape[1:]))
-        self._n0, self._rest = n0, rest
-        self.terms = xp.zeros((n0, op.batch * 2 * op._sig.shape[0], rest), dtype=xp.complex128)
+        self._n0, self._rest = op._half_shape[0], int(numpy.prod(op._half_shape[1:]))
+        self.angular = xp.zeros((op.batch, self._n0, self._rest), dtype=xp.complex128)
         self.k = [xp.asarray(k) for k in op._k_axes]
         self.reps = xp.asarray(op._reps)
         self.coef = xp.asarray(op._coef)
         self.sig = xp.asarray(op._sig)
+        self.rho, self.a, self.b = (xp.asarray(v) for v in (op._rho, op._a, op._b))
+        self.radial_weights = op._radial_weights.reshape(-1, self._n0, self._rest)
 
     def _phases(self, eta, axis):
-        """exp(i eta k_axis) for every row of eta, shape (rows, len(k_axis))."""
-        return self.op.backend.xp.exp(1j * eta[:, axis:axis + 1] * self.k[axis][None, :])
+        """exp(i eta[..., axis] k_axis), shape eta.shape[:-1] + (len(k_axis),)."""
+        return self.op.backend.xp.exp(1j * eta[..., axis, None] * self.k[axis])
 
     def _tail(self, eta):
-        """Separable factor over axes 1..d-1 as (rows, prod(half_shape[1:]))."""
-        xp = self.op.backend.xp
-        d = eta.shape[1]
+        """Separable factor over axes 1..d-1, shape eta.shape[:-1] + (prod(half_shape[1:]),)."""
+        d = eta.shape[-1]
         tail = self._phases(eta, d - 1)
         for axis in range(d - 2, 0, -1):
-            tail = (self._phases(eta, axis)[:, :, None] * tail[:, None, :]).reshape(len(eta), -1)
+            tail = (self._phases(eta, axis)[..., :, None] * tail[..., None, :]).reshape(
+                eta.shape[:-1] + (-1,))
         return tail
 
     def run(self, spectrum, f_n):
         op, xp = self.op, self.op.backend.xp
         d, L = op.grid.dimension, op.grid.half_width
-        n_total = float(op.grid.n_modes) ** d
-        gain = xp.zeros(op._half_shape, dtype=xp.complex128)
+        inverse_count = 1.0 / float(op.grid.n_modes) ** d
+        gain = xp.zeros((self._n0, self._rest), dtype=xp.complex128)
         spec2 = spectrum.reshape(self._n0, self._rest)
-        n_sig = op._sig.shape[0]
-        for r in self.rho_indices:
-            rho, a, b = float(op._rho[r]), float(op._a[r]), float(op._b[r])
-            acc = xp.zeros((self._n0, 1, self._rest), dtype=xp.complex128)
-            for start in range(0, op.n_pairs, self.batch):
-                stop = min(start + self.batch, op.n_pairs)
-                count = stop - start
-                g = self.reps[start:stop]
-                # s = f(v - rho ghat): shift the spectrum, 1/N^d folded into the axis-0 factor
-                shift = -math.pi * rho / L * g
+        n_pairs = op.n_pairs
+        # blocks of q rho values x p pairs: all pairs of several rho at once (small grids),
+        # or a few pairs of one rho (large grids)
+        p = min(self.batch, n_pairs)
+        q = max(1, self.batch // n_pairs)
+        r_first, r_last = self.rho_range
+        for r0 in range(r_first, r_last, q):
+            rhos = slice(r0, min(r0 + q, r_last))
+            nq = rhos.stop - rhos.start
+            acc = xp.zeros((nq, self._n0, self._rest), dtype=xp.complex128)
+            for start in range(0, n_pairs, p):
+                stop = min(start + p, n_pairs)
+                np_ = stop - start
+                count = nq * np_
+                g = self.reps[start:stop]                                       # (np_, d)
+                rho = self.rho[rhos, None, None]                                 # (nq, 1, 1)
+                a, b = self.a[rhos, None, None], self.b[rhos, None, None]
+                # s = f(v - rho ghat): shift the spectrum; 1/N^d folded into the axis-0 factor
+                shift = (-math.pi / L * rho * g).reshape(count, d)
                 x = self.fft.spectrum[:count].reshape(count, self._n0, self._rest)
-                xp.multiply(spec2[None], self._tail(shift)[:, None, :], out=x)
-                x *= self._phases(shift, 0)[:, :, None] * (1.0 / n_total)
+                xp.multiply(spec2, self._tail(shift)[:, None, :], out=x)
+                x *= self._phases(shift, 0)[:, :, None] * inverse_count
                 s = self.fft.inverse()
-                s[:count] *= f_n[None]
+                s[:count] *= f_n
                 if count < self.batch:
                     s[count:] = 0.0
                 if s is not self.fft.real:
                     self.fft.real[...] = s
                 p_hat = self.fft.forward()[:count].reshape(count, self._n0, self._rest)
-                # angular terms: eta = alpha ghat - a sigma, alpha = a (+ghat) or b (-ghat)
-                eta = xp.concatenate([
-                    (a * g)[:, None, :] - a * self.sig[None, :, :],
-                    (b * g)[:, None, :] - a * self.sig[None, :, :]], axis=1)   # (count, 2S, d)
-                coef = self.coef[start:stop].reshape(count, 2, n_sig).reshape(count, 2 * n_sig)
-                eta = eta.reshape(count * 2 * n_sig, d)
-                tail = self._tail(eta).reshape(count, 2 * n_sig, self._rest)
-                terms = self.terms[:, :count * 2 * n_sig, :].reshape(
-                    self._n0, count, 2 * n_sig, self._rest)
-                xp.multiply(p_hat.transpose(1, 0, 2)[:, :, None, :], tail[None], out=terms)
-                head = self._phases(eta, 0) * coef.reshape(-1)[:, None]          # (terms, n0)
-                acc += xp.matmul(head.T[:, None, :], terms.reshape(self._n0, -1, self._rest))
-            gain += op._radial_weights[r] * acc.reshape(op._half_shape)
-        return gain
+                # angular terms of a pair: eta = alpha ghat - a sigma, alpha = a (+ghat), b (-ghat)
+                a4, b4 = a[..., None], b[..., None]
+                eta = xp.concatenate([a4 * g[:, None, :] - a4 * self.sig,
+                                      b4 * g[:, None, :] - a4 * self.sig], axis=2)
+                eta = eta.reshape(count, -1, d)                                  # (count, T, d)
+                coef = xp.broadcast_to(self.coef[None, start:stop], (nq,) + self.coef[start:stop].shape)
+                head = self._phases(eta, 0) * coef.reshape(count, -1)[:, :, None]
+                angular = self.angular[:count]
+                xp.matmul(head.transpose(0, 2, 1), self._tail(eta), out=angular)
+                angular *= p_hat
+                if np_ == 1:
+                    acc += angular
+                else:
+                    acc += angular.reshape(nq, np_, self._n0, self._rest).sum(axis=1)
+            acc *= self.radial_weights[rhos]
+            gain += acc[0] if nq == 1 else acc.sum(axis=0)
+        return gain.reshape(op._half_shape)
