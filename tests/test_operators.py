@@ -38,6 +38,8 @@ LAWS = [("constant", {"value": 0.2}), ("toscani", {"strength": 0.5, "exponent": 
 def test_mass_vanishes_to_round_off(backend, method, dimension, n_modes, law):
     grid = gf.VelocityGrid(dimension, n_modes, 3.0)
     kernel = gf.VariableHardSpheres(0.5, angular=lambda c: 1 + 0.4 * c, energy_exponent=0.5)
+    if method == "direct_spectral" and dimension == 3:
+        grid = gf.VelocityGrid(3, 8, 3.0)   # the direct method is O(N^6)
     op = build(method, grid, kernel, law, backend, **({"radial_points": 12} if method ==
                                                        "fast_spectral" else {}))
     f = grid.maxwellian(velocity=[0.3, -0.2, 0.1][:dimension], temperature=0.9)
@@ -46,7 +48,7 @@ def test_mass_vanishes_to_round_off(backend, method, dimension, n_modes, law):
     assert relative_mass(grid, q) <= 1e-13
 
 
-@pytest.mark.parametrize("dimension,sizes", [(2, (16, 24, 32, 48)), (3, (12, 16, 24))])
+@pytest.mark.parametrize("dimension,sizes", [(2, (16, 24, 32, 48)), (3, (16, 24, 32))])
 def test_bkw_spectral_convergence(dimension, sizes):
     errors = []
     for n in sizes:
@@ -61,73 +63,122 @@ def test_bkw_spectral_convergence(dimension, sizes):
 
 
 def test_bkw_direct_method_2d():
-    grid = gf.VelocityGrid(2, 32, 5.0)
-    f, dfdt = bkw(grid, 6.5)
-    q = build("direct_spectral", grid)(f)
-    fast = build("fast_spectral", grid, radial_points=48, sphere=gf.CircleTrapezoid(48))(f)
-    scale = numpy.abs(dfdt).max()
-    assert numpy.abs(q - dfdt).max() / scale < 1e-2
-    assert numpy.abs(q - fast).max() / scale < 1e-9    # same discretisation, up to aliasing
+    errors = []
+    for n in (16, 24, 32):
+        grid = gf.VelocityGrid(2, n, 5.0)
+        f, dfdt = bkw(grid, 6.5)
+        q = build("direct_spectral", grid)(f)
+        errors.append(numpy.abs(q - dfdt).max() / numpy.abs(dfdt).max())
+    assert errors[0] > 10 * errors[1] > 100 * errors[2] and errors[2] < 1e-2, errors
 
 
-@pytest.mark.parametrize("dimension,n_modes,sphere", [(2, 48, gf.CircleTrapezoid(16)),
-                                                      (3, 24, gf.SphereProduct(4))])
-@pytest.mark.parametrize("e", [0.0, 0.5, 0.9])
-def test_maxwell_energy_dissipation_is_exact(dimension, n_modes, sphere, e):
-    grid = gf.VelocityGrid(dimension, n_modes, 6.0)
-    op = build("fast_spectral", grid, law=("constant", {"value": e}), radial_points=30,
-               sphere=sphere)
-    f = grid.maxwellian(velocity=[0.2, -0.1, 0.3][:dimension], temperature=0.8)
+FAST_BACKEND = "pyfftw" if __import__("importlib").util.find_spec("pyfftw") else "numpy"
+
+
+@pytest.mark.parametrize("dimension,e", [(2, 0.0), (2, 0.5), (2, 0.9), (3, 0.5)])
+def test_maxwell_energy_dissipation_is_exact(dimension, e):
+    """With f resolved (Nyquist modes ~ e^-35) and no collision cut by R
+    ((1 + R^2/4T) e^{-R^2/4T} ~ 1e-12), the review's N_rho = 30 and M = 16 / 32 suffice."""
+    grid = gf.VelocityGrid(dimension, 64, 6.0)
+    op = build("fast_spectral", grid, law=("constant", {"value": e}), backend=FAST_BACKEND)
+    f = grid.maxwellian(velocity=[0.2, -0.1, 0.3][:dimension], temperature=1.2)
     rate = float(numpy.sum(op(f) * grid.speed_squared())) * grid.cell_volume
     exact = maxwell_energy_dissipation(grid, f, e, op.kernel)
     assert rate == pytest.approx(exact, rel=1e-8, abs=1e-13)
 
 
-def test_dissipation_with_speed_dependent_restitution():
-    """int Q |v|^2 = -(C |S|/8) sum_ij f_i f_j (1 - e(|v_i - v_j|)^2) |v_i - v_j|^2 h^{2d}."""
-    grid = gf.VelocityGrid(2, 32, 5.0)
+@pytest.mark.parametrize("dimension", [2, 3])
+def test_dissipation_with_anisotropic_maxwell_kernel(dimension):
+    """beta = int b(t)(1 - t) dsigma replaces |S^{d-1}| in the exact rate."""
+    grid = gf.VelocityGrid(dimension, 64, 6.0)
+    kernel = gf.VariableHardSpheres(0.0, angular=lambda c: 1 + 0.5 * c + 0.3 * c * c)
+    op = build("fast_spectral", grid, kernel, ("constant", {"value": 0.3}), backend=FAST_BACKEND)
+    f = grid.maxwellian(velocity=[0.2, -0.1, 0.3][:dimension], temperature=1.2)
+    rate = float(numpy.sum(op(f) * grid.speed_squared())) * grid.cell_volume
+    assert rate == pytest.approx(maxwell_energy_dissipation(grid, f, 0.3, kernel), rel=1e-8)
+
+
+def _tanh_dissipation_error(n_modes):
+    """int Q |v|^2 against -(C |S|/8) sum_ij f_i f_j (1 - e(|v_i - v_j|)^2) |v_i - v_j|^2 h^4."""
+    grid = gf.VelocityGrid(2, n_modes, 5.0)
     law = gf.restitution_law("tanh", asymptotic_value=0.2, centre=1.5, width=0.5)
-    op = build("fast_spectral", grid, law=law, radial_points=40, sphere=gf.CircleTrapezoid(24))
-    f = grid.maxwellian(temperature=0.7)
-    v = numpy.stack([c.ravel() * numpy.ones(grid.shape).ravel() for c in grid.mesh()], axis=1)
+    op = build("fast_spectral", grid, law=law, backend=FAST_BACKEND, radial_points=40,
+               sphere=gf.CircleTrapezoid(24))
+    f = grid.maxwellian(temperature=1.0)
+    v = numpy.stack([c.ravel() for c in numpy.meshgrid(grid.points(), grid.points(),
+                                                        indexing="ij")], axis=1)
     fv = f.ravel()
     u2 = ((v[:, None, :] - v[None, :, :]) ** 2).sum(-1)
-    inelastic = (1 - law(numpy.sqrt(u2)) ** 2) * u2
-    exact = -(1 / 8) * fv @ inelastic @ fv * grid.cell_volume ** 2   # C |S| = 1 in 2D
+    exact = -(1 / 8) * fv @ ((1 - law(numpy.sqrt(u2)) ** 2) * u2) @ fv * grid.cell_volume ** 2
     rate = float(numpy.sum(op(f) * grid.speed_squared())) * grid.cell_volume
-    assert rate == pytest.approx(exact, rel=1e-8)
+    return abs(rate / exact - 1)
 
 
-@pytest.mark.parametrize("dimension,sizes", [(2, (16, 24, 32)), (3, (8, 12, 16))])
+def test_dissipation_with_speed_dependent_restitution():
+    """e(|g|) enters through the rho-nodes; the rate converges with the grid (C |S| = 1 in 2D)."""
+    coarse, fine = _tanh_dissipation_error(48), _tanh_dissipation_error(64)
+    assert fine < coarse / 5 and fine < 1e-6, (coarse, fine)
+
+
+@pytest.mark.parametrize("dimension,sizes", [(2, (16, 24, 32, 48)), (3, (16, 24, 32))])
 def test_momentum_and_elastic_energy_converge(dimension, sizes):
+    """Quadrature refined with N (N_rho = N; M = N in 2D, Lebedev of degree ~ N in 3D)."""
     mom, energy = [], []
     for n in sizes:
         grid = gf.VelocityGrid(dimension, n, 5.0)
-        op = build("fast_spectral", grid, kernel="hard_spheres")
-        f = grid.maxwellian(density=0.7, velocity=[0.4, -0.3, 0.2][:dimension], temperature=0.6)
+        sphere = (gf.CircleTrapezoid(n) if dimension == 2
+                  else gf.Lebedev(min(o for o in gf.quadratures.LEBEDEV_ORDERS if o >= n - 1)))
+        op = build("fast_spectral", grid, kernel="hard_spheres", backend=FAST_BACKEND,
+                   radial_points=n, sphere=sphere)
+        t1, t2 = (0.6, 0.4) if dimension == 2 else (1.0, 0.8)
+        f = grid.maxwellian(density=0.7, velocity=[0.4, -0.3, 0.2][:dimension], temperature=t1)
         f = f + grid.maxwellian(density=0.3, velocity=[-0.5, 0.6, 0.0][:dimension],
-                                temperature=0.4)
+                                temperature=t2)
         q = op(f)
         scale = numpy.sum(numpy.abs(q)) * grid.cell_volume
         mom.append(numpy.abs(grid.momentum(q)).max() / scale)
         energy.append(abs(grid.kinetic_energy(q)) / scale)
-    assert mom[-1] < mom[0] / 10 and energy[-1] < energy[0] / 10, (mom, energy)
-    assert max(mom[-1], energy[-1]) < 1e-4, (mom, energy)
+    assert mom[-1] < mom[0] / 100 and energy[-1] < energy[0] / 100, (mom, energy)
+    assert max(mom[-1], energy[-1]) < 1e-3, (mom, energy)
 
 
 def test_fast_approaches_direct_as_quadrature_grows():
-    grid = gf.VelocityGrid(2, 24, 4.0)
+    grid = gf.VelocityGrid(2, 32, 5.0)
     law = ("toscani", {"strength": 0.3, "exponent": 1.0})
-    f = grid.maxwellian(velocity=[0.3, 0.0], temperature=0.8) + grid.maxwellian(
-        density=0.5, velocity=[-0.6, 0.4], temperature=0.5)
+    # resolved (Nyquist modes ~ e^-20), so the circular (fast) and Galerkin (direct)
+    # convolutions differ by less than the quadrature error
+    f = grid.maxwellian(velocity=[0.3, 0.0], temperature=2.5) + grid.maxwellian(
+        density=0.5, velocity=[-0.6, 0.4], temperature=2.0)
     reference = build("direct_spectral", grid, "hard_spheres", law)(f)
     differences = []
-    for n_radial, m in [(8, 8), (16, 12), (24, 16), (48, 32)]:
+    for n_radial, m in [(8, 8), (16, 16), (32, 32), (64, 64)]:
         q = build("fast_spectral", grid, "hard_spheres", law, radial_points=n_radial,
                   sphere=gf.CircleTrapezoid(m))(f)
         differences.append(numpy.abs(q - reference).max() / numpy.abs(reference).max())
     assert all(b < a for a, b in zip(differences, differences[1:])), differences
-    assert differences[-1] < 1e-8, differences
+    assert differences[-1] < 1e-7, differences
+
+
+@pytest.mark.parametrize("dimension,n_modes,temperature,spheres,floor", [
+    (2, 24, 1.5, [gf.CircleTrapezoid(8), gf.CircleTrapezoid(16), gf.CircleTrapezoid(48)], 1e-7),
+    # 3D direct weights fit in memory only for N <= 12, where f is not resolved: the
+    # circular (fast) and Galerkin (direct) sums then differ by ~2e-4, as for b = 1.
+    (3, 12, 2.0, [gf.Lebedev(5), gf.Lebedev(11), gf.Lebedev(23)], 1e-3)])
+def test_anisotropic_kernel_fast_against_direct(dimension, n_modes, temperature, spheres, floor):
+    """b(cos theta) = 1 + 0.5 cos theta + 0.3 cos^2 theta: sigma-quadrature (fast) against the
+    exact Funk-Hecke series (direct)."""
+    grid = gf.VelocityGrid(dimension, n_modes, 3.0)
+    kernel = gf.VariableHardSpheres(1.0, angular=lambda c: 1 + 0.5 * c + 0.3 * c * c)
+    law = ("constant", {"value": 0.6})
+    f = grid.maxwellian(velocity=[0.2, -0.1, 0.1][:dimension], temperature=temperature)
+    reference = build("direct_spectral", grid, kernel, law)(f)
+    differences = []
+    for rule in spheres:
+        q = build("fast_spectral", grid, kernel, law, radial_points=2 * n_modes, sphere=rule,
+                  sigma=rule)(f)
+        differences.append(numpy.abs(q - reference).max() / numpy.abs(reference).max())
+    assert differences[0] > differences[1] > differences[2], differences
+    assert differences[2] < floor, differences
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
@@ -176,18 +227,18 @@ def test_heated_maxwell_limited_by_truncation_radius():
 
 
 def test_heat_bath_is_the_laplacian():
-    grid = gf.VelocityGrid(2, 48, 6.0)
+    grid = gf.VelocityGrid(2, 64, 6.0)
     f = grid.maxwellian(temperature=1.3)
     v2 = grid.speed_squared()
     exact = 0.1 * f * (v2 / 1.3 ** 2 - 2 / 1.3)         # tau Delta of a Maxwellian
     numpy.testing.assert_allclose(HeatBath(grid, 0.1, gf.array_backend())(f), exact,
-                                  atol=1e-12 * numpy.abs(exact).max())
+                                  rtol=0, atol=1e-11 * numpy.abs(exact).max())
 
 
 def test_bad_operands_and_budgets():
     grid = gf.VelocityGrid(3, 32, 4.0)
     with pytest.raises(ValueError, match=r"direct_spectral: parameter 'memory_budget'.*needs "
-                                         r"1.*GiB.*use fast_spectral"):
+                                         r"[0-9.]+ GiB.*use fast_spectral"):
         build("direct_spectral", grid)
     small = gf.VelocityGrid(2, 8, 2.0)
     op = build("fast_spectral", small)

@@ -27,8 +27,8 @@ def angular_coefficients(kernel, dimension: int, max_degree: int):
 
     3D: b_n = int_{-1}^{1} b(t) P_n(t) dt (Legendre); 2D:
     beta_n = int_0^{2 pi} b(cos psi) cos(n psi) dpsi (Fourier). The series is
-    cut after the last coefficient above 1e-15 |b_0| (degree 0 when b is
-    constant).
+    cut after the last coefficient above 1e-13 |b_0|, the round-off level of
+    the rules computing them (degree 0 when b is constant).
     """
     if kernel.is_isotropic:
         return numpy.array([2.0 if dimension == 3 else 2.0 * math.pi]), 0
@@ -41,7 +41,7 @@ def angular_coefficients(kernel, dimension: int, max_degree: int):
         psi = 2.0 * math.pi * numpy.arange(4 * max_degree + 64) / (4 * max_degree + 64)
         values = kernel.angular_part(numpy.cos(psi))
         coeffs = numpy.array([values @ numpy.cos(k * psi) for k in n]) * (2 * math.pi / len(psi))
-    significant = numpy.nonzero(numpy.abs(coeffs) > 1e-15 * abs(coeffs[0]))[0]
+    significant = numpy.nonzero(numpy.abs(coeffs) > 1e-13 * abs(coeffs[0]))[0]
     return coeffs, int(significant.max())
 
 
