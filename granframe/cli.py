@@ -5,6 +5,8 @@ Commands
 plugins [--json]
     List every registered implementation per family with its source and a
     one-line description. The JSON form is documented in docs/plugins.md.
+bench [--json] [--backend NAME] [--threads T] [--repeats R] [--config D:N[:N_RHO:M]]
+    Time the fast operator against the FFT floor (docs/benchmarks.md).
 """
 
 from __future__ import annotations
@@ -34,6 +36,31 @@ def _plugins(args) -> int:
     return 0
 
 
+def _bench(args) -> int:
+    from granframe import bench
+    from granframe.registry import default_registries
+
+    backend = args.backend
+    if backend is None:
+        backend = "pyfftw" if "pyfftw" in default_registries().names("array_backends") else "numpy"
+        try:
+            default_registries().create("array_backends", backend)
+        except ValueError:
+            backend = "numpy"
+    configs = ([bench.parse_config(c) for c in args.config] if args.config
+               else list(bench.DEFAULT_CONFIGS))
+    records = bench.run(configs, backend, args.threads, args.repeats)
+    if args.json:
+        json.dump({"schema": "granframe.bench/1", "granframe_version": __version__,
+                   "records": records}, sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        print(f"fast_spectral, backend {backend}, {args.threads} threads, float64, "
+              f"median of {args.repeats} evaluations after warm-up")
+        print(bench.table(records))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="granframe",
@@ -43,6 +70,15 @@ def build_parser() -> argparse.ArgumentParser:
     plugins = commands.add_parser("plugins", help="list registered implementations per family")
     plugins.add_argument("--json", action="store_true", help="machine-readable output")
     plugins.set_defaults(handler=_plugins)
+    bench = commands.add_parser("bench", help="time the fast operator against the FFT floor")
+    bench.add_argument("--json", action="store_true", help="machine-readable output")
+    bench.add_argument("--backend", default=None, help="array backend (default: pyfftw if "
+                       "installed, else numpy)")
+    bench.add_argument("--threads", type=int, default=2, help="threads (default 2)")
+    bench.add_argument("--repeats", type=int, default=7, help="timed evaluations (default 7)")
+    bench.add_argument("--config", action="append", metavar="D:N[:N_RHO:M]",
+                       help="configuration (repeatable); default: the review's five")
+    bench.set_defaults(handler=_bench)
     return parser
 
 

@@ -1,0 +1,128 @@
+"""``granframe bench``: time one evaluation of a collision operator against the FFT floor.
+
+Each configuration runs in a fresh subprocess so that its peak resident memory
+is its own. Reported per configuration: precomputation time, the median of
+``repeats`` evaluations after one warm-up, the FFT floor -- the median time of
+one real forward + inverse transform of size N^d on the same backend and
+threads, times the number of (rho, ghat) pairs the operator transforms -- the
+ratio time/floor, and the peak resident set size of the process.
+"""
+
+from __future__ import annotations
+
+import json
+import resource
+import subprocess
+import sys
+import time
+
+import numpy
+
+#: The review's configurations (section 3): (dimension, N, N_rho, M).
+DEFAULT_CONFIGS = ((2, 64, 32, 16), (2, 128, 32, 16), (3, 16, 30, 32), (3, 32, 30, 32),
+                   (3, 64, 30, 32))
+
+
+def _median_time(function, repeats: int, synchronize) -> float:
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        synchronize()
+        times.append(time.perf_counter() - start)
+    return float(numpy.median(times))
+
+
+def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int,
+            backend: str, threads: int, repeats: int, method: str = "fast_spectral") -> dict:
+    """Build and time one operator in this process; returns a JSON-ready record."""
+    import granframe as gf
+    from granframe.quadratures import CircleTrapezoid, SphereProduct
+
+    baseline = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    grid = gf.VelocityGrid(dimension, n_modes, 4.0)
+    array_backend = gf.array_backend(backend, threads=threads)
+    if dimension == 2:
+        sphere = CircleTrapezoid(sphere_points)
+    else:
+        n_polar = int(round((sphere_points / 2) ** 0.5))
+        if 2 * n_polar ** 2 != sphere_points:
+            raise ValueError(f"bench: parameter 'sphere_points' = {sphere_points} is invalid; "
+                             "in 3D it must be 2 n^2 (Gauss product rule), e.g. 32")
+        sphere = SphereProduct(n_polar)
+    start = time.perf_counter()
+    operator = gf.collision_operator(method, grid, gf.collision_kernel("hard_spheres"),
+                                     gf.restitution_law("constant", value=0.8),
+                                     backend=array_backend, radial_points=radial_points,
+                                     sphere=sphere)
+    precompute = time.perf_counter() - start
+    f = array_backend.asarray(grid.maxwellian(temperature=1.0))
+    operator(f)
+    array_backend.synchronize()
+    evaluation = _median_time(lambda: operator(f), repeats, array_backend.synchronize)
+    fft = array_backend.real_fft(grid.shape, tuple(range(dimension)), threads=threads)
+    fft.real[...] = f
+
+    def pair():
+        fft.forward()
+        fft.inverse()
+
+    pair()
+    single = _median_time(pair, max(20, 3 * repeats), array_backend.synchronize)
+    floor = single * operator.transform_pairs
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return {
+        "dimension": dimension, "n_modes": n_modes, "radial_points": radial_points,
+        "sphere_points": sphere_points, "method": method, "backend": backend, "threads": threads,
+        "transform_pairs": operator.transform_pairs, "precompute_s": precompute,
+        "evaluation_s": evaluation, "repeats": repeats, "fft_pair_s": single, "floor_s": floor,
+        "time_over_floor": evaluation / floor, "peak_rss_gib": peak / 2 ** 20,
+        "baseline_rss_gib": baseline / 2 ** 20,
+    }
+
+
+def run(configs, backend: str, threads: int, repeats: int) -> list[dict]:
+    """Measure each configuration in its own subprocess."""
+    records = []
+    for dimension, n_modes, radial, sphere in configs:
+        command = [sys.executable, "-c",
+                   "import json, sys; from granframe.bench import measure; "
+                   f"print(json.dumps(measure({dimension}, {n_modes}, {radial}, {sphere}, "
+                   f"{backend!r}, {threads}, {repeats})))"]
+        done = subprocess.run(command, capture_output=True, text=True)
+        if done.returncode != 0:
+            raise ValueError(f"bench: configuration d={dimension} N={n_modes} failed:\n"
+                             f"{done.stderr.strip()}")
+        records.append(json.loads(done.stdout.strip().splitlines()[-1]))
+    return records
+
+
+def table(records) -> str:
+    """Markdown table of bench records."""
+    lines = ["| d | N | N_rho | M | pairs | precompute | time / eval | FFT floor | time/floor "
+             "| peak RSS |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in records:
+        lines.append(
+            f"| {r['dimension']} | {r['n_modes']} | {r['radial_points']} | {r['sphere_points']} "
+            f"| {r['transform_pairs']} | {r['precompute_s']:.2f} s | {_ms(r['evaluation_s'])} "
+            f"| {_ms(r['floor_s'])} | {r['time_over_floor']:.2f} | {r['peak_rss_gib']:.2f} GiB |")
+    return "\n".join(lines)
+
+
+def _ms(seconds: float) -> str:
+    return f"{seconds * 1e3:.1f} ms" if seconds < 1 else f"{seconds:.2f} s"
+
+
+def parse_config(text: str):
+    """'D:N' or 'D:N:NRHO:M' -> (d, N, N_rho, M) with the review's quadrature by default."""
+    parts = text.split(":")
+    try:
+        values = [int(p) for p in parts]
+    except ValueError:
+        values = []
+    if len(values) not in (2, 4) or values[0] not in (2, 3):
+        raise ValueError(f"bench: parameter 'config' = {text!r} is invalid; use D:N or "
+                         "D:N:N_RHO:M with D in {2, 3}, e.g. 3:32 or 3:32:30:32")
+    if len(values) == 2:
+        values += [32, 16] if values[0] == 2 else [30, 32]
+    return tuple(values)
