@@ -11,6 +11,7 @@ import concurrent.futures
 import math
 
 import numpy
+import threadpoolctl
 
 from granframe import validators as check
 from granframe.operators import CollisionOperator
@@ -194,6 +195,7 @@ class FastSpectral(CollisionOperator):
                              f"is too small: one pair per pipeline needs "
                              f"{needed / 2 ** 30:.3g} GiB")
         self.batch = batch
+        self._tables = _PhaseTables(self, memory_budget)
         bounds = numpy.linspace(0, len(rho), pipelines + 1).round().astype(int)
         self._pipelines = [_Pipeline(self, (int(bounds[p]), int(bounds[p + 1])))
                            for p in range(pipelines)]
@@ -220,7 +222,11 @@ class FastSpectral(CollisionOperator):
         if self._executor is None:
             gain = self._pipelines[0].run(spectrum, f_n)
         else:
-            parts = list(self._executor.map(lambda p: p.run(spectrum, f_n), self._pipelines))
+            # one BLAS thread per pipeline: a threaded BLAS called from both pipelines at
+            # once contends for its own pool and made evaluation 2.5x slower (N = 64, 3D)
+            with _BLAS.limit(limits=1, user_api="blas"):
+                parts = list(self._executor.map(lambda p: p.run(spectrum, f_n),
+                                                self._pipelines))
             gain = parts[0]
             for part in parts[1:]:
                 gain += part
@@ -244,6 +250,9 @@ class FastSpectral(CollisionOperator):
             executor.shutdown(wait=False)
 
 
+_BLAS = threadpoolctl.ThreadpoolController()
+
+
 def _separable_sum(coef, factors):
     """sum_p coef_p prod_i factors_i[p, k_i] on the tensor grid (k_0, ..., k_{d-1})."""
     d = len(factors)
@@ -252,6 +261,67 @@ def _separable_sum(coef, factors):
         tail = (f[:, :, None] * tail[:, None, :]).reshape(len(coef), -1)
     result = factors[0].T @ tail
     return result.reshape(tuple(fa.shape[1] for fa in factors)) if d > 1 else result
+
+
+class _PhaseTables:
+    """Separable phase factors of every (rho, ghat) pair, per rho.
+
+    For rho values ``rhos`` it returns, over all pairs,
+    ``shift_head`` (q, P, N0) and ``shift_tail`` (q, P, rest): the factors of
+    e^{-i pi rho k.ghat/L} / N^d along axis 0 and over the other axes, and
+    ``angular_head`` (q, P, N0, T), ``angular_tail`` (q, P, T, rest): the
+    factors of the pair's T angular terms c_t e^{i eta_t.k}. They depend on
+    the grid and quadrature only, so they are precomputed when they fit in a
+    quarter of the memory budget and otherwise formed once per rho block.
+    """
+
+    def __init__(self, op: FastSpectral, memory_budget: int):
+        xp = op.backend.xp
+        self.op, self.xp = op, xp
+        self.k = [xp.asarray(k) for k in op._k_axes]
+        self.reps = xp.asarray(op._reps)
+        self.coef = xp.asarray(op._coef)
+        self.sig = xp.asarray(op._sig)
+        self.rho, self.a, self.b = (xp.asarray(v) for v in (op._rho, op._a, op._b))
+        n0, rest = op._half_shape[0], int(numpy.prod(op._half_shape[1:]))
+        terms = self.coef.shape[1]
+        size = 16 * len(op._rho) * op.n_pairs * (n0 + rest) * (1 + terms)
+        self.nbytes = size if size <= memory_budget // 4 else 0
+        self._all = self.compute(slice(0, len(op._rho))) if self.nbytes else None
+
+    def __call__(self, rhos: slice):
+        if self._all is not None:
+            return tuple(t[rhos] for t in self._all)
+        return self.compute(rhos)
+
+    def _phases(self, eta, axis):
+        """exp(i eta[..., axis] k_axis), shape eta.shape[:-1] + (len(k_axis),)."""
+        return self.xp.exp(1j * eta[..., axis, None] * self.k[axis])
+
+    def _tail(self, eta):
+        """Separable factor over axes 1..d-1, shape eta.shape[:-1] + (prod(half_shape[1:]),)."""
+        d = eta.shape[-1]
+        tail = self._phases(eta, d - 1)
+        for axis in range(d - 2, 0, -1):
+            tail = (self._phases(eta, axis)[..., :, None] * tail[..., None, :]).reshape(
+                eta.shape[:-1] + (-1,))
+        return tail
+
+    def compute(self, rhos: slice):
+        op, xp = self.op, self.xp
+        d, L = op.grid.dimension, op.grid.half_width
+        inverse_count = 1.0 / float(op.grid.n_modes) ** d
+        g = self.reps[None]                                                    # (1, P, d)
+        shift = -math.pi / L * self.rho[rhos, None, None] * g                   # (q, P, d)
+        shift_head = self._phases(shift, 0) * inverse_count
+        shift_tail = self._tail(shift)
+        # angular terms: eta = alpha ghat - a sigma, alpha = a (+ghat) or b (reused -ghat)
+        a = self.a[rhos, None, None, None]
+        b = self.b[rhos, None, None, None]
+        g4 = g[:, :, None, :]
+        eta = xp.concatenate([a * g4 - a * self.sig, b * g4 - a * self.sig], axis=2)
+        angular_head = (self._phases(eta, 0) * self.coef[None, :, :, None]).transpose(0, 1, 3, 2)
+        return shift_head, shift_tail, xp.ascontiguousarray(angular_head), self._tail(eta)
 
 
 class _Pipeline:
@@ -274,30 +344,10 @@ class _Pipeline:
                                     threads=backend.threads_per_pipeline)
         self._n0, self._rest = op._half_shape[0], int(numpy.prod(op._half_shape[1:]))
         self.angular = xp.zeros((op.batch, self._n0, self._rest), dtype=xp.complex128)
-        self.k = [xp.asarray(k) for k in op._k_axes]
-        self.reps = xp.asarray(op._reps)
-        self.coef = xp.asarray(op._coef)
-        self.sig = xp.asarray(op._sig)
-        self.rho, self.a, self.b = (xp.asarray(v) for v in (op._rho, op._a, op._b))
         self.radial_weights = op._radial_weights.reshape(-1, self._n0, self._rest)
-
-    def _phases(self, eta, axis):
-        """exp(i eta[..., axis] k_axis), shape eta.shape[:-1] + (len(k_axis),)."""
-        return self.op.backend.xp.exp(1j * eta[..., axis, None] * self.k[axis])
-
-    def _tail(self, eta):
-        """Separable factor over axes 1..d-1, shape eta.shape[:-1] + (prod(half_shape[1:]),)."""
-        d = eta.shape[-1]
-        tail = self._phases(eta, d - 1)
-        for axis in range(d - 2, 0, -1):
-            tail = (self._phases(eta, axis)[..., :, None] * tail[..., None, :]).reshape(
-                eta.shape[:-1] + (-1,))
-        return tail
 
     def run(self, spectrum, f_n):
         op, xp = self.op, self.op.backend.xp
-        d, L = op.grid.dimension, op.grid.half_width
-        inverse_count = 1.0 / float(op.grid.n_modes) ** d
         gain = xp.zeros((self._n0, self._rest), dtype=xp.complex128)
         spec2 = spectrum.reshape(self._n0, self._rest)
         n_pairs = op.n_pairs
@@ -309,19 +359,17 @@ class _Pipeline:
         for r0 in range(r_first, r_last, q):
             rhos = slice(r0, min(r0 + q, r_last))
             nq = rhos.stop - rhos.start
+            shift_head, shift_tail, angular_head, angular_tail = op._tables(rhos)
             acc = xp.zeros((nq, self._n0, self._rest), dtype=xp.complex128)
             for start in range(0, n_pairs, p):
                 stop = min(start + p, n_pairs)
                 np_ = stop - start
                 count = nq * np_
-                g = self.reps[start:stop]                                       # (np_, d)
-                rho = self.rho[rhos, None, None]                                 # (nq, 1, 1)
-                a, b = self.a[rhos, None, None], self.b[rhos, None, None]
-                # s = f(v - rho ghat): shift the spectrum; 1/N^d folded into the axis-0 factor
-                shift = (-math.pi / L * rho * g).reshape(count, d)
+                pairs = slice(start, stop)
+                # s = f(v - rho ghat) f_N(v): shift the spectrum, transform, multiply
                 x = self.fft.spectrum[:count].reshape(count, self._n0, self._rest)
-                xp.multiply(spec2, self._tail(shift)[:, None, :], out=x)
-                x *= self._phases(shift, 0)[:, :, None] * inverse_count
+                xp.multiply(spec2, shift_tail[:, pairs].reshape(count, 1, self._rest), out=x)
+                x *= shift_head[:, pairs].reshape(count, self._n0, 1)
                 s = self.fft.inverse()
                 s[:count] *= f_n
                 if count < self.batch:
@@ -329,15 +377,10 @@ class _Pipeline:
                 if s is not self.fft.real:
                     self.fft.real[...] = s
                 p_hat = self.fft.forward()[:count].reshape(count, self._n0, self._rest)
-                # angular terms of a pair: eta = alpha ghat - a sigma, alpha = a (+ghat), b (-ghat)
-                a4, b4 = a[..., None], b[..., None]
-                eta = xp.concatenate([a4 * g[:, None, :] - a4 * self.sig,
-                                      b4 * g[:, None, :] - a4 * self.sig], axis=2)
-                eta = eta.reshape(count, -1, d)                                  # (count, T, d)
-                coef = xp.broadcast_to(self.coef[None, start:stop], (nq,) + self.coef[start:stop].shape)
-                head = self._phases(eta, 0) * coef.reshape(count, -1)[:, :, None]
+                # E = sum_t head_t (x) tail_t, then E * DFT(s) into the accumulator
                 angular = self.angular[:count]
-                xp.matmul(head.transpose(0, 2, 1), self._tail(eta), out=angular)
+                xp.matmul(angular_head[:, pairs].reshape(count, self._n0, -1),
+                          angular_tail[:, pairs].reshape(count, -1, self._rest), out=angular)
                 angular *= p_hat
                 if np_ == 1:
                     acc += angular
