@@ -180,3 +180,23 @@ def test_core_imports_neither_pyfftw_nor_cupy():
             "print(sorted(m for m in ('pyfftw', 'cupy') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_cli_bench_runs_and_reports_the_floor():
+    out = subprocess.run([sys.executable, "-m", "granframe.cli", "bench", "--json",
+                          "--config", "2:16:8:8", "--repeats", "2", "--backend", "numpy"],
+                         capture_output=True, text=True, check=True)
+    record = json.loads(out.stdout)["records"][0]
+    assert record["transform_pairs"] == 8 * 4
+    assert record["evaluation_s"] > 0 and record["floor_s"] > 0
+    assert record["time_over_floor"] == record["evaluation_s"] / record["floor_s"]
+    bad = subprocess.run([sys.executable, "-m", "granframe.cli", "bench", "--config", "4:16"],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "parameter 'config' = '4:16'" in bad.stderr
+
+
+def test_operators_and_backends_are_plugins():
+    registries = granframe.default_registries()
+    for name in ("fast_spectral", "direct_spectral"):
+        assert registries.get("collision_operators", name).source.plugin == "spectral"
+    assert registries.get("array_backends", "pyfftw").source.plugin == "fftw"
