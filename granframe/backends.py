@@ -117,24 +117,27 @@ class RealFFT:
         return int(numpy.prod(self._sizes))
 
 
+def _optional_threads(instance, attribute, value):
+    if value is not None:
+        check.integer(lower=1)(instance, attribute, value)
+
+
 @attrs.frozen
-class NumpyBackend(ArrayBackend):
-    """NumPy arrays with SciPy's pocketfft transforms run on ``threads`` threads.
+class CPUBackend(ArrayBackend):
+    """Base of the CPU backends: ``threads`` in all, one operator pipeline per thread.
 
     Parameters
     ----------
     threads : int or None
-        Worker threads for the FFTs; ``None`` uses every CPU available.
+        Threads in all; ``None`` uses every CPU available. Operators run
+        ``threads`` independent single-threaded pipelines (at the sizes of this
+        field the transforms scale better over independent pipelines than
+        inside one), while one-off transforms use all threads.
     """
 
-    threads: int | None = attrs.field(default=None, converter=check.to_int)
-    name = "numpy"
+    threads: int | None = attrs.field(default=None, converter=check.to_int,
+                                      validator=_optional_threads)
     xp = numpy
-
-    @threads.validator
-    def _check_threads(self, attribute, value):
-        if value is not None:
-            check.integer(lower=1)(self, attribute, value)
 
     @property
     def workers(self) -> int:
@@ -143,6 +146,13 @@ class NumpyBackend(ArrayBackend):
     @property
     def concurrency(self) -> int:
         return self.workers
+
+
+@attrs.frozen
+class NumpyBackend(CPUBackend):
+    """NumPy arrays with SciPy's pocketfft transforms (``threads`` as in :class:`CPUBackend`)."""
+
+    name = "numpy"
 
     def fftn(self, a, axes=None):
         return scipy.fft.fftn(a, axes=axes, workers=self.workers)

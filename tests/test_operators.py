@@ -1,14 +1,12 @@
 """Physics of the spectral collision operators against exact results."""
 
-import math
-import warnings
-
 import numpy
 import pytest
 
 import granframe as gf
-from granframe.exact import bkw, heated_maxwell_temperature, maxwell_energy_dissipation
+from granframe.exact import bkw, maxwell_energy_dissipation
 from granframe.heatbath import HeatBath
+from granframe.testing import heated_maxwell_error
 
 BACKENDS = ["numpy", pytest.param("pyfftw", marks=pytest.mark.skipif(
     not __import__("importlib").util.find_spec("pyfftw"), reason="pyfftw not installed"))]
@@ -191,26 +189,12 @@ def test_backends_agree(backend):
     numpy.testing.assert_allclose(q, reference, rtol=0, atol=1e-13 * numpy.abs(reference).max())
 
 
-def _heated_maxwell(support_radius, n_modes=64):
-    """The review's heated Maxwell-molecule test: RK4 dt = 0.01 to t = 2."""
-    grid = gf.VelocityGrid(2, n_modes, support_radius)
-    e, tau, t0 = 0.5, 0.1, 8.0
-    op = build("fast_spectral", grid, law=("constant", {"value": e}), backend="pyfftw"
-               if __import__("importlib").util.find_spec("pyfftw") else "numpy",
+def _heated_maxwell(support_radius):
+    """The review's heated Maxwell-molecule test: N = 64, N_rho = 32, M = 16, RK4 dt = 0.01 to t = 2."""
+    grid = gf.VelocityGrid(2, 64, support_radius)
+    op = build("fast_spectral", grid, law=("constant", {"value": 0.5}), backend=FAST_BACKEND,
                radial_points=32, sphere=gf.CircleTrapezoid(16))
-    heat = HeatBath(grid, tau, op.backend)
-    rhs = lambda f: op(f) + heat(f)  # noqa: E731
-    f = grid.maxwellian(temperature=t0)
-    rho0, dt, worst = grid.mass(f), 0.01, 0.0
-    for step in range(1, 201):
-        k1 = rhs(f)
-        k2 = rhs(f + dt / 2 * k1)
-        k3 = rhs(f + dt / 2 * k2)
-        k4 = rhs(f + dt * k3)
-        f = f + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        exact = heated_maxwell_temperature(step * dt, t0, e, tau, rho0)
-        worst = max(worst, abs(grid.temperature(f) / exact - 1))
-    return worst, abs(grid.mass(f) / rho0 - 1)
+    return heated_maxwell_error(op, restitution=0.5)
 
 
 def test_heated_maxwell_temperature_of_the_review():
@@ -252,3 +236,6 @@ def test_bad_operands_and_budgets():
         build("fast_spectral", small, radial_points=0)
     with pytest.raises(TypeError, match="accepted parameters"):
         build("fast_spectral", small, quadrature=3)
+    with pytest.raises(ValueError, match=r"'memory_budget' = 4096 is invalid; is too small: one "
+                                         r"pair per pipeline needs [0-9.e-]+ GiB"):
+        build("fast_spectral", gf.VelocityGrid(3, 16, 4.0), memory_budget=4096)

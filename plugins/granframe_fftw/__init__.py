@@ -8,11 +8,10 @@ pyfftw only matters to someone asking for this backend.
 from __future__ import annotations
 
 import attrs
-import numpy
 
 from granframe import hookimpl
 from granframe import validators as check
-from granframe.backends import ArrayBackend, RealFFT, available_cpus
+from granframe.backends import CPUBackend, RealFFT
 
 
 def _pyfftw():
@@ -28,29 +27,19 @@ _EFFORTS = ("FFTW_ESTIMATE", "FFTW_MEASURE", "FFTW_PATIENT")
 
 
 @attrs.frozen
-class PyFFTWBackend(ArrayBackend):
+class PyFFTWBackend(CPUBackend):
     """NumPy arrays; FFTW transforms planned once per shape and reused.
 
     Parameters
     ----------
     threads : int or None
-        Threads in all; ``None`` uses every CPU available. Operators run
-        ``threads`` independent single-threaded pipelines (at the sizes of
-        this field FFTW scales better over independent transforms than inside
-        one), while one-off transforms use all threads.
+        As in :class:`granframe.backends.CPUBackend`.
     planner_effort : str
         FFTW planner flag: FFTW_ESTIMATE, FFTW_MEASURE (default) or FFTW_PATIENT.
     """
 
-    threads: int | None = attrs.field(default=None, converter=check.to_int)
     planner_effort: str = attrs.field(default="FFTW_MEASURE")
     name = "pyfftw"
-    xp = numpy
-
-    @threads.validator
-    def _check_threads(self, attribute, value):
-        if value is not None:
-            check.integer(lower=1)(self, attribute, value)
 
     @planner_effort.validator
     def _check_effort(self, attribute, value):
@@ -59,14 +48,6 @@ class PyFFTWBackend(ArrayBackend):
 
     def __attrs_post_init__(self):
         _pyfftw()  # fail early and clearly when pyfftw is missing
-
-    @property
-    def workers(self) -> int:
-        return available_cpus() if self.threads is None else self.threads
-
-    @property
-    def concurrency(self) -> int:
-        return self.workers
 
     def _interfaces(self):
         pyfftw = _pyfftw()

@@ -108,8 +108,8 @@ class DirectSpectral(CollisionOperator):
         self._build()
 
     def _build(self):
-        grid, kernel, xp = self.grid, self.kernel, self.backend.xp
-        d, n, L = grid.dimension, grid.n_modes, grid.half_width
+        grid, xp = self.grid, self.backend.xp
+        d, n = grid.dimension, grid.n_modes
         one = numpy.arange(-(n // 2) + 1, n // 2)
         modes = numpy.stack(numpy.meshgrid(*([one] * d), indexing="ij"), axis=-1).reshape(-1, d)
         count = len(modes)

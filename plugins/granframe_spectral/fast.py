@@ -97,7 +97,7 @@ class FastSpectral(CollisionOperator):
     def __init__(self, grid, kernel, restitution, backend, *, radial_points=None, sphere=None,
                  sigma=None, batch=None, memory_budget=2 ** 31):
         super().__init__(grid, kernel, restitution, backend)
-        d, n = grid.dimension, grid.n_modes
+        d = grid.dimension
         owner = "fast_spectral"
         radial_points = DEFAULT_RADIAL[d] if radial_points is None else radial_points
         if not check.is_integer(radial_points) or radial_points < 1:
@@ -144,7 +144,6 @@ class FastSpectral(CollisionOperator):
             coef = numpy.concatenate([w_plus[:, None] * b_plus, w_minus[:, None] * b_minus], axis=1)
             sig = s_nodes
             f0_plus, f0_minus = b_plus.sum(axis=1), b_minus.sum(axis=1)
-        self._terms_per_pair = coef.shape[1]
         self._reps, self._coef, self._sig = reps, coef, sig
 
         # Wavenumbers of the half (rfft) layout: axes 0..d-2 in DFT order, last axis 0..N/2.
@@ -181,19 +180,20 @@ class FastSpectral(CollisionOperator):
 
         # Work split: contiguous ranges of rho values over pipelines; pairs in batches.
         pipelines = max(1, min(backend.concurrency, len(rho)))
-        per_pair = 8 * total + 16 * numpy.prod(half_shape) * (1 + self._terms_per_pair)
+        # per pair in a batch: real buffer, spectrum buffer, angular-factor buffer
+        per_pair = 8 * total + 2 * 16 * numpy.prod(half_shape)
+        # radial weights, loss multiplier, accumulators and the operator's own transform
+        fixed = 16 * numpy.prod(half_shape) * (len(rho) + 4 + 2 * pipelines)
         if batch is None:  # about 1 MiB per spectrum buffer: whole rho values on small grids
             batch = max(1, int(2 ** 20 // (16 * numpy.prod(half_shape))))
             if batch >= self.n_pairs:
                 batch -= batch % self.n_pairs
-        needed = pipelines * batch * per_pair + 16 * numpy.prod(half_shape) * (len(rho) + 4)
-        if needed > memory_budget:
-            batch = int((memory_budget - 16 * numpy.prod(half_shape) * (len(rho) + 4))
-                        // (pipelines * per_pair))
+        if fixed + pipelines * batch * per_pair > memory_budget:
+            batch = int((memory_budget - fixed) // (pipelines * per_pair))
             if batch < 1:
                 check.reject("fast_spectral", "memory_budget", memory_budget,
                              f"is too small: one pair per pipeline needs "
-                             f"{needed / 2 ** 30:.3g} GiB")
+                             f"{(fixed + pipelines * per_pair) / 2 ** 30:.3g} GiB")
         self.batch = batch
         self._tables = _PhaseTables(self, memory_budget)
         bounds = numpy.linspace(0, len(rho), pipelines + 1).round().astype(int)
@@ -240,14 +240,12 @@ class FastSpectral(CollisionOperator):
 
     def close(self):
         """Stop the worker threads (also done when the operator is garbage collected)."""
-        if self._executor is not None:
-            self._executor.shutdown(wait=False)
-            self._executor = None
-
-    def __del__(self):
         executor = getattr(self, "_executor", None)
         if executor is not None:
             executor.shutdown(wait=False)
+            self._executor = None
+
+    __del__ = close
 
 
 _BLAS = threadpoolctl.ThreadpoolController()
