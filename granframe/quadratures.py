@@ -66,10 +66,8 @@ class SurfaceQuadrature(Quadrature):
     @property
     def is_antipodal(self) -> bool:
         """True when -ghat is a node of equal weight for every node ghat."""
-        x, w = self._rule()
-        key = {tuple(numpy.round(p, 12)): wi for p, wi in zip(x, w)}
-        return all(numpy.isclose(key.get(tuple(numpy.round(-p, 12) + 0.0), numpy.nan), wi)
-                   for p, wi in zip(x, w))
+        _, w_plus, w_minus = antipodal_pairs(*self._rule())
+        return bool(numpy.allclose(w_plus, w_minus, rtol=1e-12, atol=0.0))
 
     def _rule(self):
         raise NotImplementedError
@@ -190,6 +188,29 @@ class SphereProduct(SurfaceQuadrature):
         nodes = numpy.stack([numpy.outer(s, numpy.cos(phi)), numpy.outer(s, numpy.sin(phi)),
                              numpy.outer(z, numpy.ones_like(phi))], axis=-1).reshape(-1, 3)
         return nodes, numpy.repeat(wz * math.pi / n, 2 * n)
+
+
+def antipodal_pairs(nodes, weights):
+    """Group a rule's directions into pairs (ghat, -ghat).
+
+    Returns representative directions (P, d) and the weights of ghat and of
+    -ghat (zero when -ghat is not a node). The fast spectral method needs one
+    transform per pair, so antipodal rules halve its work.
+    """
+    remaining = list(range(len(weights)))
+    reps, w_plus, w_minus = [], [], []
+    while remaining:
+        i = remaining.pop(0)
+        partner = next((j for j in remaining if numpy.allclose(nodes[j], -nodes[i], atol=1e-12)),
+                       None)
+        reps.append(nodes[i])
+        w_plus.append(weights[i])
+        if partner is None:
+            w_minus.append(0.0)
+        else:
+            remaining.remove(partner)
+            w_minus.append(weights[partner])
+    return numpy.array(reps), numpy.array(w_plus), numpy.array(w_minus)
 
 
 def sphere_area(dimension: int) -> float:

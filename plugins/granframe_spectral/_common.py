@@ -14,7 +14,7 @@ import numpy
 import scipy.special
 
 from granframe import validators as check
-from granframe.quadratures import sphere_area
+from granframe.quadratures import GaussLegendre
 
 
 def isotropic_sphere_average(x, dimension: int):
@@ -50,10 +50,4 @@ def check_operands(owner: str, grid, f, backend):
 
 def radial_rule(grid, n_radial: int):
     """Gauss-Legendre nodes rho_i and weights on [0, R]."""
-    from granframe.quadratures import GaussLegendre
-
     return GaussLegendre(n_radial).rule(grid.truncation_radius)
-
-
-def surface_area(dimension: int) -> float:
-    return sphere_area(dimension)

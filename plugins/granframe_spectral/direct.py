@@ -14,9 +14,10 @@ import scipy.special
 
 from granframe import validators as check
 from granframe.operators import CollisionOperator
+from granframe.quadratures import sphere_area
 
 from granframe_spectral._common import (check_operands, energy_factor, isotropic_sphere_average,
-                                        radial_rule, surface_area)
+                                        radial_rule)
 
 #: Bytes per (k, m) entry: weight (complex), gather index, triple key, gathered f-hat.
 BYTES_PER_ENTRY = 16 + 8 + 8 + 16
@@ -183,7 +184,7 @@ class DirectSpectral(CollisionOperator):
         out = numpy.zeros(m_norm.shape)
         for r, s in zip(rho, scale):
             out += s * isotropic_sphere_average(math.pi * r / L * m_norm, d)
-        return out * omega * surface_area(d)
+        return out * omega * sphere_area(d)
 
     def __call__(self, f):
         """Q_I(f, f) on the grid: the Galerkin sum over l + m = k (class notes)."""

@@ -15,38 +15,16 @@ import threadpoolctl
 
 from granframe import validators as check
 from granframe.operators import CollisionOperator
-from granframe.quadratures import CircleTrapezoid, SphereProduct, SurfaceQuadrature
+from granframe.quadratures import (CircleTrapezoid, SphereProduct, SurfaceQuadrature,
+                                   antipodal_pairs, sphere_area)
 
 from granframe_spectral._common import (check_operands, energy_factor, isotropic_sphere_average,
-                                        radial_rule, surface_area)
+                                        radial_rule)
 
 #: Default quadratures: the review's N_rho = 32, M = 16 in 2D and N_rho = 30, M = 32 in 3D.
 DEFAULT_RADIAL = {2: 32, 3: 30}
 DEFAULT_SPHERE = {2: CircleTrapezoid(16), 3: SphereProduct(4)}
 DEFAULT_SIGMA = {2: CircleTrapezoid(32), 3: SphereProduct(8)}
-
-
-def antipodal_pairs(nodes, weights):
-    """Group a rule's directions into pairs (ghat, -ghat).
-
-    Returns representative directions (P, d) and the weights of ghat and of
-    -ghat (zero when -ghat is not a node, so any rule works; antipodal rules
-    need half the transforms).
-    """
-    remaining = list(range(len(weights)))
-    reps, w_plus, w_minus = [], [], []
-    while remaining:
-        i = remaining.pop(0)
-        partner = next((j for j in remaining if numpy.allclose(nodes[j], -nodes[i], atol=1e-12)),
-                       None)
-        reps.append(nodes[i])
-        w_plus.append(weights[i])
-        if partner is None:
-            w_minus.append(0.0)
-        else:
-            remaining.remove(partner)
-            w_minus.append(weights[partner])
-    return numpy.array(reps), numpy.array(w_plus), numpy.array(w_minus)
 
 
 class FastSpectral(CollisionOperator):
@@ -135,7 +113,7 @@ class FastSpectral(CollisionOperator):
         if kernel.is_isotropic:
             coef = numpy.stack([w_plus, w_minus], axis=1)                     # (P, 2)
             sig = numpy.zeros((1, d))
-            f0_plus = f0_minus = numpy.full(len(reps), surface_area(d))
+            f0_plus = f0_minus = numpy.full(len(reps), sphere_area(d))
         else:
             s_nodes, s_weights = self.sigma.nodes(), self.sigma.weights()
             cos_plus = reps @ s_nodes.T                                        # (P, S)
@@ -164,7 +142,7 @@ class FastSpectral(CollisionOperator):
         # Radial weights W_rho(k).
         if kernel.is_isotropic:
             j = numpy.stack([isotropic_sphere_average(a * kk, d) for a in a_rho])
-            weights = (radial * surface_area(d))[:, None] * j.reshape(len(rho), -1)
+            weights = (radial * sphere_area(d))[:, None] * j.reshape(len(rho), -1)
         else:
             weights = numpy.repeat(radial[:, None], kk.size, axis=1)
         self._radial_weights = xp.asarray(weights.reshape((len(rho),) + half_shape))
