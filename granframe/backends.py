@@ -44,17 +44,13 @@ class ArrayBackend:
 
     For hot loops, :meth:`real_fft` returns a reusable :class:`RealFFT` with
     its own buffers, and ``concurrency`` says how many such pipelines the
-    backend runs well side by side (CPU threads; 1 on a GPU), each with
-    ``threads_per_pipeline`` FFT threads.
+    backend runs well side by side (CPU threads, each pipeline with
+    single-threaded transforms; 1 on a GPU).
     """
 
     name: str
     xp: ModuleType
     concurrency: int = 1
-
-    @property
-    def threads_per_pipeline(self) -> int:
-        return 1
 
     def real_fft(self, shape, axes, threads: int = 1) -> "RealFFT":
         """A planned real transform pair over ``axes`` of arrays of ``shape``."""

@@ -137,6 +137,34 @@ class VelocityGrid:
         n = self.n_modes
         return xp.concatenate([xp.arange(n // 2), xp.arange(-n // 2, 0)]).astype(xp.float64)
 
+    @property
+    def half_shape(self) -> tuple[int, ...]:
+        """Shape of a real-to-complex (rfft) spectrum: N^{d-1} x (N/2 + 1)."""
+        return (self.n_modes,) * (self.dimension - 1) + (self.n_modes // 2 + 1,)
+
+    def half_wavenumbers(self):
+        """Integer wavenumbers of each axis of the rfft layout (NumPy arrays).
+
+        Axes 0..d-2 in DFT order (0, ..., N/2-1, -N/2, ..., -1), the last axis 0..N/2.
+        """
+        n = self.n_modes
+        return [self.wavenumbers()] * (self.dimension - 1) + [numpy.arange(n // 2 + 1.0)]
+
+    def half_wavenumber_squared(self):
+        """|k|^2 on the rfft layout (NumPy array of shape ``half_shape``)."""
+        d = self.dimension
+        return sum(numpy.reshape(k, [-1 if i == j else 1 for j in range(d)]) ** 2
+                   for i, k in enumerate(self.half_wavenumbers()))
+
+    def nyquist_mask(self):
+        """True on the rfft layout where some |k_i| = N/2 (modes that are not real-representable)."""
+        mask = numpy.zeros(self.half_shape, dtype=bool)
+        for axis in range(self.dimension):
+            index = [slice(None)] * self.dimension
+            index[axis] = self.n_modes // 2
+            mask[tuple(index)] = True
+        return mask
+
     def mesh(self, xp=numpy):
         """Sparse (broadcastable) coordinate arrays v_1, ..., v_d of shape N^d."""
         v = self.points(xp)

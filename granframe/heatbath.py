@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import math
 
-import numpy
-
 from granframe import validators as check
 
 
@@ -30,17 +28,10 @@ class HeatBath:
         if not check.is_real(tau) or not (0.0 <= float(tau) < math.inf):
             check.reject("HeatBath", "tau", tau, "must be a finite real number >= 0")
         self.grid, self.tau, self.backend = grid, float(tau), backend
-        d, n = grid.dimension, grid.n_modes
-        k_axes = [numpy.fft.fftfreq(n, 1.0 / n)] * (d - 1) + [numpy.arange(n // 2 + 1.0)]
-        k2 = sum(numpy.reshape(k, [-1 if i == j else 1 for j in range(d)]) ** 2
-                 for i, k in enumerate(k_axes))
-        symbol = -self.tau * (math.pi / grid.half_width) ** 2 * k2
-        for axis in range(d):
-            index = [slice(None)] * d
-            index[axis] = n // 2
-            symbol[tuple(index)] = 0.0
+        symbol = -self.tau * (math.pi / grid.half_width) ** 2 * grid.half_wavenumber_squared()
+        symbol[grid.nyquist_mask()] = 0.0
         self.multiplier = backend.asarray(symbol)
-        self._axes = tuple(range(d))
+        self._axes = tuple(range(grid.dimension))
 
     def __call__(self, f):
         """tau Delta_v f on the grid."""

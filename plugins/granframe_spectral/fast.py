@@ -125,19 +125,10 @@ class FastSpectral(CollisionOperator):
         self._reps, self._coef, self._sig = reps, coef, sig
 
         # Wavenumbers of the half (rfft) layout: axes 0..d-2 in DFT order, last axis 0..N/2.
-        k_full = numpy.fft.fftfreq(n, 1.0 / n)
-        k_half = numpy.arange(n // 2 + 1, dtype=float)
-        self._k_axes = [k_full] * (d - 1) + [k_half]
-        half_shape = (n,) * (d - 1) + (n // 2 + 1,)
-        self._half_shape = half_shape
-        kk = numpy.sqrt(sum(numpy.reshape(k, [-1 if i == j else 1 for j in range(d)]) ** 2
-                            for i, k in enumerate(self._k_axes)))
-        nyquist = numpy.zeros(half_shape, dtype=bool)
-        for axis in range(d):
-            index = [slice(None)] * d
-            index[axis] = n // 2
-            nyquist[tuple(index)] = True
-        self._keep = xp.asarray(~nyquist)
+        self._k_axes = grid.half_wavenumbers()
+        half_shape = self._half_shape = grid.half_shape
+        kk = numpy.sqrt(grid.half_wavenumber_squared())
+        self._keep = xp.asarray(~grid.nyquist_mask())
 
         # Radial weights W_rho(k).
         if kernel.is_isotropic:
@@ -317,7 +308,7 @@ class _Pipeline:
         d = grid.dimension
         self.batch = op.batch
         self.fft = backend.real_fft((op.batch,) + grid.shape, tuple(range(1, d + 1)),
-                                    threads=backend.threads_per_pipeline)
+                                    threads=1)
         self._n0, self._rest = op._half_shape[0], int(numpy.prod(op._half_shape[1:]))
         self.angular = xp.zeros((op.batch, self._n0, self._rest), dtype=xp.complex128)
         self.radial_weights = op._radial_weights.reshape(-1, self._n0, self._rest)
