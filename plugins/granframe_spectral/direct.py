@@ -129,8 +129,11 @@ class DirectSpectral(CollisionOperator):
         u_kk = unique // ((top + 1) * (2 * top + 1))
         u_mm = (unique // (2 * top + 1)) % (top + 1)
         u_km = unique % (2 * top + 1) - top
-        gain = self._gain_weights(numpy.sqrt(u_kk), numpy.sqrt(u_mm), u_km.astype(float))
-        loss = self._loss_weights(numpy.sqrt(numpy.arange(top + 1)))
+        coeffs, degree = angular_coefficients(self.kernel, d, self.angular_degree)
+        rho, scale = self._radial()
+        gain = self._gain_weights(numpy.sqrt(u_kk), numpy.sqrt(u_mm), u_km.astype(float),
+                                  rho, scale, coeffs, degree)
+        loss = self._loss_weights(numpy.sqrt(numpy.arange(top + 1)), rho, scale, coeffs[0])
         weights = (gain[inverse.reshape(count, count)] - loss[kk][None, :]) * valid
         self._weights = xp.asarray(weights)
         self._l_index = xp.asarray(numpy.where(valid, l_index, 0))
@@ -144,10 +147,8 @@ class DirectSpectral(CollisionOperator):
         scale = w * rho ** (d - 1) * self.kernel.prefactor(d) * self.kernel.speed_part(rho)
         return rho, scale
 
-    def _gain_weights(self, k_norm, m_norm, k_dot_m):
+    def _gain_weights(self, k_norm, m_norm, k_dot_m, rho, scale, coeffs, degree):
         d, L = self.grid.dimension, self.grid.half_width
-        coeffs, degree = angular_coefficients(self.kernel, d, self.angular_degree)
-        rho, scale = self._radial()
         e = self.restitution(rho)
         out = numpy.zeros(k_norm.shape)
         for r, s, e_r in zip(rho, scale, e):
@@ -176,11 +177,9 @@ class DirectSpectral(CollisionOperator):
         # 3D: 8 pi^2 sum (2n+1) b_n ...; 2D: 2 pi sum beta_n ...
         return out * (8.0 * math.pi ** 2 if d == 3 else 2.0 * math.pi)
 
-    def _loss_weights(self, m_norm):
+    def _loss_weights(self, m_norm, rho, scale, b_0):
         d, L = self.grid.dimension, self.grid.half_width
-        coeffs, _ = angular_coefficients(self.kernel, d, self.angular_degree)
-        omega = 2.0 * math.pi * coeffs[0] if d == 3 else coeffs[0]   # int b(sigma.ghat) dsigma
-        rho, scale = self._radial()
+        omega = 2.0 * math.pi * b_0 if d == 3 else b_0               # int b(sigma.ghat) dsigma
         out = numpy.zeros(m_norm.shape)
         for r, s in zip(rho, scale):
             out += s * isotropic_sphere_average(math.pi * r / L * m_norm, d)
