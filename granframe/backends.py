@@ -93,13 +93,13 @@ class RealFFT:
     cuFFT) override it.
     """
 
-    def __init__(self, backend: ArrayBackend, shape: tuple, axes: tuple):
-        xp = backend.xp
+    def __init__(self, backend: ArrayBackend, shape: tuple, axes: tuple, zeros=None):
+        zeros = backend.xp.zeros if zeros is None else zeros   # e.g. an aligned allocator
         self.backend, self.shape, self.axes = backend, shape, axes
         half = list(shape)
         half[axes[-1]] = shape[axes[-1]] // 2 + 1
-        self.real = xp.zeros(shape, dtype=xp.float64)
-        self.spectrum = xp.zeros(tuple(half), dtype=xp.complex128)
+        self.real = zeros(shape, dtype="float64")
+        self.spectrum = zeros(tuple(half), dtype="complex128")
         self._sizes = tuple(shape[a] for a in axes)
 
     def forward(self):

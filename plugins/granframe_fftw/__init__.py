@@ -75,11 +75,7 @@ class _FFTWRealFFT(RealFFT):
 
     def __init__(self, backend, shape, axes, threads):
         pyfftw = _pyfftw()
-        half = list(shape)
-        half[axes[-1]] = shape[axes[-1]] // 2 + 1
-        self.backend, self.shape, self.axes = backend, shape, axes
-        self.real = pyfftw.zeros_aligned(shape, dtype="float64")
-        self.spectrum = pyfftw.zeros_aligned(tuple(half), dtype="complex128")
+        super().__init__(backend, shape, axes, zeros=pyfftw.zeros_aligned)
         flags = (backend.planner_effort,)
         self._forward = pyfftw.FFTW(self.real, self.spectrum, axes=axes, threads=threads,
                                     flags=flags + ("FFTW_DESTROY_INPUT",))
