@@ -42,7 +42,7 @@ class VelocityGrid:
     dimension : int
         Velocity dimension d, 2 or 3.
     n_modes : int
-        Number N of Fourier modes (and grid points) per axis; even, at least 4.
+        Number N of Fourier modes (and grid points) per axis; even, 4 <= N <= 65536.
     support_radius : float
         Radius S of the ball that (approximately) contains the support of f.
     half_width : float, optional
@@ -72,7 +72,8 @@ class VelocityGrid:
     """
 
     dimension: int = attrs.field(converter=check.to_int, validator=check.integer(choices=(2, 3)))
-    n_modes: int = attrs.field(converter=check.to_int, validator=check.integer(lower=4, even=True))
+    n_modes: int = attrs.field(converter=check.to_int,
+                               validator=check.integer(lower=4, upper=2 ** 16, even=True))
     support_radius: float = attrs.field(
         converter=check.to_float, validator=check.real(0.0, math.inf, lower_open=True))
     half_width: float = attrs.field(default=None, converter=check.to_float,

@@ -70,7 +70,7 @@ def integer(lower: int | None = None, upper: int | None = None, *,
         if lower is not None:
             parts.append(f">= {lower}")
         if upper is not None:
-            parts.append(f"<= {upper}")
+            parts.append(f"and <= {upper}" if lower is not None else f"<= {upper}")
         return "must be " + " ".join(parts)
 
     def validate(instance, attribute: attrs.Attribute, value):

@@ -79,3 +79,11 @@ def test_moment_of_wrong_shape_is_refused():
     grid = VelocityGrid(2, 16, 1.0)
     with pytest.raises(ValueError, match=r"'f.shape' = \(8, 8\)"):
         grid.mass(numpy.ones((8, 8)))
+
+
+def test_absurd_mode_counts_are_refused():
+    with pytest.raises(ValueError, match=r"'n_modes' = 131072 is invalid; must be an even "
+                                         r"integer >= 4 and <= 65536"):
+        VelocityGrid(2, 2 ** 17, 1.0)
+    with pytest.raises(ValueError, match="'n_modes'"):
+        VelocityGrid(2, 10 ** 400, 1.0)
