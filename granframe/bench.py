@@ -23,6 +23,20 @@ DEFAULT_CONFIGS = ((2, 64, 32, 16), (2, 128, 32, 16), (3, 16, 30, 32), (3, 32, 3
                    (3, 64, 30, 32))
 
 
+def preferred_backend() -> str:
+    """'pyfftw' when that backend is registered and can be built (pyfftw installed), else 'numpy'."""
+    from granframe.registry import default_registries
+
+    registries = default_registries()
+    if "pyfftw" in registries.names("array_backends"):
+        try:
+            registries.create("array_backends", "pyfftw")
+            return "pyfftw"
+        except ValueError:
+            pass
+    return "numpy"
+
+
 def _median_time(function, repeats: int, synchronize) -> float:
     times = []
     for _ in range(repeats):

@@ -38,15 +38,8 @@ def _plugins(args) -> int:
 
 def _bench(args) -> int:
     from granframe import bench
-    from granframe.registry import default_registries
 
-    backend = args.backend
-    if backend is None:
-        backend = "pyfftw" if "pyfftw" in default_registries().names("array_backends") else "numpy"
-        try:
-            default_registries().create("array_backends", backend)
-        except ValueError:
-            backend = "numpy"
+    backend = bench.preferred_backend() if args.backend is None else args.backend
     configs = ([bench.parse_config(c) for c in args.config] if args.config
                else list(bench.DEFAULT_CONFIGS))
     records = bench.run(configs, backend, args.threads, args.repeats)

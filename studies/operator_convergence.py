@@ -17,12 +17,12 @@ import numpy
 
 import granframe as gf
 from granframe.exact import bkw
+from granframe.bench import preferred_backend
 from granframe.testing import heated_maxwell_error
 
 
 def backend():
-    return gf.array_backend("pyfftw" if "pyfftw" in gf.default_registries().names(
-        "array_backends") else "numpy")
+    return gf.array_backend(preferred_backend())
 
 
 def bkw_table():

@@ -4,6 +4,7 @@ import numpy
 import pytest
 
 import granframe as gf
+from granframe.bench import preferred_backend
 from granframe.exact import bkw, maxwell_energy_dissipation
 from granframe.heatbath import HeatBath
 from granframe.testing import heated_maxwell_error
@@ -70,7 +71,7 @@ def test_bkw_direct_method_2d():
     assert errors[0] > 10 * errors[1] > 100 * errors[2] and errors[2] < 1e-2, errors
 
 
-FAST_BACKEND = "pyfftw" if __import__("importlib").util.find_spec("pyfftw") else "numpy"
+FAST_BACKEND = preferred_backend()
 
 
 @pytest.mark.parametrize("dimension,e", [(2, 0.0), (2, 0.5), (2, 0.9), (3, 0.5)])
