@@ -46,6 +46,12 @@ class ArrayBackend:
     its own buffers, and ``concurrency`` says how many such pipelines the
     backend runs well side by side (CPU threads, each pipeline with
     single-threaded transforms; 1 on a GPU).
+
+    Spectral operators multiply spectra by separable (per-axis) phase factors
+    many times per evaluation. :meth:`separable_product` and
+    :meth:`lowrank_accumulate` are those element-wise steps, written here once
+    in ``xp``; a backend may override them with fused kernels (one pass over
+    memory instead of several) that must give the same result to round-off.
     """
 
     name: str
@@ -64,6 +70,35 @@ class ArrayBackend:
 
     def synchronize(self) -> None:
         """Block until queued work is done (no-op on CPU backends)."""
+
+    def separable_product(self, out, spectrum, head, tail):
+        r"""Batch of spectra times separable factors, into ``out``.
+
+        .. math:: \mathrm{out}_{b,i,j} = S_{i,j}\, h_{b,i}\, t_{b,j}
+
+        with ``spectrum`` S of shape (I, J), ``head`` h (B, I), ``tail`` t
+        (B, J) and ``out`` (B, I, J), all complex. Returns ``out``.
+        """
+        self.xp.multiply(spectrum, tail[:, None, :], out=out)
+        out *= head[:, :, None]
+        return out
+
+    def lowrank_accumulate(self, acc, heads, tails, values):
+        r"""Add low-rank-weighted batches of spectra into per-group accumulators.
+
+        .. math:: \mathrm{acc}_{q,i,j} \mathrel{+}= \sum_{b \in q} \Big(\sum_t
+           H_{b,i,t} T_{b,t,j}\Big) V_{b,i,j}
+
+        with ``acc`` (Q, I, J), ``heads`` H (B, I, R), ``tails`` T (B, R, J) and
+        ``values`` V (B, I, J), all complex; group q holds the consecutive
+        batch entries b = q B/Q, ..., (q+1) B/Q - 1. ``values`` may be
+        overwritten. Returns ``acc``.
+        """
+        weighted = self.xp.matmul(heads, tails)
+        weighted *= values
+        groups = acc.shape[0]
+        acc += weighted.reshape((groups, -1) + weighted.shape[1:]).sum(axis=1)
+        return acc
 
     def fftn(self, a, axes=None):
         raise NotImplementedError

@@ -181,13 +181,20 @@ def test_anisotropic_kernel_fast_against_direct(dimension, n_modes, temperature,
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
-def test_backends_agree(backend):
+@pytest.mark.parametrize("kernel", [
+    "hard_spheres",                                       # rank-2 angular terms
+    gf.VariableHardSpheres(0.5, angular=lambda c: 1 + 0.4 * c, energy_exponent=0.5)],
+    ids=["isotropic", "anisotropic"])                     # rank 2 x (sigma nodes)
+def test_backends_agree(backend, kernel):
+    """Same operator on every backend and batching (batch 3 leaves part-filled batches)."""
     grid = gf.VelocityGrid(3, 12, 4.0)
     f = grid.maxwellian(velocity=[0.2, 0.1, -0.3], temperature=0.9)
-    reference = build("fast_spectral", grid, "hard_spheres", ("constant", {"value": 0.7}))(f)
-    q = build("fast_spectral", grid, "hard_spheres", ("constant", {"value": 0.7}), backend,
-              batch=3)(f)
-    numpy.testing.assert_allclose(q, reference, rtol=0, atol=1e-13 * numpy.abs(reference).max())
+    law = ("constant", {"value": 0.7})
+    reference = build("fast_spectral", grid, kernel, law, batch=1)(f)
+    for batch in (3, None):
+        q = build("fast_spectral", grid, kernel, law, backend, batch=batch)(f)
+        numpy.testing.assert_allclose(q, reference, rtol=0,
+                                      atol=1e-13 * numpy.abs(reference).max())
 
 
 def _heated_maxwell(support_radius):

@@ -1,8 +1,8 @@
-"""pyFFTW array backend: NumPy arrays with planned, reused FFTW transforms.
+"""pyFFTW array backend: NumPy arrays, planned FFTW transforms, fused numba kernels.
 
-Install with ``pip install granframe[fftw]``. pyfftw is imported when the
-backend is built, not when granframe discovers the plugin, so a missing
-pyfftw only matters to someone asking for this backend.
+Install with ``pip install granframe[fftw]`` (pyfftw and numba). Both are
+imported when the backend is built, not when granframe discovers the plugin,
+so a missing package only matters to someone asking for this backend.
 """
 
 from __future__ import annotations
@@ -23,12 +23,25 @@ def _pyfftw():
     return pyfftw
 
 
+def _kernels():
+    try:
+        from granframe_fftw import _numba_kernels
+    except ImportError as exc:
+        raise ValueError("array backend 'pyfftw' needs the numba package for its fused "
+                         "kernels: pip install 'granframe[fftw]'") from exc
+    return _numba_kernels
+
+
 _EFFORTS = ("FFTW_ESTIMATE", "FFTW_MEASURE", "FFTW_PATIENT")
 
 
 @attrs.frozen
 class PyFFTWBackend(CPUBackend):
-    """NumPy arrays; FFTW transforms planned once per shape and reused.
+    """NumPy arrays; FFTW transforms planned once per shape and reused; fused kernels.
+
+    :meth:`separable_product` and :meth:`lowrank_accumulate` are numba
+    kernels (one pass over memory, GIL released) instead of NumPy's
+    several passes.
 
     Parameters
     ----------
@@ -47,7 +60,14 @@ class PyFFTWBackend(CPUBackend):
             check.reject("PyFFTWBackend", "planner_effort", value, f"must be one of {list(_EFFORTS)}")
 
     def __attrs_post_init__(self):
-        _pyfftw()  # fail early and clearly when pyfftw is missing
+        _pyfftw()  # fail early and clearly when pyfftw or numba is missing
+        _kernels()
+
+    def separable_product(self, out, spectrum, head, tail):
+        return _kernels().separable_product(out, spectrum, head, tail)
+
+    def lowrank_accumulate(self, acc, heads, tails, values):
+        return _kernels().lowrank_accumulate(acc, heads, tails, values)
 
     def _interfaces(self):
         pyfftw = _pyfftw()
