@@ -4,7 +4,7 @@ This module is a plugin like any third-party one (see docs/plugins.md); the
 plugin manager registers it under the name ``builtin``.
 """
 
-from granframe import backends, kernels, quadratures, restitution
+from granframe import backends, initial, integrators, kernels, quadratures, restitution
 from granframe.hookspecs import hookimpl
 
 
@@ -41,3 +41,25 @@ def granframe_register_quadratures(registry):
 def granframe_register_array_backends(registry):
     registry.add("numpy", backends.NumpyBackend,
                  description="NumPy arrays, SciPy pocketfft transforms (multithreaded)")
+
+
+@hookimpl
+def granframe_register_time_integrators(registry):
+    registry.add("forward_euler", integrators.ForwardEuler)
+    registry.add("ssp_rk2", integrators.SSPRK2)
+    registry.add("ssp_rk3", integrators.SSPRK3)
+    registry.add("rk4", integrators.RK4)
+    registry.add("if_rk4", integrators.IntegratingFactorRK4,
+                 description="integrating-factor (Lawson) RK4: the heat bath tau Delta exactly")
+    registry.add("dopri54", integrators.DormandPrince54,
+                 description="adaptive Dormand-Prince 5(4) embedded pair with error control")
+
+
+@hookimpl
+def granframe_register_initial_conditions(registry):
+    registry.add("maxwellian", initial.Maxwellian)
+    registry.add("box", initial.Box,
+                 description="flat profile on a cube, cell-averaged (the review's flat data)")
+    registry.add("bkw", initial.BKWProfile)
+    registry.add("gaussian_mixture", initial.GaussianMixture)
+    registry.add("callable", initial.FromCallable)

@@ -32,8 +32,21 @@ class HeatBath:
         symbol[grid.nyquist_mask()] = 0.0
         self.multiplier = backend.asarray(symbol)
         self._axes = tuple(range(grid.dimension))
+        self._factors = {}
 
     def __call__(self, f):
         """tau Delta_v f on the grid."""
         spectrum = self.backend.rfftn(f, axes=self._axes) * self.multiplier
+        return self.backend.irfftn(spectrum, s=self.grid.shape, axes=self._axes)
+
+    def propagate(self, f, dt: float):
+        """exp(dt tau Delta_v) f: each mode times exp(-dt tau (pi |k| / L)^2), exactly."""
+        if dt == 0.0 or self.tau == 0.0:
+            return f
+        factor = self._factors.get(dt)
+        if factor is None:
+            if len(self._factors) > 8:  # a few step fractions per step size; adaptive steps vary
+                self._factors.clear()
+            factor = self._factors[dt] = self.backend.xp.exp(dt * self.multiplier)
+        spectrum = self.backend.rfftn(f, axes=self._axes) * factor
         return self.backend.irfftn(spectrum, s=self.grid.shape, axes=self._axes)

@@ -51,6 +51,12 @@ def granframe_register_time_integrators(registry):
 
 
 @hookspec
+def granframe_register_initial_conditions(registry):
+    """Add initial conditions; factories return
+    :class:`granframe.initial.InitialCondition` instances."""
+
+
+@hookspec
 def granframe_register_array_backends(registry):
     """Add array backends; factories return
     :class:`granframe.backends.ArrayBackend` instances."""

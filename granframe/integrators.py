@@ -1,30 +1,259 @@
-"""Time-integrator interface for df/dt = F(t, f).
+"""Time integrators for df/dt = N(t, f) + L f.
 
-Schemes (forward Euler, SSP Runge-Kutta, RK4, exponential and adaptive
-schemes) are registered as plugins through ``granframe_register_time_integrators``;
-the runner looks them up by name and never branches on scheme names.
+The equation is split into a part N treated explicitly (the collision term
+Q(f, f)/eps) and a linear part L that is diagonal in Fourier space (the heat
+bath tau Delta_v). Explicit Runge-Kutta schemes use the sum; the
+integrating-factor scheme treats L exactly through exp(dt L). Schemes are
+registered through ``granframe_register_time_integrators`` (the built-ins
+in ``granframe._builtin``); the runner looks them up by name and never
+branches on scheme names.
 """
 
 from __future__ import annotations
 
 import abc
-from typing import Callable, ClassVar
+import math
+from fractions import Fraction
+from typing import ClassVar
+
+import attrs
+
+
+class Equation(abc.ABC):
+    """df/dt = N(t, f) + L f with L linear and cheap to exponentiate."""
+
+    @abc.abstractmethod
+    def nonlinear(self, t: float, f):
+        """N(t, f)."""
+
+    @abc.abstractmethod
+    def linear(self, f):
+        """L f."""
+
+    @abc.abstractmethod
+    def propagate(self, f, dt: float):
+        """exp(dt L) f."""
+
+    def __call__(self, t: float, f):
+        """The whole right-hand side N(t, f) + L f."""
+        return self.nonlinear(t, f) + self.linear(f)
 
 
 class TimeIntegrator(abc.ABC):
-    """One step f(t) -> f(t + dt) of an explicit one-step method.
+    """One step f(t) -> f(t + dt) of a one-step method.
 
     Attributes
     ----------
     order : int
-        Classical order of accuracy p: the global error is O(dt^p).
+        Classical order p: the global error is O(dt^p).
     adaptive : bool
-        True when the scheme chooses its own step from an error estimate.
+        True for schemes with an embedded error estimate
+        (:class:`AdaptiveIntegrator`); the runner then controls the step.
     """
 
     order: ClassVar[int]
     adaptive: ClassVar[bool] = False
 
     @abc.abstractmethod
-    def step(self, rhs: Callable, t: float, f, dt: float):
-        """Return f(t + dt) given ``rhs(t, f) -> df/dt``; ``f`` is not modified."""
+    def step(self, equation: Equation, t: float, f, dt: float):
+        """Return f(t + dt); ``f`` is not modified."""
+
+
+class AdaptiveIntegrator(TimeIntegrator):
+    """A scheme with an embedded lower-order solution for step-size control.
+
+    Attributes
+    ----------
+    embedded_order : int
+        Order q of the embedded solution; the error estimate is O(dt^{q+1}).
+    """
+
+    adaptive: ClassVar[bool] = True
+    embedded_order: ClassVar[int]
+
+    @abc.abstractmethod
+    def attempt(self, equation: Equation, t: float, f, dt: float):
+        """Return ``(f_new, error)``: the step of order p and the difference to the embedded one."""
+
+    def step(self, equation, t, f, dt):
+        return self.attempt(equation, t, f, dt)[0]
+
+
+def _fractions(rows):
+    return tuple(tuple(float(Fraction(x)) for x in row) for row in rows)
+
+
+@attrs.frozen
+class Tableau:
+    """Butcher tableau (A strictly lower triangular, weights b, nodes c = row sums of A)."""
+
+    a: tuple
+    b: tuple
+
+    @property
+    def c(self):
+        return tuple(sum(row) for row in self.a)
+
+
+def _combine(f, dt, weights, stages):
+    """f + dt sum_j w_j k_j, skipping zero weights."""
+    result = f
+    for w, k in zip(weights, stages):
+        if w != 0.0:
+            result = result + (dt * w) * k
+    return result
+
+
+class ExplicitRungeKutta(TimeIntegrator):
+    r"""Explicit Runge-Kutta method of a given tableau on N + L.
+
+    .. math:: k_i = F\big(t + c_i \Delta t,\ f + \Delta t \sum_{j<i} a_{ij} k_j\big),\qquad
+              f^{n+1} = f^n + \Delta t \sum_i b_i k_i,
+
+    with F = N + L.
+    """
+
+    tableau: ClassVar[Tableau]
+
+    def step(self, equation, t, f, dt):
+        stages = []
+        for row, c in zip(self.tableau.a, self.tableau.c):
+            stages.append(equation(t + c * dt, _combine(f, dt, row, stages)))
+        return _combine(f, dt, self.tableau.b, stages)
+
+
+class ForwardEuler(ExplicitRungeKutta):
+    """Forward Euler, order 1."""
+
+    order = 1
+    tableau = Tableau(a=((),), b=(1.0,))
+
+
+class SSPRK2(ExplicitRungeKutta):
+    """Strong-stability-preserving RK2 (Heun; Shu-Osher), order 2, SSP coefficient 1."""
+
+    order = 2
+    tableau = Tableau(a=_fractions([[], ["1"]]), b=(0.5, 0.5))
+
+
+class SSPRK3(ExplicitRungeKutta):
+    """Strong-stability-preserving RK3 of Shu and Osher (1988), order 3, SSP coefficient 1."""
+
+    order = 3
+    tableau = Tableau(a=_fractions([[], ["1"], ["1/4", "1/4"]]),
+                      b=tuple(float(Fraction(x)) for x in ("1/6", "1/6", "2/3")))
+
+
+RK4_TABLEAU = Tableau(a=_fractions([[], ["1/2"], ["0", "1/2"], ["0", "0", "1"]]),
+                      b=tuple(float(Fraction(x)) for x in ("1/6", "1/3", "1/3", "1/6")))
+
+
+class RK4(ExplicitRungeKutta):
+    """Classical fourth-order Runge-Kutta method (the review's time integrator)."""
+
+    order = 4
+    tableau = RK4_TABLEAU
+
+
+class IntegratingFactorRK4(TimeIntegrator):
+    r"""Lawson's integrating-factor RK4: the linear part L = tau Delta is integrated exactly.
+
+    With w(t) = e^{-tL} f(t), dw/dt = e^{-tL} N(t, e^{tL} w) is advanced by the
+    classical RK4 tableau; in f:
+
+    .. math:: Y_i = e^{c_i \Delta t L} f + \Delta t \sum_{j<i} a_{ij}
+              e^{(c_i - c_j)\Delta t L} k_j,\quad k_i = N(t + c_i\Delta t, Y_i),\quad
+              f^{n+1} = e^{\Delta t L} f + \Delta t \sum_i b_i e^{(1-c_i)\Delta t L} k_i .
+
+    Order 4; exact for df/dt = L f, so the heat bath sets no step-size limit.
+    Reference: J. D. Lawson, SIAM J. Numer. Anal. 4 (1967).
+    """
+
+    order = 4
+    tableau = RK4_TABLEAU
+
+    def step(self, equation, t, f, dt):
+        a, b, c = self.tableau.a, self.tableau.b, self.tableau.c
+        stages = []
+        for i, row in enumerate(a):
+            y = equation.propagate(f, c[i] * dt)
+            for j, w in enumerate(row):
+                if w != 0.0:
+                    y = y + (dt * w) * equation.propagate(stages[j], (c[i] - c[j]) * dt)
+            stages.append(equation.nonlinear(t + c[i] * dt, y))
+        result = equation.propagate(f, dt)
+        for i, w in enumerate(b):
+            result = result + (dt * w) * equation.propagate(stages[i], (1.0 - c[i]) * dt)
+        return result
+
+
+class DormandPrince54(AdaptiveIntegrator):
+    """Dormand-Prince 5(4) embedded pair, first-same-as-last (6 evaluations per accepted step).
+
+    Reference: J. R. Dormand, P. J. Prince, J. Comput. Appl. Math. 6 (1980).
+    """
+
+    order = 5
+    embedded_order = 4
+    tableau = Tableau(
+        a=_fractions([[], ["1/5"], ["3/40", "9/40"], ["44/45", "-56/15", "32/9"],
+                      ["19372/6561", "-25360/2187", "64448/6561", "-212/729"],
+                      ["9017/3168", "-355/33", "46732/5247", "49/176", "-5103/18656"],
+                      ["35/384", "0", "500/1113", "125/192", "-2187/6784", "11/84"]]),
+        b=_fractions([["35/384", "0", "500/1113", "125/192", "-2187/6784", "11/84", "0"]])[0])
+    #: b - b_embedded, the weights of the error estimate
+    error_weights = tuple(
+        float(Fraction(x) - Fraction(y)) for x, y in zip(
+            ("35/384", "0", "500/1113", "125/192", "-2187/6784", "11/84", "0"),
+            ("5179/57600", "0", "7571/16695", "393/640", "-92097/339200", "187/2100", "1/40")))
+
+    def __init__(self):
+        self._last = None       # (f, t, F(t, f)): the first stage, known when f is
+        self._candidate = None  # the same for the last attempt's new solution
+
+    def attempt(self, equation, t, f, dt):
+        stages = []
+        for i, (row, c) in enumerate(zip(self.tableau.a, self.tableau.c)):
+            if i == 0 and self._last is not None and self._last[0] is f and self._last[1] == t:
+                stages.append(self._last[2])
+                continue
+            y = _combine(f, dt, row, stages)
+            stages.append(equation(t + c * dt, y))
+            if i == 0:
+                self._last = (f, t, stages[0])
+        # the last row equals b: its stage point y is the new solution, its stage F(t+dt, y)
+        self._candidate = (y, t + dt, stages[-1])
+        error = dt * self.error_weights[0] * stages[0]
+        error = _combine(error, dt, self.error_weights[1:], stages[1:])
+        return y, error
+
+    def accept(self):
+        """Tell the scheme its last attempt was accepted (its last stage starts the next step)."""
+        self._last = self._candidate
+
+
+@attrs.frozen
+class StepController:
+    r"""Elementary step-size control for an :class:`AdaptiveIntegrator`.
+
+    The scaled error of an attempt is
+    err = max|E| / (tolerance * max(max|f^n|, max|f^{n+1}|)); the step is
+    accepted when err <= 1, and the next step is
+    dt * min(growth, max(shrink, safety * err^{-1/(q+1)})) with q the embedded order
+    [Hairer, Norsett, Wanner, Solving ODEs I, section II.4].
+    """
+
+    tolerance: float
+    safety: float = 0.9
+    shrink: float = 0.2
+    growth: float = 5.0
+
+    def scaled_error(self, xp, f, f_new, error) -> float:
+        scale = max(float(xp.max(xp.abs(f))), float(xp.max(xp.abs(f_new))))
+        return float(xp.max(xp.abs(error))) / (self.tolerance * scale)
+
+    def next_step(self, dt: float, err: float, embedded_order: int) -> float:
+        if not math.isfinite(err):
+            return dt * self.shrink
+        factor = self.growth if err == 0.0 else self.safety * err ** (-1.0 / (embedded_order + 1))
+        return dt * min(self.growth, max(self.shrink, factor))

@@ -39,6 +39,7 @@ FAMILIES = {
     "quadratures": "granframe_register_quadratures",
     "collision_operators": "granframe_register_collision_operators",
     "time_integrators": "granframe_register_time_integrators",
+    "initial_conditions": "granframe_register_initial_conditions",
     "array_backends": "granframe_register_array_backends",
 }
 

@@ -1,0 +1,354 @@
+"""The description of a run: what to solve, how, and what to write.
+
+A :class:`RunDescription` is a frozen attrs object; every implementation in
+it is a :class:`Component` (a registered name plus its parameters), so it
+round-trips through TOML (:meth:`RunDescription.to_toml`,
+:meth:`RunDescription.from_toml`) and is stored verbatim in the run's store.
+Everything is checked when the description is made, before any file is
+written; messages name the parameter, the value and what is allowed.
+
+Example (the review's heated Maxwell-molecule test)::
+
+    title = "heated Maxwell molecules"
+    final_time = 2.0
+    time_step = 0.01
+    heat_bath = 0.1
+
+    [grid]
+    dimension = 2
+    n_modes = 64
+    support_radius = 10.0
+
+    [kernel]
+    name = "maxwell"
+
+    [restitution]
+    name = "constant"
+    value = 0.5
+
+    [initial]
+    name = "maxwellian"
+    temperature = 8.0
+
+    [operator]
+    name = "fast_spectral"
+    radial_points = 32
+    sphere = { name = "circle_trapezoid", n_points = 16 }
+"""
+
+from __future__ import annotations
+
+import inspect
+import json
+import math
+import tomllib
+from typing import Any
+
+import attrs
+import tomli_w
+
+from granframe import validators as check
+from granframe.grid import VelocityGrid
+from granframe.initial import callable_reference, resolve_callable
+from granframe.registry import default_registries
+
+#: Tolerance on "final_time and snapshot_interval are whole multiples of time_step".
+_MULTIPLE_TOLERANCE = 1e-9
+
+
+def _is_json_scalar(value) -> bool:
+    return value is None or isinstance(value, (str, bool, int, float))
+
+
+def _plain(owner: str, key: str, value) -> Any:
+    """A parameter in TOML/JSON form: callables by reference, tuples as lists."""
+    if isinstance(value, dict):
+        return {k: _plain(owner, f"{key}.{k}", v) for k, v in value.items() if v is not None}
+    if isinstance(value, (list, tuple)):
+        return [_plain(owner, key, v) for v in value]
+    if attrs.has(type(value)):
+        return _plain(owner, key, attrs.asdict(value, recurse=False))
+    if callable(value):
+        reference = callable_reference(value)
+        if reference is None:
+            check.reject(owner, key, value, "is a callable that cannot be written to TOML or a "
+                         "store: use a module-level function or a 'module:function' string")
+        return reference
+    if isinstance(value, float) and not math.isfinite(value):
+        check.reject(owner, key, value, "must be finite")
+    if not _is_json_scalar(value):
+        check.reject(owner, key, value, "must be a number, string, boolean, list or table",
+                     error=TypeError)
+    return value
+
+
+@attrs.frozen
+class Component:
+    """A registered implementation: ``name`` in a family, with its parameters."""
+
+    name: str = attrs.field()
+    params: dict = attrs.field(factory=dict)
+
+    @name.validator
+    def _check_name(self, attribute, value):
+        if not isinstance(value, str) or not value:
+            check.reject("Component", "name", value, "must be a non-empty string", error=TypeError)
+
+    @params.validator
+    def _check_params(self, attribute, value):
+        if not isinstance(value, dict) or not all(isinstance(k, str) for k in value):
+            check.reject("Component", "params", value, "must be a table of named parameters",
+                         error=TypeError)
+
+    @classmethod
+    def coerce(cls, value) -> "Component":
+        """A Component from itself, a name, or a table ``{name = ..., <params>}``."""
+        if isinstance(value, Component):
+            return value
+        if isinstance(value, str):
+            return cls(value)
+        if isinstance(value, dict):
+            params = dict(value)
+            if "name" not in params:
+                check.reject("Component", "name", None, f"is missing from the table {value!r}")
+            return cls(params.pop("name"), params)
+        check.reject("Component", "value", value, "must be a name or a table with a 'name' key",
+                     error=TypeError)
+
+    def to_dict(self, owner: str) -> dict:
+        return {"name": self.name, **_plain(owner, owner, self.params)}
+
+
+def _component(value):
+    try:
+        return Component.coerce(value)
+    except (TypeError, ValueError):
+        return value  # the validator reports it against the right parameter
+
+
+def _optional_positive(instance, attribute, value):
+    if value is not None:
+        check.real(0.0, math.inf, lower_open=True)(instance, attribute, value)
+
+
+@attrs.frozen(kw_only=True)
+class Output:
+    """What is written: f every ``snapshot_interval`` in time (and at the start and end).
+
+    Moments (mass, momentum, temperature, energy, min f, kurtosis, ...) are
+    written for every step; they are cheap. ``snapshot_interval = None``
+    keeps only the initial and final f.
+    """
+
+    snapshot_interval: float | None = attrs.field(default=None, converter=check.to_float,
+                                                  validator=_optional_positive)
+
+
+@attrs.frozen(kw_only=True)
+class Health:
+    """Limits checked after every step (the run stops with a message) and on f0.
+
+    Parameters
+    ----------
+    mass_tolerance : float
+        Largest |mass(t)/mass(0) - 1|.
+    positivity_tolerance : float
+        Largest share of negative mass, int max(-f, 0) / int |f|.
+    edge_tolerance : float
+        Largest f0 on the faces of the box, relative to max f0.
+    initial_mass_tolerance : float
+        Largest relative error of the grid mass of f0 against its intended mass.
+    """
+
+    mass_tolerance: float = attrs.field(default=1e-8, converter=check.to_float,
+                                        validator=check.real(0.0, 1.0, lower_open=True))
+    positivity_tolerance: float = attrs.field(default=1e-2, converter=check.to_float,
+                                              validator=check.real(0.0, 1.0))
+    edge_tolerance: float = attrs.field(default=1e-8, converter=check.to_float,
+                                        validator=check.real(0.0, 1.0))
+    initial_mass_tolerance: float = attrs.field(default=1e-6, converter=check.to_float,
+                                                validator=check.real(0.0, 1.0, lower_open=True))
+
+
+def _table(cls):
+    def convert(value):
+        return cls(**value) if isinstance(value, dict) else value
+    return convert
+
+
+def _instance_of(cls, what):
+    def validate(instance, attribute, value):
+        if not isinstance(value, cls):
+            check.reject("RunDescription", attribute.name, value, f"must be {what}",
+                         error=TypeError)
+    return validate
+
+
+_FAMILIES = {"kernel": "collision_kernels", "restitution": "restitution_laws",
+             "initial": "initial_conditions", "operator": "collision_operators",
+             "integrator": "time_integrators", "backend": "array_backends"}
+
+
+@attrs.frozen(kw_only=True)
+class RunDescription:
+    r"""A run of :math:`\partial_t f = Q(f, f)/\varepsilon + \tau \Delta_v f` from f0 to ``final_time``.
+
+    Parameters
+    ----------
+    grid : VelocityGrid (or a table of its parameters)
+    final_time : float
+        End of the run (it starts at t = 0).
+    kernel, restitution, initial : Component
+        Registered collision kernel, restitution law and initial condition.
+    operator : Component
+        Collision operator and its options; an option given as a table with a
+        ``name`` is a registered quadrature (e.g. ``sphere``).
+    backend : Component
+        Array backend; ``auto`` takes pyfftw when installed, else numpy.
+    integrator : Component
+        Registered time integrator (default ``rk4``, the review's).
+    time_step : float or None
+        dt of fixed-step integrators (required for them); the first trial step
+        of adaptive ones. final_time and the snapshot interval must be whole
+        multiples of it, so that outputs fall on steps.
+    tolerance : float or None
+        Error tolerance of adaptive integrators (required for them).
+    heat_bath : float
+        tau >= 0.
+    knudsen : float
+        epsilon > 0.
+    output : Output
+    health : Health
+    title : str
+    """
+
+    grid: VelocityGrid = attrs.field(converter=_table(VelocityGrid),
+                                     validator=_instance_of(VelocityGrid, "a VelocityGrid"))
+    final_time: float = attrs.field(converter=check.to_float,
+                                    validator=check.real(0.0, math.inf, lower_open=True))
+    kernel: Component = attrs.field(converter=_component,
+                                    validator=_instance_of(Component, "a name or a table"))
+    restitution: Component = attrs.field(converter=_component,
+                                         validator=_instance_of(Component, "a name or a table"))
+    initial: Component = attrs.field(converter=_component,
+                                     validator=_instance_of(Component, "a name or a table"))
+    operator: Component = attrs.field(default=Component("fast_spectral"), converter=_component,
+                                      validator=_instance_of(Component, "a name or a table"))
+    backend: Component = attrs.field(default=Component("auto"), converter=_component,
+                                     validator=_instance_of(Component, "a name or a table"))
+    integrator: Component = attrs.field(default=Component("rk4"), converter=_component,
+                                        validator=_instance_of(Component, "a name or a table"))
+    time_step: float | None = attrs.field(default=None, converter=check.to_float,
+                                          validator=_optional_positive)
+    tolerance: float | None = attrs.field(default=None, converter=check.to_float,
+                                          validator=_optional_positive)
+    heat_bath: float = attrs.field(default=0.0, converter=check.to_float,
+                                   validator=check.real(0.0, math.inf))
+    knudsen: float = attrs.field(default=1.0, converter=check.to_float,
+                                 validator=check.real(0.0, math.inf, lower_open=True))
+    output: Output = attrs.field(factory=Output, converter=_table(Output),
+                                 validator=_instance_of(Output, "an Output table"))
+    health: Health = attrs.field(factory=Health, converter=_table(Health),
+                                 validator=_instance_of(Health, "a Health table"))
+    title: str = attrs.field(default="", validator=_instance_of(str, "a string"))
+
+    def __attrs_post_init__(self):
+        registries = default_registries()
+        for field, family in _FAMILIES.items():
+            component = getattr(self, field)
+            if field == "backend" and component.name == "auto":
+                continue
+            entry = registries.get(family, component.name)  # unknown names: clear error
+            if field == "operator":
+                params = {"grid": None, "kernel": None, "restitution": None, "backend": None,
+                          **component.params}
+                try:
+                    inspect.signature(entry.factory).bind(**params)
+                except TypeError as exc:
+                    check.reject("RunDescription", "operator", component.params,
+                                 f"has an unknown option ({exc})", error=TypeError)
+        self.build("kernel"), self.build("restitution"), self.build("initial")
+        integrator = self.build("integrator")
+        self._check_time_stepping(integrator.adaptive)
+        self.to_dict()  # everything can be written to TOML and a store
+
+    def _check_time_stepping(self, adaptive: bool):
+        owner, name = "RunDescription", self.integrator.name
+        if adaptive and self.tolerance is None:
+            check.reject(owner, "tolerance", None,
+                         f"is required by the adaptive integrator '{name}' (a positive number)")
+        if not adaptive:
+            if self.time_step is None:
+                check.reject(owner, "time_step", None,
+                             f"is required by the fixed-step integrator '{name}'")
+            if self.tolerance is not None:
+                check.reject(owner, "tolerance", self.tolerance,
+                             f"applies to adaptive integrators only, not to '{name}'")
+            for field in ("final_time", "snapshot_interval"):
+                value = (self.final_time if field == "final_time"
+                         else self.output.snapshot_interval)
+                if value is None:
+                    continue
+                ratio = value / self.time_step
+                if abs(ratio - round(ratio)) > _MULTIPLE_TOLERANCE * max(1.0, ratio):
+                    check.reject(owner, field, value, f"must be a whole multiple of time_step "
+                                 f"= {self.time_step!r} (ratio {ratio:.12g})")
+        interval = self.output.snapshot_interval
+        if interval is not None and interval > self.final_time:
+            check.reject(owner, "output.snapshot_interval", interval,
+                         f"must be <= final_time = {self.final_time!r}")
+
+    # -- building ---------------------------------------------------------------------
+    def build(self, field: str, **extra):
+        """Build the registered implementation of ``field`` (kernel, restitution, initial, ...)."""
+        component = getattr(self, field)
+        params = dict(component.params)
+        if field == "kernel" and isinstance(params.get("angular"), str):
+            params["angular"] = resolve_callable("kernel", "angular", params["angular"])
+        if field == "operator":
+            params = {k: (default_registries().create("quadratures", **v)
+                          if isinstance(v, dict) and "name" in v else v)
+                      for k, v in params.items()}
+        if field == "backend" and component.name == "auto":
+            from granframe.bench import preferred_backend
+            return default_registries().create("array_backends", preferred_backend(), **params)
+        return default_registries().create(_FAMILIES[field], component.name, **params, **extra)
+
+    # -- TOML / dict ------------------------------------------------------------------
+    def to_dict(self) -> dict:
+        """JSON- and TOML-ready nested dict (None values left out)."""
+        data = {"title": self.title, "final_time": self.final_time, "time_step": self.time_step,
+                "tolerance": self.tolerance, "heat_bath": self.heat_bath,
+                "knudsen": self.knudsen,
+                "grid": attrs.asdict(self.grid),
+                **{field: getattr(self, field).to_dict(field) for field in _FAMILIES},
+                "output": attrs.asdict(self.output), "health": attrs.asdict(self.health)}
+        return json.loads(json.dumps(_plain("RunDescription", "description", data)))
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "RunDescription":
+        if not isinstance(data, dict):
+            check.reject("RunDescription", "description", data, "must be a table",
+                         error=TypeError)
+        known = {a.name for a in attrs.fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            check.reject("RunDescription", unknown[0], data[unknown[0]],
+                         f"is not a parameter of a run description; known: {', '.join(sorted(known))}",
+                         error=TypeError)
+        return cls(**data)
+
+    def to_toml(self) -> str:
+        return tomli_w.dumps(self.to_dict())
+
+    @classmethod
+    def from_toml(cls, text: str) -> "RunDescription":
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise ValueError(f"RunDescription: the TOML text is invalid: {exc}") from None
+        return cls.from_dict(data)
+
+    def replace(self, **changes) -> "RunDescription":
+        """A copy with some parameters changed (validated again)."""
+        return attrs.evolve(self, **changes)

@@ -1,0 +1,251 @@
+"""Run a :class:`~granframe.description.RunDescription` into a store.
+
+:class:`Simulation` builds every object once (operator precomputation
+included) and checks f0 against the grid; :meth:`Simulation.run` steps to
+``final_time``, computes the moments after every step, checks the health
+limits, and commits a snapshot of f with the pending moment records on the
+output schedule (see :mod:`granframe.storage` for why a stop at any moment
+leaves a valid store). ``resume=True`` continues from the last committed
+snapshot; the result equals that of an uninterrupted run to round-off.
+"""
+
+from __future__ import annotations
+
+import math
+import platform
+import sys
+import time
+
+import attrs
+import numpy
+import tqdm
+import zarr
+
+from granframe._version import __version__
+from granframe.backends import available_cpus
+from granframe.description import _FAMILIES, RunDescription
+from granframe.equation import HomogeneousBoltzmann
+from granframe.initial import check_fits
+from granframe.integrators import StepController
+from granframe.registry import default_registries
+from granframe.storage import SCALAR_MOMENTS, RunStore
+
+
+class HealthError(RuntimeError):
+    """A run stopped by a health check; the message says which check, when and by how much."""
+
+
+def _safe(function) -> float:
+    try:
+        return float(function())
+    except (ZeroDivisionError, OverflowError, ValueError):
+        return math.nan
+
+
+def moments(grid, f, xp) -> dict:
+    """Mass, momentum, temperature, energy, min f, negative-mass share, kurtosis, a2 of f."""
+    absolute = float(xp.sum(xp.abs(f)))
+    return {
+        "mass": _safe(lambda: grid.mass(f, xp)),
+        "momentum": grid.momentum(f, xp),
+        "temperature": _safe(lambda: grid.temperature(f, xp)),
+        "kinetic_energy": _safe(lambda: grid.kinetic_energy(f, xp)),
+        "min_f": float(xp.min(f)),
+        "negative_mass_fraction": _safe(lambda: float(xp.sum(xp.maximum(-f, 0.0))) / absolute),
+        "kurtosis": _safe(lambda: grid.kurtosis(f, xp)),
+        "sonine_a2": _safe(lambda: grid.sonine_a2(f, xp)),
+    }
+
+
+def health_problem(record: dict, mass0: float, health) -> str | None:
+    """What is wrong with the state behind ``record``, or None (see :class:`Health`)."""
+    values = [record["mass"], record["kinetic_energy"], record["min_f"]]
+    if not all(math.isfinite(v) for v in values):
+        return "f is not finite (NaN or Inf)"
+    if record["mass"] <= 0.0:
+        return f"the mass is not positive ({record['mass']:.6g})"
+    drift = abs(record["mass"] / mass0 - 1.0)
+    if drift > health.mass_tolerance:
+        return (f"mass drift |mass/mass(0) - 1| = {drift:.3g} exceeds mass_tolerance = "
+                f"{health.mass_tolerance:g}")
+    if record["negative_mass_fraction"] > health.positivity_tolerance:
+        return (f"loss of positivity: negative mass share {record['negative_mass_fraction']:.3g} "
+                f"exceeds positivity_tolerance = {health.positivity_tolerance:g} "
+                f"(min f = {record['min_f']:.3g})")
+    return None
+
+
+@attrs.frozen
+class RunResult:
+    """What a run did: its store, final status, steps, simulated time and wall time."""
+
+    store: str
+    status: str
+    steps: int
+    time: float
+    snapshots: int
+    wall_seconds: float
+
+
+class _Records:
+    """Moment records waiting for the next commit."""
+
+    def __init__(self):
+        self.columns = {name: [] for name in ("step_time", "step", "dt", "momentum")
+                        + SCALAR_MOMENTS}
+
+    def add(self, step: int, t: float, dt: float, record: dict) -> None:
+        self.columns["step_time"].append(t)
+        self.columns["step"].append(step)
+        self.columns["dt"].append(dt)
+        for name in ("momentum",) + SCALAR_MOMENTS:
+            self.columns[name].append(record[name])
+
+    def take(self) -> dict:
+        taken = self.columns
+        self.__init__()
+        return taken
+
+
+class Simulation:
+    """Everything a run needs, built once from a description (f0 checked against the grid)."""
+
+    def __init__(self, description: RunDescription):
+        if not isinstance(description, RunDescription):
+            raise TypeError(f"Simulation: parameter 'description' = {description!r} is invalid; "
+                            "must be a RunDescription")
+        self.description = d = description
+        self.grid = d.grid
+        self.backend = d.build("backend")
+        self.operator = d.build("operator", grid=d.grid, kernel=d.build("kernel"),
+                                restitution=d.build("restitution"), backend=self.backend)
+        self.equation = HomogeneousBoltzmann(self.operator, d.heat_bath, d.knudsen)
+        self.integrator = d.build("integrator")
+        self.f0 = d.build("initial").sample(d.grid)
+        check_fits(d.grid, self.f0, d.build("initial"), d.health.edge_tolerance,
+                   d.health.initial_mass_tolerance)
+
+    def provenance(self) -> dict:
+        """Versions and plugins behind this run (stored with it)."""
+        registries = default_registries()
+        plugins = {}
+        for field, family in _FAMILIES.items():
+            name = (self.backend.name if field == "backend"
+                    else getattr(self.description, field).name)
+            plugins[field] = f"{name} ({registries.get(family, name).source})"
+        return {"granframe": __version__, "backend": repr(self.backend), **plugins,
+                "python": sys.version.split()[0], "numpy": numpy.__version__,
+                "zarr": zarr.__version__, "host": platform.node(), "cpus": available_cpus()}
+
+    # -- schedule ---------------------------------------------------------------------
+    def _targets(self):
+        """Output points after t = 0: step indices (fixed step) or times (adaptive)."""
+        d = self.description
+        interval = d.output.snapshot_interval
+        if not self.integrator.adaptive:
+            total = round(d.final_time / d.time_step)
+            every = total if interval is None else round(interval / d.time_step)
+            return sorted(set(range(every, total, every)) | {total})
+        count = 0 if interval is None else int(math.floor(d.final_time / interval * (1 + 1e-12)))
+        times = [k * interval for k in range(1, count + 1)] if count else []
+        return sorted({t for t in times if t < d.final_time * (1 - 1e-12)} | {d.final_time})
+
+    # -- running ----------------------------------------------------------------------
+    def run(self, out, *, resume: bool = False, overwrite: bool = False,
+            progress: bool | None = None) -> RunResult:
+        """Run to ``final_time`` writing the store ``out`` (see the module notes).
+
+        ``progress`` None shows a progress bar on a terminal only.
+        """
+        d, grid, backend = self.description, self.grid, self.backend
+        xp = backend.xp
+        start_wall = time.perf_counter()
+        description = d.to_dict()
+        if resume and RunStore.exists(out):
+            store = RunStore.resume(out, description)
+            state = store.progress
+            if state["status"] == "finished":
+                return RunResult(str(out), "already finished", state["step"], state["time"],
+                                 store.snapshot_count, 0.0)
+            f_host, t = store.last_snapshot()
+            f, step, mass0 = backend.asarray(f_host), int(state["step"]), float(state["mass0"])
+            dt_next = state.get("dt_next")
+        else:
+            store = RunStore.create(out, description, d.to_toml(), grid, self.provenance(),
+                                    overwrite=overwrite)
+            f, t, step = backend.asarray(self.f0), 0.0, 0
+            record = moments(grid, f, xp)
+            # adaptive schemes without a first trial step start from 1% of the run
+            mass0, dt_next = record["mass"], d.time_step or d.final_time / 100
+            first = _Records()
+            first.add(0, 0.0, 0.0, record)
+            store.commit([(0.0, self.f0)], first.take(),
+                         {"status": "running", "step": 0, "time": 0.0, "mass0": mass0,
+                          "dt_next": dt_next})
+        adaptive = self.integrator.adaptive
+        targets = [x for x in self._targets() if (x > step if not adaptive else x > t)]
+        controller = StepController(d.tolerance) if adaptive else None
+        records = _Records()
+        bar = tqdm.tqdm(total=d.final_time, initial=t, disable=None if progress is None
+                        else not progress, unit="t", dynamic_ncols=True,
+                        bar_format="{l_bar}{bar}| t={n:.4g}/{total:.4g} [{elapsed}<{remaining}]"
+                                   "{postfix}")
+        try:
+            for target in targets:
+                while (step < target) if not adaptive else (t < target):
+                    if adaptive:
+                        try:
+                            f, t, dt, dt_next = self._adaptive_step(f, t, dt_next, target,
+                                                                    controller, xp)
+                        except HealthError as exc:
+                            self._fail(store, records, str(exc), step, t, mass0, dt_next)
+                        step += 1
+                    else:
+                        f = self.integrator.step(self.equation, t, f, d.time_step)
+                        step, dt = step + 1, d.time_step
+                        t = step * d.time_step
+                    record = moments(grid, f, xp)
+                    records.add(step, t, dt, record)
+                    problem = health_problem(record, mass0, d.health)
+                    if problem is not None:
+                        self._fail(store, records,
+                                   f"health check failed at step {step}, t = {t:.6g}: {problem}",
+                                   step, t, mass0, dt_next)
+                    bar.update(t - bar.n)
+                    bar.set_postfix_str(f"step {step}, T={record['temperature']:.6g}, mass drift "
+                                        f"{record['mass'] / mass0 - 1:+.1e}", refresh=False)
+                done = target == targets[-1]
+                store.commit([(t, backend.to_numpy(f))], records.take(),
+                             {"status": "finished" if done else "running", "step": step,
+                              "time": t, "mass0": mass0, "dt_next": dt_next})
+        finally:
+            bar.close()
+        return RunResult(str(out), "finished", step, t, store.snapshot_count,
+                         time.perf_counter() - start_wall)
+
+    @staticmethod
+    def _fail(store, records, message, step, t, mass0, dt_next):
+        """Write the moments up to the failing step, mark the store failed, raise HealthError.
+
+        The snapshots stay the last healthy states; the moments show how it failed.
+        """
+        store.commit([], records.take(), {"status": "failed", "message": message, "step": step,
+                                          "time": t, "mass0": mass0, "dt_next": dt_next})
+        raise HealthError(message)
+
+    def _adaptive_step(self, f, t, dt, target, controller, xp):
+        """One accepted step of the adaptive integrator, landing exactly on ``target``."""
+        integrator = self.integrator
+        while True:
+            dt = min(dt, target - t)
+            if dt <= 1e-14 * max(1.0, abs(t)):
+                raise HealthError(f"health check failed at t = {t:.6g}: the adaptive step size "
+                                  f"fell to {dt:.3g} (stiffness or a blow-up)")
+            f_new, error = integrator.attempt(self.equation, t, f, dt)
+            err = controller.scaled_error(xp, f, f_new, error)
+            dt_next = controller.next_step(dt, err, integrator.embedded_order)
+            if err <= 1.0:
+                integrator.accept()
+                t_new = target if target - (t + dt) <= 1e-12 * max(1.0, abs(target)) else t + dt
+                return f_new, t_new, dt, dt_next
+            dt = dt_next
