@@ -7,6 +7,13 @@ plugins [--json]
     one-line description. The JSON form is documented in docs/plugins.md.
 bench [--json] [--backend NAME] [--threads T] [--repeats R] [--config D:N[:N_RHO:M]]
     Time the fast operator against the FFT floor (docs/benchmarks.md).
+run SOURCE --out STORE [--resume] [--overwrite] [--quick] [--progress/--no-progress]
+    Run a description (a TOML file or a study module under studies/) into a zarr store.
+    Exit status 3 when a health check stopped the run, 130 when interrupted.
+plot STORE --out DIR
+    Draw the figures of a run (PNG).
+info STORE
+    Say what is in a store.
 """
 
 from __future__ import annotations
@@ -54,6 +61,46 @@ def _bench(args) -> int:
     return 0
 
 
+def _run(args) -> int:
+    from granframe.runner import HealthError, Simulation, load_description
+
+    description = load_description(args.source, quick=args.quick)
+    simulation = Simulation(description)
+    try:
+        result = simulation.run(args.out, resume=args.resume, overwrite=args.overwrite,
+                                progress=args.progress)
+    except HealthError as exc:
+        print(f"granframe: run stopped: {exc}\nThe store '{args.out}' keeps every snapshot "
+              "before it and the moments up to it.", file=sys.stderr)
+        return 3
+    except KeyboardInterrupt:
+        print(f"\ngranframe: interrupted; the store '{args.out}' holds every complete snapshot: "
+              "continue with --resume", file=sys.stderr)
+        return 130
+    if result.status == "already finished":
+        print(f"{args.out}: the run is already finished (t = {result.time:g}, "
+              f"{result.steps} steps)")
+    else:
+        print(f"{args.out}: finished, {result.steps} steps to t = {result.time:g} in "
+              f"{result.wall_seconds:.1f} s, {result.snapshots} snapshots")
+    return 0
+
+
+def _plot(args) -> int:
+    from granframe.plotting import plot
+
+    for path in plot(args.store, args.out):
+        print(path)
+    return 0
+
+
+def _info(args) -> int:
+    from granframe.storage import describe
+
+    print(describe(args.store))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="granframe",
@@ -72,6 +119,25 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--config", action="append", metavar="D:N[:N_RHO:M]",
                        help="configuration (repeatable); default: the review's five")
     bench.set_defaults(handler=_bench)
+    run = commands.add_parser("run", help="run a description (TOML or study module) into a store")
+    run.add_argument("source", metavar="STUDY_OR_TOML",
+                     help="a .toml run description or a .py study defining description(quick)")
+    run.add_argument("--out", required=True, metavar="STORE", help="zarr store to write")
+    run.add_argument("--resume", action="store_true",
+                     help="continue the run in STORE from its last complete snapshot")
+    run.add_argument("--overwrite", action="store_true", help="replace an existing STORE")
+    run.add_argument("--quick", action="store_true",
+                     help="the study's reduced variant (smaller grid or time)")
+    run.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                     help="progress bar (default: only on a terminal)")
+    run.set_defaults(handler=_run)
+    plot = commands.add_parser("plot", help="draw the figures of a run store (PNG)")
+    plot.add_argument("store", metavar="STORE")
+    plot.add_argument("--out", required=True, metavar="DIR", help="folder for the PNG files")
+    plot.set_defaults(handler=_plot)
+    info = commands.add_parser("info", help="say what is in a run store")
+    info.add_argument("store", metavar="STORE")
+    info.set_defaults(handler=_info)
     return parser
 
 
@@ -79,7 +145,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.handler(args)
-    except (ValueError, TypeError) as exc:
+    except (ValueError, TypeError, OSError) as exc:
         print(f"granframe: error: {exc}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # output piped into e.g. `head`, which stopped reading

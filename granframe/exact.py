@@ -95,3 +95,25 @@ def heated_maxwell_temperature(time, initial_temperature, restitution, heat_bath
         return initial_temperature + 2.0 * tau * t
     limit = 8.0 * tau / ((1.0 - e * e) * density)
     return (initial_temperature - limit) * numpy.exp(-density * (1 - e * e) / 4 * t) + limit
+
+
+def heated_maxwell_law(kernel, restitution, heat_bath: float, knudsen: float = 1.0):
+    """The exact temperature law T(t, T0, rho0) of a run, or ``None`` where none is known.
+
+    It exists for Maxwell molecules with the review's constant (isotropic b,
+    no energy factor) and a constant restitution coefficient, in 2D and 3D:
+    d_t f = Q/eps + tau Delta f gives dT/dt = -rho (1-e^2) T / (4 eps) + 2 tau, i.e.
+    :func:`heated_maxwell_temperature` with density rho/eps (Haff's exponential
+    law when tau = 0).
+    """
+    from granframe.restitution import Constant
+
+    if (kernel.exponent != 0.0 or not kernel.is_isotropic or kernel.energy_exponent != 0.0
+            or kernel.constant is not None or not isinstance(restitution, Constant)):
+        return None
+
+    def law(time, initial_temperature, density):
+        return heated_maxwell_temperature(time, initial_temperature, restitution.value,
+                                          heat_bath, density / knudsen)
+
+    return law

@@ -232,6 +232,10 @@ class DormandPrince54(AdaptiveIntegrator):
         self._last = self._candidate
 
 
+class StepSizeError(RuntimeError):
+    """The adaptive step size fell to round-off level (stiffness beyond the scheme, or a blow-up)."""
+
+
 @attrs.frozen
 class StepController:
     r"""Elementary step-size control for an :class:`AdaptiveIntegrator`.
@@ -257,3 +261,25 @@ class StepController:
             return dt * self.shrink
         factor = self.growth if err == 0.0 else self.safety * err ** (-1.0 / (embedded_order + 1))
         return dt * min(self.growth, max(self.shrink, factor))
+
+    def advance(self, integrator: AdaptiveIntegrator, equation: Equation, t: float, f,
+                dt: float, target: float, xp):
+        """One accepted step from t, at most to ``target`` (landed on exactly).
+
+        Returns ``(f_new, t_new, dt_taken, dt_next)``; rejected attempts are
+        retried with smaller steps, and a step below round-off raises
+        :class:`StepSizeError`.
+        """
+        while True:
+            dt = min(dt, target - t)
+            if dt <= 1e-14 * max(1.0, abs(t)):
+                raise StepSizeError(f"the adaptive step size fell to {dt:.3g} (stiffness beyond "
+                                    "the scheme's stability, or a blow-up)")
+            f_new, error = integrator.attempt(equation, t, f, dt)
+            err = self.scaled_error(xp, f, f_new, error)
+            dt_next = self.next_step(dt, err, integrator.embedded_order)
+            if err <= 1.0:
+                integrator.accept()
+                t_new = target if target - (t + dt) <= 1e-12 * max(1.0, abs(target)) else t + dt
+                return f_new, t_new, dt, dt_next
+            dt = dt_next

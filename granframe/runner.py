@@ -11,7 +11,9 @@ snapshot; the result equals that of an uninterrupted run to round-off.
 
 from __future__ import annotations
 
+import importlib.util
 import math
+import pathlib
 import platform
 import sys
 import time
@@ -26,9 +28,35 @@ from granframe.backends import available_cpus
 from granframe.description import _FAMILIES, RunDescription
 from granframe.equation import HomogeneousBoltzmann
 from granframe.initial import check_fits
-from granframe.integrators import StepController
+from granframe.integrators import StepController, StepSizeError
 from granframe.registry import default_registries
 from granframe.storage import SCALAR_MOMENTS, RunStore
+
+
+def load_description(source, quick: bool = False) -> RunDescription:
+    """The description in a TOML file, or made by a study module's ``description(quick)``."""
+    path = pathlib.Path(source)
+    if not path.is_file():
+        raise ValueError(f"run: parameter 'source' = '{source}' is invalid; no such file")
+    if path.suffix == ".toml":
+        if quick:
+            raise ValueError("run: --quick applies to study modules; a TOML description runs "
+                             "as written")
+        return RunDescription.from_toml(path.read_text())
+    if path.suffix == ".py":
+        spec = importlib.util.spec_from_file_location(f"granframe_study_{path.stem}", path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        make = getattr(module, "description", None)
+        if not callable(make):
+            raise ValueError(f"run: study '{source}' defines no function description(quick)")
+        description = make(quick=quick)
+        if not isinstance(description, RunDescription):
+            raise TypeError(f"run: description() of '{source}' returned {description!r}; "
+                            "must return a RunDescription")
+        return description
+    raise ValueError(f"run: parameter 'source' = '{source}' is invalid; must be a .toml "
+                     "description or a .py study module")
 
 
 class HealthError(RuntimeError):
@@ -133,7 +161,7 @@ class Simulation:
             name = (self.backend.name if field == "backend"
                     else getattr(self.description, field).name)
             plugins[field] = f"{name} ({registries.get(family, name).source})"
-        return {"granframe": __version__, "backend": repr(self.backend), **plugins,
+        return {"granframe": __version__, "backend_config": repr(self.backend), **plugins,
                 "python": sys.version.split()[0], "numpy": numpy.__version__,
                 "zarr": zarr.__version__, "host": platform.node(), "cpus": available_cpus()}
 
@@ -195,10 +223,11 @@ class Simulation:
                 while (step < target) if not adaptive else (t < target):
                     if adaptive:
                         try:
-                            f, t, dt, dt_next = self._adaptive_step(f, t, dt_next, target,
-                                                                    controller, xp)
-                        except HealthError as exc:
-                            self._fail(store, records, str(exc), step, t, mass0, dt_next)
+                            f, t, dt, dt_next = controller.advance(
+                                self.integrator, self.equation, t, f, dt_next, target, xp)
+                        except StepSizeError as exc:
+                            self._fail(store, records, f"health check failed at step {step + 1}, "
+                                       f"t = {t:.6g}: {exc}", step, t, mass0, dt_next)
                         step += 1
                     else:
                         f = self.integrator.step(self.equation, t, f, d.time_step)
@@ -232,20 +261,3 @@ class Simulation:
         store.commit([], records.take(), {"status": "failed", "message": message, "step": step,
                                           "time": t, "mass0": mass0, "dt_next": dt_next})
         raise HealthError(message)
-
-    def _adaptive_step(self, f, t, dt, target, controller, xp):
-        """One accepted step of the adaptive integrator, landing exactly on ``target``."""
-        integrator = self.integrator
-        while True:
-            dt = min(dt, target - t)
-            if dt <= 1e-14 * max(1.0, abs(t)):
-                raise HealthError(f"health check failed at t = {t:.6g}: the adaptive step size "
-                                  f"fell to {dt:.3g} (stiffness or a blow-up)")
-            f_new, error = integrator.attempt(self.equation, t, f, dt)
-            err = controller.scaled_error(xp, f, f_new, error)
-            dt_next = controller.next_step(dt, err, integrator.embedded_order)
-            if err <= 1.0:
-                integrator.accept()
-                t_new = target if target - (t + dt) <= 1e-12 * max(1.0, abs(target)) else t + dt
-                return f_new, t_new, dt, dt_next
-            dt = dt_next

@@ -1,0 +1,115 @@
+"""Every registered time integrator reaches its declared order; adaptive control meets its tolerance."""
+
+import math
+
+import numpy
+import pytest
+
+import granframe as gf
+from granframe.equation import HomogeneousBoltzmann
+from granframe.heatbath import HeatBath
+from granframe.integrators import Equation, StepController, StepSizeError
+
+INTEGRATORS = gf.default_registries().names("time_integrators")
+
+
+class Bernoulli(Equation):
+    """f' = -a f + b f^2 split as N = b f^2, L = -a; exact f = 1 / (b/a + (1/f0 - b/a) e^{a t})."""
+
+    def __init__(self, a=3.0, b=1.0):
+        self.a, self.b = a, b
+
+    def nonlinear(self, t, f):
+        return self.b * f * f
+
+    def linear(self, f):
+        return -self.a * f
+
+    def propagate(self, f, dt):
+        return math.exp(-self.a * dt) * f
+
+    def exact(self, t, f0):
+        return 1.0 / (self.b / self.a + (1.0 / f0 - self.b / self.a) * numpy.exp(self.a * t))
+
+
+def integrate(name, equation, f0, steps, final_time=1.0):
+    integrator = gf.time_integrator(name)
+    f, dt = f0.copy(), final_time / steps
+    for i in range(steps):
+        f = integrator.step(equation, i * dt, f, dt)
+    return f
+
+
+def test_the_built_in_schemes_are_registered():
+    assert {"forward_euler", "ssp_rk2", "ssp_rk3", "rk4", "if_rk4", "dopri54"} <= set(INTEGRATORS)
+
+
+@pytest.mark.parametrize("name", INTEGRATORS)
+def test_observed_order_on_a_problem_with_known_solution(name):
+    equation, f0 = Bernoulli(), numpy.array([0.5, 1.0, 2.0])
+    errors = [numpy.abs(integrate(name, equation, f0, n) - equation.exact(1.0, f0)).max()
+              for n in (20, 40, 80)]
+    observed = numpy.log2(numpy.array(errors[:-1]) / numpy.array(errors[1:]))
+    order = gf.time_integrator(name).order
+    assert numpy.all(numpy.abs(observed - order) < 0.25), (order, observed, errors)
+
+
+@pytest.mark.parametrize("name", INTEGRATORS)
+def test_self_convergence_on_the_heated_collision_problem(name):
+    """d_t f = Q(f,f) + 0.1 Delta f (2D Maxwell molecules, e = 0.5) from T0 = 8 to t = 1:
+    successive differences with dt = 1/4, 1/8, 1/16 shrink by 2^order."""
+    grid = gf.VelocityGrid(2, 32, 10.0)
+    op = gf.collision_operator("fast_spectral", grid, gf.collision_kernel("maxwell"),
+                               gf.restitution_law("constant", value=0.5),
+                               backend=gf.array_backend("numpy", threads=1), radial_points=16,
+                               sphere=gf.CircleTrapezoid(8))
+    equation, f0 = HomogeneousBoltzmann(op, heat_bath=0.1), grid.maxwellian(temperature=8.0)
+    solutions = [integrate(name, equation, f0, n) for n in (4, 8, 16)]
+    d1 = numpy.abs(solutions[0] - solutions[1]).max()
+    d2 = numpy.abs(solutions[1] - solutions[2]).max()
+    order = gf.time_integrator(name).order
+    assert abs(math.log2(d1 / d2) - order) < 0.4, (order, d1, d2)
+
+
+def test_heat_bath_propagator_is_exact():
+    """exp(t tau Delta) of a Maxwellian of temperature T is the Maxwellian of T + 2 tau t."""
+    grid = gf.VelocityGrid(2, 64, 6.0)
+    heat = HeatBath(grid, 0.1, gf.array_backend())
+    result = heat.propagate(grid.maxwellian(temperature=1.3), 2.5)
+    expected = grid.maxwellian(temperature=1.3 + 2 * 0.1 * 2.5)
+    assert numpy.abs(result - expected).max() < 1e-12 * expected.max()
+
+
+def test_integrating_factor_rk4_is_exact_for_the_linear_part():
+    """With N = 0 the IF scheme is exp(dt L) itself, whatever dt (explicit RK4 is not)."""
+
+    class Linear(Bernoulli):
+        def nonlinear(self, t, f):
+            return 0.0 * f
+
+    equation, f0 = Linear(a=50.0), numpy.array([1.0])
+    assert abs(integrate("if_rk4", equation, f0, 2)[0] - math.exp(-50.0)) < 1e-15
+    assert abs(integrate("rk4", equation, f0, 2)[0]) > 1e3   # beyond its stability limit
+
+
+@pytest.mark.parametrize("tolerance", [1e-4, 1e-6, 1e-8])
+def test_adaptive_error_control_meets_the_tolerance(tolerance):
+    equation, f0 = Bernoulli(), numpy.array([0.5, 1.0, 2.0])
+    integrator, controller = gf.time_integrator("dopri54"), StepController(tolerance)
+    t, f, dt, steps = 0.0, f0.copy(), 0.01, 0
+    while t < 1.0:
+        f, t, _, dt = controller.advance(integrator, equation, t, f, dt, 1.0, numpy)
+        steps += 1
+    error = numpy.abs(f - equation.exact(1.0, f0)).max() / numpy.abs(f0).max()
+    assert t == 1.0 and error <= 10 * tolerance, (error, steps)
+    assert steps < 20 * tolerance ** (-1 / 5), steps   # step count grows like tol^(-1/5)
+
+
+def test_adaptive_step_size_underflow_is_reported():
+    class Blowup(Bernoulli):
+        def nonlinear(self, t, f):
+            return numpy.full_like(f, numpy.nan)
+
+    with pytest.raises(StepSizeError, match="step size fell"):
+        StepController(1e-6).advance(gf.time_integrator("dopri54"), Blowup(), 0.0,
+                                     numpy.array([1.0]), 0.1, 1.0, numpy)
