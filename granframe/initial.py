@@ -202,7 +202,12 @@ class FromCallable(InitialCondition):
 
     def sample(self, grid):
         function = resolve_callable("FromCallable", "function", self.function)
-        values = numpy.asarray(function(*grid.mesh()), dtype=float)
+        try:
+            values = numpy.asarray(function(*grid.mesh()), dtype=float)
+        except Exception as exc:  # the user's function: report it with what it was given
+            check.reject("FromCallable", "function", self.function,
+                         f"must map the {grid.dimension} velocity components (broadcastable "
+                         f"arrays) to f0; calling it raised {type(exc).__name__}: {exc}")
         try:
             return numpy.broadcast_to(values, grid.shape).copy()
         except ValueError:

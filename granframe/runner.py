@@ -198,6 +198,7 @@ class Simulation:
             f_host, t = store.last_snapshot()
             f, step, mass0 = backend.asarray(f_host), int(state["step"]), float(state["mass0"])
             dt_next = state.get("dt_next")
+            resumes = state.get("resumes", []) + [step]
         else:
             store = RunStore.create(out, description, d.to_toml(), grid, self.provenance(),
                                     overwrite=overwrite)
@@ -205,11 +206,18 @@ class Simulation:
             record = moments(grid, f, xp)
             # adaptive schemes without a first trial step start from 1% of the run
             mass0, dt_next = record["mass"], d.time_step or d.final_time / 100
+            resumes = []
             first = _Records()
             first.add(0, 0.0, 0.0, record)
             store.commit([(0.0, self.f0)], first.take(),
                          {"status": "running", "step": 0, "time": 0.0, "mass0": mass0,
-                          "dt_next": dt_next})
+                          "dt_next": dt_next, "resumes": resumes})
+
+        def state(status, **extra):
+            """The progress entry of a commit made now."""
+            return {"status": status, "step": step, "time": t, "mass0": mass0,
+                    "dt_next": dt_next, "resumes": resumes, **extra}
+
         adaptive = self.integrator.adaptive
         targets = [x for x in self._targets() if (x > step if not adaptive else x > t)]
         controller = StepController(d.tolerance) if adaptive else None
@@ -226,8 +234,8 @@ class Simulation:
                             f, t, dt, dt_next = controller.advance(
                                 self.integrator, self.equation, t, f, dt_next, target, xp)
                         except StepSizeError as exc:
-                            self._fail(store, records, f"health check failed at step {step + 1}, "
-                                       f"t = {t:.6g}: {exc}", step, t, mass0, dt_next)
+                            self._fail(store, records, state, f"health check failed at step "
+                                       f"{step + 1}, t = {t:.6g}: {exc}")
                         step += 1
                     else:
                         f = self.integrator.step(self.equation, t, f, d.time_step)
@@ -237,27 +245,24 @@ class Simulation:
                     records.add(step, t, dt, record)
                     problem = health_problem(record, mass0, d.health)
                     if problem is not None:
-                        self._fail(store, records,
-                                   f"health check failed at step {step}, t = {t:.6g}: {problem}",
-                                   step, t, mass0, dt_next)
+                        self._fail(store, records, state,
+                                   f"health check failed at step {step}, t = {t:.6g}: {problem}")
                     bar.update(t - bar.n)
                     bar.set_postfix_str(f"step {step}, T={record['temperature']:.6g}, mass drift "
                                         f"{record['mass'] / mass0 - 1:+.1e}", refresh=False)
                 done = target == targets[-1]
                 store.commit([(t, backend.to_numpy(f))], records.take(),
-                             {"status": "finished" if done else "running", "step": step,
-                              "time": t, "mass0": mass0, "dt_next": dt_next})
+                             state("finished" if done else "running"))
         finally:
             bar.close()
         return RunResult(str(out), "finished", step, t, store.snapshot_count,
                          time.perf_counter() - start_wall)
 
     @staticmethod
-    def _fail(store, records, message, step, t, mass0, dt_next):
+    def _fail(store, records, state, message):
         """Write the moments up to the failing step, mark the store failed, raise HealthError.
 
         The snapshots stay the last healthy states; the moments show how it failed.
         """
-        store.commit([], records.take(), {"status": "failed", "message": message, "step": step,
-                                          "time": t, "mass0": mass0, "dt_next": dt_next})
+        store.commit([], records.take(), state("failed", message=message))
         raise HealthError(message)
