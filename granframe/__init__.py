@@ -48,6 +48,11 @@ def time_integrator(name: str, **params):
     return default_registries().create("time_integrators", name, **params)
 
 
+def initial_condition(name: str, **params):
+    """Build the initial condition registered as ``name``."""
+    return default_registries().create("initial_conditions", name, **params)
+
+
 def collision_operator(name: str, grid, kernel, restitution, backend=None, **options):
     """Build the collision operator registered as ``name`` (precomputation happens here)."""
     return default_registries().create(
@@ -60,5 +65,6 @@ __all__ = [
     "UnknownNameError", "VelocityGrid", "hookimpl", "TimeIntegrator", "VariableHardSpheres",
     "CollisionOperator", "Quadrature", "GaussLegendre", "CircleTrapezoid", "Lebedev",
     "SphereProduct", "FAMILIES", "default_registries", "RestitutionLaw", "collision_kernel",
-    "restitution_law", "quadrature", "array_backend", "time_integrator", "collision_operator",
+    "restitution_law", "quadrature", "array_backend", "time_integrator", "initial_condition",
+    "collision_operator",
 ]

@@ -246,8 +246,9 @@ def describe(path) -> str:
     provenance = meta.get("provenance", {})
     if provenance:
         lines.append("provenance")
+        width = max(len(key) for key in provenance) + 2
         for key, value in provenance.items():
-            lines.append(f"  {key:<12s}{value}")
+            lines.append(f"  {key:<{width}s}{value}")
     lines.append("description (TOML)")
     lines.extend("  " + line for line in meta["description_toml"].strip().splitlines())
     return "\n".join(lines)

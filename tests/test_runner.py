@@ -86,11 +86,11 @@ def test_unknown_keys_and_bad_toml_are_rejected():
 # -- initial data ---------------------------------------------------------------------
 def test_review_initial_data_fits_and_has_the_stated_moments():
     grid = gf.VelocityGrid(2, 64, 10.0)
-    box = gf.default_registries().create("initial_conditions", "box", half_width=2 * 6 ** 0.5)
+    box = gf.initial_condition("box", half_width=2 * 6 ** 0.5)
     f = box.sample(grid)
     check_fits(grid, f, box, 1e-8, 1e-12)
     assert abs(grid.mass(f) - 1.0) < 1e-13 and abs(grid.temperature(f) - 8.0) < 0.1
-    mixture = gf.default_registries().create("initial_conditions", "gaussian_mixture", components=[
+    mixture = gf.initial_condition("gaussian_mixture", components=[
         {"density": 0.5, "velocity": [1.0, 0.0], "temperature": 2.0},
         {"density": 0.5, "velocity": [-1.0, 0.0], "temperature": 2.0}])
     check_fits(grid, mixture.sample(grid), mixture, 1e-8, 1e-10)
