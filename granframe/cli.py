@@ -7,8 +7,9 @@ plugins [--json]
     one-line description. The JSON form is documented in docs/plugins.md.
 bench [--json] [--backend NAME] [--threads T] [--repeats R] [--config D:N[:N_RHO:M]]
     Time the fast operator against the FFT floor (docs/benchmarks.md).
-run SOURCE --out STORE [--resume] [--overwrite] [--quick] [--progress/--no-progress]
-    Run a description (a TOML file or a study module under studies/) into a zarr store.
+run SOURCE --out STORE [--resume] [--overwrite] [--quick] [--only NAMES] [--progress]
+    Run a description (a TOML file or a study module under studies/) into a zarr store;
+    a study with several runs writes STORE/<name>.zarr each, then its report.
     Exit status 3 when a health check stopped the run, 130 when interrupted.
 plot STORE --out DIR
     Draw the figures of a run (PNG).
@@ -20,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import pathlib
 import sys
 
 from granframe._version import __version__
@@ -62,26 +64,66 @@ def _bench(args) -> int:
 
 
 def _run(args) -> int:
-    from granframe.runner import HealthError, Simulation, load_description
+    from granframe.runner import load_study
+    from granframe.storage import RunStore
 
-    description = load_description(args.source, quick=args.quick)
-    simulation = Simulation(description)
+    study = load_study(args.source, quick=args.quick)
+    out = pathlib.Path(args.out)
+    if list(study.runs) == [""]:
+        if args.only:
+            raise ValueError("run: --only applies to studies with several runs")
+        return _run_one(study.runs[""], out, args)
+    names = list(study.runs) if not args.only else args.only.split(",")
+    unknown = [n for n in names if n not in study.runs]
+    if unknown:
+        raise ValueError(f"run: parameter 'only' = {args.only!r} is invalid; the study's runs "
+                         f"are {', '.join(study.runs)}")
+    out.mkdir(parents=True, exist_ok=True)
+    status = 0
+    for name in names:
+        print(f"[{name}] {study.runs[name].title}")
+        code = _run_one(study.runs[name], out / f"{name}.zarr", args)
+        if code == 130:
+            return code
+        status = max(status, code)
+    # the report reads finished runs and runs stopped by a health check (their moments up to
+    # the stop are valid data); it waits for runs that are missing or interrupted
+    ended = {}
+    for name in study.runs:
+        store = out / f"{name}.zarr"
+        if RunStore.exists(store) and RunStore.open(store).progress.get("status") in (
+                "finished", "failed"):
+            ended[name] = store
+    if study.report is not None and len(ended) == len(study.runs):
+        report = out / "report"
+        summary = study.report(ended, report)
+        (report / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+        print(f"report: {report} (summary.json and figures)")
+    elif study.report is not None:
+        print(f"report: waiting for {len(study.runs) - len(ended)} of {len(study.runs)} runs "
+              "(run again with --resume)")
+    return status
+
+
+def _run_one(description, out, args) -> int:
+    from granframe.runner import HealthError, Simulation
+
     try:
-        result = simulation.run(args.out, resume=args.resume, overwrite=args.overwrite,
-                                progress=args.progress)
+        result = Simulation(description).run(out, resume=args.resume, overwrite=args.overwrite,
+                                             progress=args.progress)
     except HealthError as exc:
-        print(f"granframe: run stopped: {exc}\nThe store '{args.out}' keeps every snapshot "
+        print(f"granframe: run stopped: {exc}\nThe store '{out}' keeps every snapshot "
               "before it and the moments up to it.", file=sys.stderr)
         return 3
     except KeyboardInterrupt:
-        print(f"\ngranframe: interrupted; the store '{args.out}' holds every complete snapshot: "
+        print(f"\ngranframe: interrupted; the store '{out}' holds every complete snapshot: "
               "continue with --resume", file=sys.stderr)
         return 130
     if result.status == "already finished":
-        print(f"{args.out}: the run is already finished (t = {result.time:g}, "
-              f"{result.steps} steps)")
+        print(f"{out}: the run is already finished (t = {result.time:g}, "
+              f"{result.steps} steps, {result.wall_seconds:.1f} s)")
     else:
-        print(f"{args.out}: finished, {result.steps} steps to t = {result.time:g} in "
+        print(f"{out}: finished, {result.steps} steps to t = {result.time:g} in "
               f"{result.wall_seconds:.1f} s, {result.snapshots} snapshots")
     return 0
 
@@ -122,7 +164,10 @@ def build_parser() -> argparse.ArgumentParser:
     run = commands.add_parser("run", help="run a description (TOML or study module) into a store")
     run.add_argument("source", metavar="STUDY_OR_TOML",
                      help="a .toml run description or a .py study defining description(quick)")
-    run.add_argument("--out", required=True, metavar="STORE", help="zarr store to write")
+    run.add_argument("--out", required=True, metavar="STORE",
+                     help="zarr store to write (a folder of stores for a study with several "
+                          "runs, plus report/)")
+    run.add_argument("--only", metavar="NAMES", help="comma-separated runs of a study to run")
     run.add_argument("--resume", action="store_true",
                      help="continue the run in STORE from its last complete snapshot")
     run.add_argument("--overwrite", action="store_true", help="replace an existing STORE")

@@ -166,6 +166,19 @@ class VelocityGrid:
             mask[tuple(index)] = True
         return mask
 
+    def project(self, f):
+        """f without its Nyquist modes (NumPy): the space the spectral operators work in.
+
+        Neither the collision operators nor the heat bath act on the modes with some
+        |k_i| = N/2, so a Nyquist part of f0 would stay frozen for the whole run (for
+        discontinuous data, a checkerboard over the whole box). Mass is unchanged.
+        """
+        self._check_shape(f)
+        axes = tuple(range(self.dimension))
+        spectrum = numpy.fft.rfftn(f, axes=axes)
+        spectrum[self.nyquist_mask()] = 0.0
+        return numpy.fft.irfftn(spectrum, s=self.shape, axes=axes)
+
     def mesh(self, xp=numpy):
         """Sparse (broadcastable) coordinate arrays v_1, ..., v_d of shape N^d."""
         v = self.points(xp)

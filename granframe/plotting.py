@@ -19,6 +19,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
 
+from granframe.analysis import relative_entropy  # noqa: E402
 from granframe.description import RunDescription  # noqa: E402
 from granframe.exact import heated_maxwell_law  # noqa: E402
 from granframe.storage import RunStore  # noqa: E402
@@ -76,12 +77,6 @@ class _Run:
     def snapshot_indices(self, count=5):
         return sorted(set(numpy.linspace(0, self.count - 1, min(count, self.count))
                           .round().astype(int)))
-
-
-def relative_entropy(f, g, cell_volume):
-    """H(f|g) = int f ln(f/g) dv over the points where both are positive (rectangle rule)."""
-    mask = (f > 0) & (g > 0)
-    return float(numpy.sum(f[mask] * numpy.log(f[mask] / g[mask]))) * cell_volume
 
 
 def _temperature(run, ax_t, ax_e):

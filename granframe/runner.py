@@ -17,6 +17,7 @@ import pathlib
 import platform
 import sys
 import time
+from typing import Callable
 
 import attrs
 import numpy
@@ -33,8 +34,24 @@ from granframe.registry import default_registries
 from granframe.storage import SCALAR_MOMENTS, RunStore
 
 
-def load_description(source, quick: bool = False) -> RunDescription:
-    """The description in a TOML file, or made by a study module's ``description(quick)``."""
+@attrs.frozen
+class Study:
+    """What ``granframe run`` runs: named descriptions (a single run is named ''), and a report.
+
+    ``report(stores, out)``, when given, draws the study's figures from the stores
+    (name -> path) of runs that finished or were stopped by a health check (their status
+    says which) into the folder ``out`` and returns a JSON-ready summary.
+    """
+
+    runs: dict
+    report: Callable | None = None
+
+
+def load_study(source, quick: bool = False) -> Study:
+    """A TOML description, or a study module defining ``runs(quick)`` or ``description(quick)``.
+
+    A module may also define ``report(stores, out)``.
+    """
     path = pathlib.Path(source)
     if not path.is_file():
         raise ValueError(f"run: parameter 'source' = '{source}' is invalid; no such file")
@@ -42,21 +59,34 @@ def load_description(source, quick: bool = False) -> RunDescription:
         if quick:
             raise ValueError("run: --quick applies to study modules; a TOML description runs "
                              "as written")
-        return RunDescription.from_toml(path.read_text())
-    if path.suffix == ".py":
-        spec = importlib.util.spec_from_file_location(f"granframe_study_{path.stem}", path)
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-        make = getattr(module, "description", None)
-        if not callable(make):
-            raise ValueError(f"run: study '{source}' defines no function description(quick)")
-        description = make(quick=quick)
-        if not isinstance(description, RunDescription):
-            raise TypeError(f"run: description() of '{source}' returned {description!r}; "
-                            "must return a RunDescription")
-        return description
-    raise ValueError(f"run: parameter 'source' = '{source}' is invalid; must be a .toml "
-                     "description or a .py study module")
+        return Study({"": RunDescription.from_toml(path.read_text())})
+    if path.suffix != ".py":
+        raise ValueError(f"run: parameter 'source' = '{source}' is invalid; must be a .toml "
+                         "description or a .py study module")
+    spec = importlib.util.spec_from_file_location(f"granframe_study_{path.stem}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    if callable(getattr(module, "runs", None)):
+        runs = module.runs(quick=quick)
+    elif callable(getattr(module, "description", None)):
+        runs = {"": module.description(quick=quick)}
+    else:
+        raise ValueError(f"run: study '{source}' defines neither runs(quick) nor "
+                         "description(quick)")
+    if not isinstance(runs, dict) or not runs or not all(
+            isinstance(d, RunDescription) for d in runs.values()):
+        raise TypeError(f"run: study '{source}' must give RunDescriptions (runs() returns a "
+                        f"non-empty dict name -> RunDescription); got {runs!r}")
+    return Study(runs, getattr(module, "report", None))
+
+
+def load_description(source, quick: bool = False) -> RunDescription:
+    """The one description of a TOML file or single-run study module."""
+    study = load_study(source, quick)
+    if list(study.runs) != [""]:
+        raise ValueError(f"run: '{source}' defines several runs ({', '.join(study.runs)}); "
+                         "use load_study")
+    return study.runs[""]
 
 
 class HealthError(RuntimeError):
@@ -136,7 +166,11 @@ class _Records:
 
 
 class Simulation:
-    """Everything a run needs, built once from a description (f0 checked against the grid)."""
+    """Everything a run needs, built once from a description.
+
+    f0 is checked against the grid (:func:`check_fits`) and projected onto the
+    Nyquist-free modes the operators evolve (:meth:`VelocityGrid.project`).
+    """
 
     def __init__(self, description: RunDescription):
         if not isinstance(description, RunDescription):
@@ -149,9 +183,10 @@ class Simulation:
                                 restitution=d.build("restitution"), backend=self.backend)
         self.equation = HomogeneousBoltzmann(self.operator, d.heat_bath, d.knudsen)
         self.integrator = d.build("integrator")
-        self.f0 = d.build("initial").sample(d.grid)
-        check_fits(d.grid, self.f0, d.build("initial"), d.health.edge_tolerance,
+        sampled = d.build("initial").sample(d.grid)
+        check_fits(d.grid, sampled, d.build("initial"), d.health.edge_tolerance,
                    d.health.initial_mass_tolerance)
+        self.f0 = d.grid.project(sampled)
 
     def provenance(self) -> dict:
         """Versions and plugins behind this run (stored with it)."""
@@ -194,11 +229,12 @@ class Simulation:
             state = store.progress
             if state["status"] == "finished":
                 return RunResult(str(out), "already finished", state["step"], state["time"],
-                                 store.snapshot_count, 0.0)
+                                 store.snapshot_count, state.get("wall_seconds", 0.0))
             f_host, t = store.last_snapshot()
             f, step, mass0 = backend.asarray(f_host), int(state["step"]), float(state["mass0"])
             dt_next = state.get("dt_next")
             resumes = state.get("resumes", []) + [step]
+            wall_before = float(state.get("wall_seconds", 0.0))
         else:
             store = RunStore.create(out, description, d.to_toml(), grid, self.provenance(),
                                     overwrite=overwrite)
@@ -206,7 +242,7 @@ class Simulation:
             record = moments(grid, f, xp)
             # adaptive schemes without a first trial step start from 1% of the run
             mass0, dt_next = record["mass"], d.time_step or d.final_time / 100
-            resumes = []
+            resumes, wall_before = [], 0.0
             first = _Records()
             first.add(0, 0.0, 0.0, record)
             store.commit([(0.0, self.f0)], first.take(),
@@ -216,7 +252,8 @@ class Simulation:
         def state(status, **extra):
             """The progress entry of a commit made now."""
             return {"status": status, "step": step, "time": t, "mass0": mass0,
-                    "dt_next": dt_next, "resumes": resumes, **extra}
+                    "dt_next": dt_next, "resumes": resumes,
+                    "wall_seconds": wall_before + time.perf_counter() - start_wall, **extra}
 
         adaptive = self.integrator.adaptive
         targets = [x for x in self._targets() if (x > step if not adaptive else x > t)]
@@ -256,7 +293,7 @@ class Simulation:
         finally:
             bar.close()
         return RunResult(str(out), "finished", step, t, store.snapshot_count,
-                         time.perf_counter() - start_wall)
+                         store.progress["wall_seconds"])
 
     @staticmethod
     def _fail(store, records, state, message):

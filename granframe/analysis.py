@@ -1,0 +1,51 @@
+"""Quantities the studies extract from runs: relative entropy, decay rates, tail exponents."""
+
+from __future__ import annotations
+
+import numpy
+
+
+def relative_entropy(f, g, cell_volume):
+    """H(f|g) = int f ln(f/g) dv over the points where both are positive (rectangle rule)."""
+    mask = (f > 0) & (g > 0)
+    return float(numpy.sum(f[mask] * numpy.log(f[mask] / g[mask]))) * cell_volume
+
+
+def fit_line(x, y):
+    """Least-squares y = a + b x; returns (b, a, standard error of b)."""
+    x, y = numpy.asarray(x, float), numpy.asarray(y, float)
+    if len(x) < 3:
+        raise ValueError(f"fit: needs at least 3 points, got {len(x)}")
+    design = numpy.stack([numpy.ones_like(x), x], axis=1)
+    (a, b), residual, _, _ = numpy.linalg.lstsq(design, y, rcond=None)
+    dof = len(x) - 2
+    sigma2 = float(residual[0]) / dof if dof > 0 and len(residual) else 0.0
+    stderr = (sigma2 / float(((x - x.mean()) ** 2).sum())) ** 0.5
+    return float(b), float(a), stderr
+
+
+def exponential_rate(times, values, window):
+    """Fit values ~ C exp(-lambda t) over ``window`` = (t_min, t_max); returns (lambda, stderr)."""
+    times, values = numpy.asarray(times), numpy.asarray(values)
+    use = (times >= window[0]) & (times <= window[1]) & (values > 0)
+    slope, _, stderr = fit_line(times[use], numpy.log(values[use]))
+    return -slope, stderr
+
+
+def tail_exponent(speed, f, window):
+    r"""Fit f ~ C exp(-c |v|^alpha) over ``window`` = (v_min, v_max) of |v|.
+
+    ln(-ln(f / C)) is linear in ln|v| with slope alpha, but C is unknown; so the fit
+    is made on d ln f / d|v| = -c alpha |v|^{alpha-1}: ln(-d ln f/d|v|) against ln|v|
+    has slope alpha - 1. Returns (alpha, stderr).
+    """
+    speed, f = numpy.asarray(speed, float), numpy.asarray(f, float)
+    order = numpy.argsort(speed)
+    speed, f = speed[order], f[order]
+    keep = f > 0
+    speed, log_f = speed[keep], numpy.log(f[keep])
+    middle = 0.5 * (speed[1:] + speed[:-1])
+    slope = numpy.diff(log_f) / numpy.diff(speed)
+    use = (middle >= window[0]) & (middle <= window[1]) & (slope < 0)
+    b, _, stderr = fit_line(numpy.log(middle[use]), numpy.log(-slope[use]))
+    return b + 1.0, stderr

@@ -1,0 +1,140 @@
+"""Review, section 3, Test 1: exponential convergence to equilibrium in 2D (Maxwell molecules).
+
+d_t f = Q(f, f) + tau Delta_v f, B = 1/(2 pi), N = 64, N_rho = 32, M = 16, R = 20,
+L = 5(3 + sqrt 2), classical RK4 with dt = 0.01 (all as in the review):
+
+- a: e = 0.95, tau = 0.05 (e = 1 - tau), Maxwellian T0 = 8, to t = 100 (f_inf = f(100));
+- b: e = 0.5, tau = 0.1, Maxwellian T0 = 8, to t = 55 (f_inf = f(55));
+- c: e = 0.5, tau = 0.1, flat data 1/(4 w0^2) on [-w0, w0]^2, w0 = 2 sqrt 6 (T0 = 8), to t = 55.
+
+Not in the review: b_fine and c_fine repeat b and c with N = 96 and S = 12
+(L = 26.5, R = 24). They show what limits the temperature error of b and c on the review's
+grid (docs/reproduction.md).
+
+    granframe run studies/review_test1.py --out runs/test1        # about 12 min on 2 cores
+    granframe run studies/review_test1.py --out runs/test1 --quick
+
+The report draws, per run, the relative entropy H(f | f_inf) (semi-log, fitted rate), the
+temperature against the exact law (review eq. (ext_temp)) and the equilibrium profile.
+Its summary.json holds the numbers.
+"""
+
+from __future__ import annotations
+
+import math
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy  # noqa: E402
+import xarray  # noqa: E402
+
+from granframe.analysis import exponential_rate, relative_entropy  # noqa: E402
+from granframe.description import RunDescription  # noqa: E402
+from granframe.exact import heated_maxwell_temperature  # noqa: E402
+from granframe.storage import RunStore  # noqa: E402
+
+W0 = 2 * math.sqrt(6)
+CASES = {  # name: (e, tau, initial condition, final time, N, S)
+    "a": (0.95, 0.05, {"name": "maxwellian", "temperature": 8.0}, 100.0, 64, 10.0),
+    "b": (0.5, 0.1, {"name": "maxwellian", "temperature": 8.0}, 55.0, 64, 10.0),
+    "c": (0.5, 0.1, {"name": "box", "half_width": W0}, 55.0, 64, 10.0),
+    "b_fine": (0.5, 0.1, {"name": "maxwellian", "temperature": 8.0}, 55.0, 96, 12.0),
+    "c_fine": (0.5, 0.1, {"name": "box", "half_width": W0}, 55.0, 96, 12.0),
+}
+
+
+def runs(quick: bool = False) -> dict:
+    made = {}
+    for name, (e, tau, initial, final, n_modes, support) in CASES.items():
+        if quick:
+            final, n_modes, radial, circle, dt = 4.0, n_modes // 2, 16, 8, 0.02
+        else:
+            radial, circle, dt = 32, 16, 0.01
+        made[name] = RunDescription(
+            title=f"Test 1{name}: e = {e}, tau = {tau}, {initial['name']} data, N = {n_modes}"
+                  + (" (quick)" if quick else ""),
+            grid={"dimension": 2, "n_modes": n_modes, "support_radius": support},
+            kernel="maxwell", restitution={"name": "constant", "value": e}, initial=initial,
+            operator={"name": "fast_spectral", "radial_points": radial,
+                      "sphere": {"name": "circle_trapezoid", "n_points": circle}},
+            integrator="rk4", heat_bath=tau, time_step=dt, final_time=final,
+            output={"snapshot_interval": 0.2 if quick else 1.0},
+            # the flat data is discontinuous: its spectral solution rings (Gibbs), a
+            # negative-mass share of about 1% at N = 64 that does not grow (0.93-0.98%
+            # over t = 2..8), about 5% at the quick N = 32
+            health={"positivity_tolerance": 0.1 if initial["name"] == "box" else 0.01})
+    return made
+
+
+def _analyse(name, store):
+    ds = xarray.open_zarr(store)
+    progress = RunStore.open(store).progress
+    e, tau = CASES[name][0], CASES[name][1]
+    t, T = ds.step_time.values, ds.temperature.values
+    exact = heated_maxwell_temperature(t, T[0], e, tau, float(ds.mass.values[0]))
+    error = numpy.abs(T / exact - 1)
+    cell = float(ds.v1[1] - ds.v1[0]) ** 2
+    f_inf = ds.f.isel(time=-1).values
+    times = ds.time.values[:-1]
+    entropy = numpy.array([relative_entropy(ds.f.isel(time=i).values, f_inf, cell)
+                           for i in range(len(times))])
+    final = times[-1] + (times[-1] - times[-2])
+    window = (0.1 * final, 0.6 * final)
+    rate, stderr = exponential_rate(times, entropy, window)
+    narrow, _ = exponential_rate(times, entropy, (0.2 * final, 0.5 * final))
+    change = float(numpy.abs(f_inf - ds.f.isel(time=-2).values).max() / f_inf.max())
+    return {
+        "e": e, "tau": tau, "N": int(ds.sizes["v1"]), "final_time": float(t[-1]),
+        "steps": int(ds.step.values[-1]), "wall_seconds": progress.get("wall_seconds"),
+        "T0": float(T[0]), "T_final": float(T[-1]), "T_limit": 8 * tau / (1 - e * e),
+        "max_T_error": float(error.max()),
+        "max_T_error_t_le_2": float(error[t <= 2.0].max()),
+        "t_of_max_T_error": float(t[error.argmax()]),
+        "entropy_rate": rate, "entropy_rate_stderr": stderr, "entropy_fit_window": window,
+        "entropy_rate_narrow_window": narrow,
+        "last_snapshot_change": change, "min_f_over_max_f": float(
+            (ds.min_f.values / ds.f.max(dim=("v1", "v2")).values.max()).min()),
+    }, (t, T, exact, error, times, entropy, ds)
+
+
+def report(stores: dict, out) -> dict:
+    out.mkdir(parents=True, exist_ok=True)
+    summary = {}
+    for name, store in stores.items():
+        summary[name], (t, T, exact, error, times, entropy, ds) = _analyse(name, store)
+        s = summary[name]
+        fig, axes = plt.subplots(1, 4, figsize=(18, 4), constrained_layout=True)
+        axes[0].semilogy(times, entropy, "o", ms=3, label=r"$H(f\,|\,f_\infty)$")
+        fit_t = numpy.linspace(*s["entropy_fit_window"], 20)
+        use = (times >= s["entropy_fit_window"][0]) & (times <= s["entropy_fit_window"][1])
+        scale = numpy.exp(numpy.mean(numpy.log(entropy[use]) + s["entropy_rate"] * times[use]))
+        axes[0].semilogy(fit_t, scale * numpy.exp(-s["entropy_rate"] * fit_t), "r--",
+                         label=f"fit: rate {s['entropy_rate']:.4f} ± {s['entropy_rate_stderr']:.1e}")
+        axes[0].set(xlabel="t", title=f"relative entropy, f_inf = f(t = {s['final_time']:g})")
+        axes[0].legend()
+        marks = max(1, len(t) // 50)
+        axes[1].plot(t, exact, lw=1.5, label="exact law")
+        axes[1].plot(t[::marks], T[::marks], "o", ms=3, label="granframe")
+        axes[1].set(xlabel="t", title=f"temperature (e = {s['e']}, tau = {s['tau']})")
+        axes[1].legend()
+        axes[2].semilogy(t[1:], numpy.maximum(error[1:], 1e-17))
+        axes[2].axhline(1e-5, color="k", ls=":", lw=1)
+        axes[2].set(xlabel="t", title=f"|T/T_exact - 1|, max {s['max_T_error']:.2e}")
+        v1, v2 = ds.v1.values, ds.v2.values
+        f_inf = ds.f.isel(time=-1).values
+        reach = 4 * math.sqrt(s["T_final"]) + 1
+        filled = axes[3].contourf(v1, v2, f_inf.T, levels=20, cmap="viridis")
+        axes[3].set(xlim=(-reach, reach), ylim=(-reach, reach), aspect="equal",
+                    title=f"equilibrium profile f(t = {s['final_time']:g})")
+        plt.colorbar(filled, ax=axes[3], shrink=0.8)
+        fig.suptitle(ds.attrs["granframe"]["description"]["title"])
+        fig.savefig(out / f"test1_{name}.png", dpi=100)
+        plt.close(fig)
+        numpy.savetxt(out / f"test1_{name}_temperature.csv",
+                      numpy.c_[t, T, exact][::max(1, len(t) // 1000)], delimiter=",",
+                      header="t,T,T_exact", comments="")
+        numpy.savetxt(out / f"test1_{name}_entropy.csv", numpy.c_[times, entropy],
+                      delimiter=",", header="t,H(f|f_inf)", comments="")
+    return summary
