@@ -41,7 +41,7 @@ def runs(quick: bool = False) -> dict:
     made = {}
     for kernel in KERNELS:
         for e in RESTITUTION:
-            n_modes, radial, circle, dt, final = ((64, 16, 8, 0.02, 4.0) if quick
+            n_modes, radial, circle, dt, final = ((64, 16, 8, 0.02, 2.0) if quick
                                                   else (128, 32, 16, 0.01, 55.0))
             made[f"{kernel}_e{e}"] = RunDescription(
                 title=f"Test 2: {kernel.replace('_', ' ')}, e = {e}, tau = 0.1, N = {n_modes}"

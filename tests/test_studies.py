@@ -1,0 +1,29 @@
+"""Smoke tests: every study of the review's numerical section runs in its --quick variant and
+writes its report (figures and summary.json). The full runs are made once (docs/reproduction.md)."""
+
+import json
+import pathlib
+
+import pytest
+
+from granframe.cli import main
+
+STUDIES = pathlib.Path(__file__).parent.parent / "studies"
+REPORTS = {
+    "review_test1.py": ({"a", "b", "c", "b_fine", "c_fine"}, "max_T_error",
+                        {"test1_a.png", "test1_c_fine.png"}),
+    "review_test2.py": ({f"{k}_e{e}" for k in ("maxwell", "hard_spheres") for e in (0.3, 0.5, 0.7)},
+                        "noise_floor", {"test2_tails.png"}),
+    "review_test3.py": ({"haff_tanh0.8", "haff_const0.2", "lambda0.5", "heated_e0.95"}, "T_final",
+                        {"test3_haff.png", "test3_lambda.png", "test3_heated.png"}),
+}
+
+
+@pytest.mark.parametrize("study", sorted(REPORTS))
+def test_quick_study_runs_and_reports(study, tmp_path, capsys):
+    runs, key, figures = REPORTS[study]
+    assert main(["run", str(STUDIES / study), "--quick", "--out", str(tmp_path)]) == 0
+    assert "report:" in capsys.readouterr().out
+    summary = json.loads((tmp_path / "report" / "summary.json").read_text())
+    assert runs <= set(summary) and all(key in entry for entry in summary.values())
+    assert figures <= {p.name for p in (tmp_path / "report").iterdir()}
