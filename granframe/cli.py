@@ -107,7 +107,14 @@ def _run(args) -> int:
 
 def _run_one(description, out, args) -> int:
     from granframe.runner import HealthError, Simulation
+    from granframe.storage import RunStore
 
+    if args.resume and RunStore.exists(out):
+        progress = RunStore.open(out).progress
+        if progress.get("status") == "failed":   # ended: resuming would fail again
+            print(f"{out}: stopped earlier by a health check ({progress.get('message')}); "
+                  "not resumed", file=sys.stderr)
+            return 3
     try:
         result = Simulation(description).run(out, resume=args.resume, overwrite=args.overwrite,
                                              progress=args.progress)
@@ -190,12 +197,12 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.handler(args)
-    except (ValueError, TypeError, OSError) as exc:
-        print(f"granframe: error: {exc}", file=sys.stderr)
-        return 2
     except BrokenPipeError:  # output piped into e.g. `head`, which stopped reading
         sys.stderr.close()
         return 0
+    except (ValueError, TypeError, OSError) as exc:
+        print(f"granframe: error: {exc}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

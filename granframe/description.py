@@ -172,7 +172,7 @@ class Health:
 
 def _table(cls):
     def convert(value):
-        return cls(**value) if isinstance(value, dict) else value
+        return check.from_table(cls, value, "RunDescription") if isinstance(value, dict) else value
     return convert
 
 
@@ -268,6 +268,8 @@ class RunDescription:
                     check.reject("RunDescription", "operator", component.params,
                                  f"has an unknown option ({exc})", error=TypeError)
         self.build("kernel"), self.build("restitution"), self.build("initial")
+        self.build("backend")
+        self._operator_options()   # quadratures given as tables are built (cheap)
         integrator = self.build("integrator")
         self._check_time_stepping(integrator.adaptive)
         self.to_dict()  # everything can be written to TOML and a store
@@ -290,9 +292,10 @@ class RunDescription:
                 if value is None:
                     continue
                 ratio = value / self.time_step
-                if abs(ratio - round(ratio)) > _MULTIPLE_TOLERANCE * max(1.0, ratio):
-                    check.reject(owner, field, value, f"must be a whole multiple of time_step "
-                                 f"= {self.time_step!r} (ratio {ratio:.12g})")
+                if (round(ratio) < 1
+                        or abs(ratio - round(ratio)) > _MULTIPLE_TOLERANCE * max(1.0, ratio)):
+                    check.reject(owner, field, value, f"must be a whole multiple (>= 1) of "
+                                 f"time_step = {self.time_step!r} (ratio {ratio:.12g})")
         interval = self.output.snapshot_interval
         if interval is not None and interval > self.final_time:
             check.reject(owner, "output.snapshot_interval", interval,
@@ -306,13 +309,17 @@ class RunDescription:
         if field == "kernel" and isinstance(params.get("angular"), str):
             params["angular"] = resolve_callable("kernel", "angular", params["angular"])
         if field == "operator":
-            params = {k: (default_registries().create("quadratures", **v)
-                          if isinstance(v, dict) and "name" in v else v)
-                      for k, v in params.items()}
+            params = self._operator_options()
         if field == "backend" and component.name == "auto":
             from granframe.bench import preferred_backend
             return default_registries().create("array_backends", preferred_backend(), **params)
         return default_registries().create(_FAMILIES[field], component.name, **params, **extra)
+
+    def _operator_options(self) -> dict:
+        """The operator's options, tables with a ``name`` built as registered quadratures."""
+        return {key: (default_registries().create("quadratures", **value)
+                      if isinstance(value, dict) and "name" in value else value)
+                for key, value in self.operator.params.items()}
 
     # -- TOML / dict ------------------------------------------------------------------
     def to_dict(self) -> dict:
@@ -330,13 +337,7 @@ class RunDescription:
         if not isinstance(data, dict):
             check.reject("RunDescription", "description", data, "must be a table",
                          error=TypeError)
-        known = {a.name for a in attrs.fields(cls)}
-        unknown = sorted(set(data) - known)
-        if unknown:
-            check.reject("RunDescription", unknown[0], data[unknown[0]],
-                         f"is not a parameter of a run description; known: {', '.join(sorted(known))}",
-                         error=TypeError)
-        return cls(**data)
+        return check.from_table(cls, data, "RunDescription")
 
     def to_toml(self) -> str:
         return tomli_w.dumps(self.to_dict())

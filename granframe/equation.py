@@ -31,12 +31,8 @@ class HomogeneousBoltzmann(Equation):
         return q if self.knudsen == 1.0 else q * (1.0 / self.knudsen)
 
     def linear(self, f):
-        return self.heat(f)
+        """tau Delta_v f; the scalar 0 without a heat bath (no transforms)."""
+        return self.heat(f) if self.heat.tau else 0.0
 
     def propagate(self, f, dt):
         return self.heat.propagate(f, dt)
-
-    def __call__(self, t, f):
-        if self.heat.tau == 0.0:
-            return self.nonlinear(t, f)
-        return self.nonlinear(t, f) + self.linear(f)

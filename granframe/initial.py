@@ -45,7 +45,9 @@ def _velocity(instance, attribute, value):
 
 
 def _tuple_or_none(value):
-    return None if value is None else tuple(float(x) if check.is_real(x) else x for x in value)
+    if value is None or not isinstance(value, (list, tuple, numpy.ndarray)):
+        return value   # the validator reports anything else
+    return tuple(float(x) if check.is_real(x) else x for x in value)
 
 
 def _check_dimension(owner, velocity, grid):
@@ -126,7 +128,8 @@ class BKWProfile(InitialCondition):
 
 def _components(value):
     if isinstance(value, (list, tuple)):
-        return tuple(Maxwellian(**c) if isinstance(c, dict) else c for c in value)
+        return tuple(check.from_table(Maxwellian, c, "GaussianMixture") if isinstance(c, dict)
+                     else c for c in value)
     return value
 
 

@@ -174,14 +174,21 @@ class IntegratingFactorRK4(TimeIntegrator):
 
     def step(self, equation, t, f, dt):
         a, b, c = self.tableau.a, self.tableau.b, self.tableau.c
+        propagated = {}   # e^{c dt L} f for each distinct node c (1/2 and 1 are used twice)
+
+        def propagate_f(node):
+            if node not in propagated:
+                propagated[node] = equation.propagate(f, node * dt)
+            return propagated[node]
+
         stages = []
         for i, row in enumerate(a):
-            y = equation.propagate(f, c[i] * dt)
+            y = propagate_f(c[i])
             for j, w in enumerate(row):
                 if w != 0.0:
                     y = y + (dt * w) * equation.propagate(stages[j], (c[i] - c[j]) * dt)
             stages.append(equation.nonlinear(t + c[i] * dt, y))
-        result = equation.propagate(f, dt)
+        result = propagate_f(1.0)
         for i, w in enumerate(b):
             result = result + (dt * w) * equation.propagate(stages[i], (1.0 - c[i]) * dt)
         return result
@@ -195,17 +202,17 @@ class DormandPrince54(AdaptiveIntegrator):
 
     order = 5
     embedded_order = 4
+    _b = ("35/384", "0", "500/1113", "125/192", "-2187/6784", "11/84", "0")
+    _b_embedded = ("5179/57600", "0", "7571/16695", "393/640", "-92097/339200", "187/2100",
+                   "1/40")
     tableau = Tableau(
         a=_fractions([[], ["1/5"], ["3/40", "9/40"], ["44/45", "-56/15", "32/9"],
                       ["19372/6561", "-25360/2187", "64448/6561", "-212/729"],
                       ["9017/3168", "-355/33", "46732/5247", "49/176", "-5103/18656"],
-                      ["35/384", "0", "500/1113", "125/192", "-2187/6784", "11/84"]]),
-        b=_fractions([["35/384", "0", "500/1113", "125/192", "-2187/6784", "11/84", "0"]])[0])
+                      _b[:6]]),   # first same as last: the last row is b
+        b=_fractions([_b])[0])
     #: b - b_embedded, the weights of the error estimate
-    error_weights = tuple(
-        float(Fraction(x) - Fraction(y)) for x, y in zip(
-            ("35/384", "0", "500/1113", "125/192", "-2187/6784", "11/84", "0"),
-            ("5179/57600", "0", "7571/16695", "393/640", "-92097/339200", "187/2100", "1/40")))
+    error_weights = tuple(float(Fraction(x) - Fraction(y)) for x, y in zip(_b, _b_embedded))
 
     def __init__(self):
         self._last = None       # (f, t, F(t, f)): the first stage, known when f is
@@ -270,6 +277,7 @@ class StepController:
         retried with smaller steps, and a step below round-off raises
         :class:`StepSizeError`.
         """
+        proposed = dt
         while True:
             dt = min(dt, target - t)
             if dt <= 1e-14 * max(1.0, abs(t)):
@@ -281,5 +289,6 @@ class StepController:
             if err <= 1.0:
                 integrator.accept()
                 t_new = target if target - (t + dt) <= 1e-12 * max(1.0, abs(target)) else t + dt
-                return f_new, t_new, dt, dt_next
+                # a step shortened to land on an output says nothing against the proposed one
+                return f_new, t_new, dt, max(dt_next, proposed) if dt < proposed else dt_next
             dt = dt_next

@@ -149,8 +149,11 @@ class _Records:
     """Moment records waiting for the next commit."""
 
     def __init__(self):
-        self.columns = {name: [] for name in ("step_time", "step", "dt", "momentum")
-                        + SCALAR_MOMENTS}
+        self.columns = self._empty()
+
+    @staticmethod
+    def _empty():
+        return {name: [] for name in ("step_time", "step", "dt", "momentum") + SCALAR_MOMENTS}
 
     def add(self, step: int, t: float, dt: float, record: dict) -> None:
         self.columns["step_time"].append(t)
@@ -160,8 +163,7 @@ class _Records:
             self.columns[name].append(record[name])
 
     def take(self) -> dict:
-        taken = self.columns
-        self.__init__()
+        taken, self.columns = self.columns, self._empty()
         return taken
 
 
@@ -183,8 +185,9 @@ class Simulation:
                                 restitution=d.build("restitution"), backend=self.backend)
         self.equation = HomogeneousBoltzmann(self.operator, d.heat_bath, d.knudsen)
         self.integrator = d.build("integrator")
-        sampled = d.build("initial").sample(d.grid)
-        check_fits(d.grid, sampled, d.build("initial"), d.health.edge_tolerance,
+        initial = d.build("initial")
+        sampled = initial.sample(d.grid)
+        check_fits(d.grid, sampled, initial, d.health.edge_tolerance,
                    d.health.initial_mass_tolerance)
         self.f0 = d.grid.project(sampled)
 
@@ -224,7 +227,9 @@ class Simulation:
         xp = backend.xp
         start_wall = time.perf_counter()
         description = d.to_dict()
-        if resume and RunStore.exists(out):
+        if resume and RunStore.exists(out) and RunStore.open(out).snapshot_count == 0:
+            overwrite = True   # stopped before its first commit: nothing to resume from
+        if resume and RunStore.exists(out) and not overwrite:
             store = RunStore.resume(out, description)
             state = store.progress
             if state["status"] == "finished":
@@ -245,7 +250,7 @@ class Simulation:
             resumes, wall_before = [], 0.0
             first = _Records()
             first.add(0, 0.0, 0.0, record)
-            store.commit([(0.0, self.f0)], first.take(),
+            store.commit([(0.0, self.f0)], first.columns,
                          {"status": "running", "step": 0, "time": 0.0, "mass0": mass0,
                           "dt_next": dt_next, "resumes": resumes})
 

@@ -232,7 +232,7 @@ def describe(path) -> str:
              f"status      {progress.get('status')}"
              + (f": {progress['message']}" if progress.get("message") else "")]
     if progress.get("snapshots"):
-        times = group["time"][:]
+        times = group["time"][:int(progress["snapshots"])]
         lines.append(f"snapshots   {len(times)} of f {tuple(group['f'].shape[1:])}, "
                      f"t = {times[0]:g} .. {times[-1]:g}")
     if progress.get("records"):

@@ -105,3 +105,14 @@ def boolean(instance, attribute: attrs.Attribute, value):
     """attrs validator: exactly ``True`` or ``False``."""
     if not isinstance(value, bool):
         reject(_owner(instance), attribute.name, value, "must be True or False", error=TypeError)
+
+
+def from_table(cls, table: dict, owner: str):
+    """``cls(**table)`` for an attrs class, an unknown key reported with the keys it knows."""
+    known = {a.name for a in attrs.fields(cls)}
+    unknown = sorted(set(table) - known)
+    if unknown:
+        reject(owner, unknown[0], table[unknown[0]],
+               f"is not a parameter of {cls.__name__}; known: {', '.join(sorted(known))}",
+               error=TypeError)
+    return cls(**table)

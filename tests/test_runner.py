@@ -56,15 +56,22 @@ def test_description_round_trips_through_toml():
 @pytest.mark.parametrize("changes,match", [
     ({"kernel": "maxwel"}, "collision_kernels: name 'maxwel' is not registered"),
     ({"restitution": {"name": "constant", "value": 1.5}}, "'value' = 1.5"),
-    ({"final_time": 1.01}, "'final_time' = 1.01 is invalid; must be a whole multiple of "
-                           "time_step"),
+    ({"final_time": 1.01}, "'final_time' = 1.01 is invalid; must be a whole multiple "
+                           r"\(>= 1\) of time_step"),
     ({"time_step": None}, "'time_step' = None is invalid; is required by the fixed-step"),
+    ({"final_time": 1e-12}, "'final_time' = 1e-12 is invalid; must be a whole multiple"),
     ({"integrator": "dopri54"}, "'tolerance' = None is invalid; is required by the adaptive"),
     ({"tolerance": 1e-6}, "'tolerance' = 1e-06 is invalid; applies to adaptive"),
     ({"heat_bath": -0.1}, "'heat_bath' = -0.1"),
     ({"knudsen": 0.0}, "'knudsen' = 0.0"),
     ({"output": {"snapshot_interval": 2.0}}, "snapshot_interval' = 2.0 is invalid; must be <= "
                                              "final_time"),
+    ({"output": {"snapshot_interval": 1e-12}}, "'snapshot_interval' = 1e-12 is invalid; must be "
+                                               r"a whole multiple \(>= 1\)"),
+    ({"operator": {"name": "fast_spectral", "sphere": {"name": "circle_trapezoid",
+                                                       "n_points": 0}}}, "'n_points' = 0"),
+    ({"backend": {"name": "auto", "threads": 0}}, "'threads' = 0"),
+    ({"initial": {"name": "maxwellian", "velocity": 1.0}}, "'velocity' = 1.0 is invalid"),
     ({"operator": {"name": "fast_spectral", "radial_point": 8}}, "unknown option"),
     ({"initial": {"name": "maxwellian", "temperature": -1.0}}, "'temperature' = -1.0"),
     ({"initial": {"name": "callable", "function": lambda v1, v2: v1 * 0}},
@@ -79,6 +86,12 @@ def test_bad_descriptions_are_rejected_with_the_parameter_named(changes, match):
 def test_unknown_keys_and_bad_toml_are_rejected():
     with pytest.raises(TypeError, match="'final_tme' .* is not a parameter"):
         RunDescription.from_dict({**heated().to_dict(), "final_tme": 1.0})
+    with pytest.raises(TypeError, match="'n_mode' = 64 is invalid; is not a parameter of "
+                                        "VelocityGrid; known: allow_aliasing, dimension"):
+        heated(grid={"dimension": 2, "n_mode": 64, "support_radius": 1.0})
+    with pytest.raises(TypeError, match="'temp' = 1.0 is invalid; is not a parameter of "
+                                        "Maxwellian"):
+        heated(initial={"name": "gaussian_mixture", "components": [{"temp": 1.0}]})
     with pytest.raises(ValueError, match="TOML text is invalid"):
         RunDescription.from_toml("final_time = = 1")
 

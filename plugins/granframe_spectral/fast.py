@@ -230,11 +230,12 @@ BATCH_BYTES = 4 * 2 ** 20
 
 def _default_batch(spectrum_bytes: int, n_pairs: int) -> int:
     """Pairs per batch: about BATCH_BYTES of spectra, in whole rho values (a multiple of
-    ``n_pairs``) or a divisor of ``n_pairs``, so that no batch is left part-filled."""
+    ``n_pairs``), or the pairs of one rho split into equal batches (the last one at most
+    one pair short)."""
     batch = max(1, BATCH_BYTES // spectrum_bytes)
     if batch >= n_pairs:
         return batch - batch % n_pairs
-    return max(d for d in range(1, batch + 1) if n_pairs % d == 0)
+    return -(-n_pairs // -(-n_pairs // batch))
 
 
 def _separable_sum(coef, factors):
