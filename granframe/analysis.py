@@ -40,10 +40,11 @@ def tail_exponent(speed, f, window):
     has slope alpha - 1. Returns (alpha, stderr).
     """
     speed, f = numpy.asarray(speed, float), numpy.asarray(f, float)
-    order = numpy.argsort(speed)
-    speed, f = speed[order], f[order]
     keep = f > 0
-    speed, log_f = speed[keep], numpy.log(f[keep])
+    # points at the same |v| (both sides of a slice, equal up to round-off) are merged:
+    # their mean ln f
+    speed, inverse = numpy.unique(numpy.round(speed[keep], 9), return_inverse=True)
+    log_f = numpy.bincount(inverse, numpy.log(f[keep])) / numpy.bincount(inverse)
     middle = 0.5 * (speed[1:] + speed[:-1])
     slope = numpy.diff(log_f) / numpy.diff(speed)
     use = (middle >= window[0]) & (middle <= window[1]) & (slope < 0)
