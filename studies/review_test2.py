@@ -11,8 +11,9 @@ The report plots f_inf(v1, 0.17) on a log scale, evaluated exactly from the Four
 (v2 = 0.17 is not a grid point). It fits the tail exponent alpha in f ~ exp(-c |v|^alpha)
 (theory: 1 for Maxwell molecules, 3/2 for hard spheres) over the trustworthy range of |v|:
 - from beyond the thermal core, |v| >= 3 sqrt(T_inf), where the asymptotic form applies;
-- to where f_inf is still 100 times the noise floor. The floor is the largest |f| at
-  negative values of f_inf: the spectral solution of the flat data rings.
+- to where f_inf is still 100 times the noise floor, and at most S = R/2: beyond it
+  collisions are cut and periodic images come near. The floor is the largest |f| at
+  negative values of f_inf.
 The uncertainty is the spread of alpha over sub-windows, with the fit's standard error.
 """
 
@@ -71,14 +72,15 @@ def slice_at(f, v2, half_width):
 def _tail(name, store):
     ds = xarray.open_zarr(store)
     f_inf = ds.f.isel(time=-1).values
-    L = RunStore.open(store).metadata["description"]["grid"]["half_width"]
+    grid = RunStore.open(store).metadata["description"]["grid"]
+    L, S = grid["half_width"], grid["support_radius"]
     v1 = ds.v1.values
     line = slice_at(f_inf, SLICE, L)
     T_inf = float(ds.temperature.values[-1])
     floor = float(max(-line.min(), -f_inf.min(), 1e-16 * f_inf.max()))
     trusted = line > 100 * floor
     v_min = 3 * math.sqrt(T_inf)
-    outer = numpy.abs(v1)[trusted & (numpy.abs(v1) >= v_min)]
+    outer = numpy.abs(v1)[trusted & (numpy.abs(v1) >= v_min) & (numpy.abs(v1) <= S)]
     v_max = float(outer.max()) if outer.size else v_min
     result = {"T_inf": T_inf, "noise_floor": floor, "fit_range": [v_min, v_max],
               "last_snapshot_change": float(numpy.abs(f_inf - ds.f.isel(time=-2).values).max()
@@ -121,8 +123,9 @@ def report(stores: dict, out) -> dict:
             numpy.savetxt(out / f"test2_{name}_slice.csv", numpy.c_[v1, line], delimiter=",",
                           header=f"v1,f_inf(v1;v2={SLICE})", comments="")
         ax.set(xlabel="v1", ylabel=f"f_inf(v1, {SLICE})",
-               title=f"{kernel.replace('_', ' ')}: tail exp(-c|v|^alpha), theory alpha = "
-                     f"{KERNELS[kernel]:g} (grey: fit range, e = {RESTITUTION[0]})")
+               title=f"{kernel.replace('_', ' ')}, f_inf = f(t = 55): tail exp(-c|v|^alpha), "
+                     f"theory alpha = {KERNELS[kernel]:g}\n(grey: fit range of e = "
+                     f"{RESTITUTION[0]}; each e has its own, see summary.json)")
         ax.legend(fontsize=8)
     fig.savefig(out / "test2_tails.png", dpi=100)
     plt.close(fig)

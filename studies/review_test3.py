@@ -76,6 +76,10 @@ def runs(quick: bool = False) -> dict:
     return made
 
 
+#: Largest negative-mass share of a state used in the Haff fit.
+VALID_NEGATIVE_SHARE = 0.01
+
+
 def haff_fit(t, T):
     """Least-squares fit of T0 / (1 + t/t0)^2 on ln T; returns (T0, t0, max relative misfit)."""
     def residual(p):
@@ -90,7 +94,8 @@ def report(stores: dict, out) -> dict:
     data, summary = {}, {}
     for name, store in stores.items():
         ds = xarray.open_zarr(store)
-        data[name] = (ds.step_time.values, ds.temperature.values)
+        data[name] = (ds.step_time.values, ds.temperature.values,
+                      ds.negative_mass_fraction.values)
         progress = RunStore.open(store).progress
         summary[name] = {"status": progress["status"], "message": progress.get("message"),
                          "t_final": float(ds.step_time.values[-1]),
@@ -102,20 +107,24 @@ def report(stores: dict, out) -> dict:
     for ax, e0 in zip(axes, (0.8, 0.2)):
         for kind, style in (("tanh", "-"), ("const", "--")):
             name = f"haff_{kind}{e0}"
-            t, T = data[name]
-            T0, t0, misfit = haff_fit(t, T)
-            summary[name].update(haff_T0=T0, haff_t0=t0, haff_max_misfit=misfit)
+            t, T, negative = data[name]
+            valid = numpy.cumprod(negative <= VALID_NEGATIVE_SHARE).astype(bool)
+            T0, t0, misfit = haff_fit(t[valid], T[valid])
+            summary[name].update(haff_T0=T0, haff_t0=t0, haff_max_misfit=misfit,
+                                 haff_fit_until=float(t[valid][-1]))
             label = (f"e(|g|) tanh law, e0 = {e0}" if kind == "tanh" else f"constant e = {e0}")
             if summary[name]["status"] != "finished":
                 label += f", stopped at t = {t[-1]:.3g}"
-            ax.plot(t, T, style, label=f"{label} (Haff fit t0 = {t0:.3g})")
-        ax.set(xlabel="t", ylabel="T", title=f"free cooling, e0 = {e0}")
+            line, = ax.plot(t, T, style, label=f"{label} (Haff fit t0 = {t0:.3g})")
+            ax.plot(t[valid][-1], T[valid][-1], "o", color=line.get_color(), ms=5)
+        ax.set(xlabel="t", ylabel="T", title=f"free cooling, e0 = {e0} (dot: negative mass "
+                                               f"reaches {VALID_NEGATIVE_SHARE:.0%}; fit before it)")
         ax.legend()
     fig.savefig(out / "test3_haff.png", dpi=100)
     plt.close(fig)
     fig, ax = plt.subplots(figsize=(6, 4.5), constrained_layout=True)
     for lam in (0.0, 0.5, 1.0):
-        t, T = data[f"lambda{lam:g}"]
+        t, T, _ = data[f"lambda{lam:g}"]
         ax.semilogy(t, T, label=f"lambda = {lam:g}")
     ax.set(xlabel="t", ylabel="T", title="heated (tau = 0.1), e = 0.5: VHS exponent lambda")
     ax.legend()
@@ -123,7 +132,7 @@ def report(stores: dict, out) -> dict:
     plt.close(fig)
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), constrained_layout=True)
     for e in HEATED:
-        t, T = data["lambda1" if e == 0.5 else f"heated_e{e}"]
+        t, T, _ = data["lambda1" if e == 0.5 else f"heated_e{e}"]
         axes[0].plot(t, T, label=f"e = {e}")
         axes[1].loglog(t[1:], T[1:], label=f"e = {e}")
     axes[0].set(xlabel="t", ylabel="T", title="heated Haff's law (tau = 0.1), hard spheres")
@@ -131,7 +140,7 @@ def report(stores: dict, out) -> dict:
     axes[0].legend()
     fig.savefig(out / "test3_heated.png", dpi=100)
     plt.close(fig)
-    for name, (t, T) in data.items():
+    for name, (t, T, _) in data.items():
         numpy.savetxt(out / f"test3_{name}_temperature.csv", numpy.c_[t, T], delimiter=",",
                       header="t,T", comments="")
     return summary
