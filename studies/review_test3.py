@@ -11,7 +11,13 @@ Runs (the review gives no final time for the first two groups; all go to t = 20)
 - lambda0, lambda0.5, lambda1: e = 0.5, tau = 0.1, VHS exponent lambda;
 - heated_e0.5 ... heated_e0.95: hard spheres, tau = 0.1, e from 0.5 to 0.95.
 
-    granframe run studies/review_test3.py --out runs/test3           # about 45 min on 2 cores
+Not in the review: the runs named *_S5 repeat six of them on a grid that resolves the data,
+S = 5 (L = 11.0, R = 10, h = 0.69; same N, N_rho, M). The review's grid (h = 1.38 against
+sigma0 = 1.41, and f0 reaching beyond S = 4) is too coarse. Its spectral solution starts with
+a negative-mass share of 0.75 % (T0 = 1.9935 instead of 2) and loses positivity as T falls.
+granframe's health check stops a run once that share reaches 25 %.
+
+    granframe run studies/review_test3.py --out runs/test3           # about 70 min on 2 cores
     granframe run studies/review_test3.py --out runs/test3 --quick
 
 The report plots T(t) per group (linear and log-log for the heated runs). It fits Haff's law
@@ -35,6 +41,9 @@ from granframe.storage import RunStore  # noqa: E402
 
 HALF_WIDTH = 5 * (3 + math.sqrt(2))
 HEATED = (0.5, 0.6, 0.7, 0.8, 0.9, 0.95)
+
+
+RESOLVED = ("lambda0", "lambda0.5", "lambda1", "haff_tanh0.8", "haff_const0.8", "heated_e0.9")
 
 
 def _run(title, kernel, restitution, tau, quick):
@@ -73,6 +82,10 @@ def runs(quick: bool = False) -> dict:
         if e != 0.5:   # e = 0.5 is lambda1
             made[f"heated_e{e}"] = _run(f"heated, hard spheres, e = {e}", "hard_spheres",
                                         {"name": "constant", "value": e}, 0.1, quick)
+    for name in RESOLVED:
+        made[f"{name}_S5"] = made[name].replace(
+            title=made[name].title.replace("Test 3:", "Test 3 (S = 5 grid):"),
+            grid={"dimension": 3, "n_modes": made[name].grid.n_modes, "support_radius": 5.0})
     return made
 
 
@@ -139,6 +152,20 @@ def report(stores: dict, out) -> dict:
     axes[1].set(xlabel="t", ylabel="T", title="log-log")
     axes[0].legend()
     fig.savefig(out / "test3_heated.png", dpi=100)
+    plt.close(fig)
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), constrained_layout=True)
+    for i, name in enumerate(RESOLVED):
+        for suffix, style, where in (("", "--", "review grid"), ("_S5", "-", "S = 5 grid")):
+            t, T, negative = data[name + suffix]
+            label = f"{name}, {where}" + ("" if summary[name + suffix]["status"] == "finished"
+                                          else f" (stopped, t = {t[-1]:.3g})")
+            axes[0].plot(t, T, style, color=f"C{i}", label=label)
+            axes[1].semilogy(t, numpy.maximum(negative, 1e-17), style, color=f"C{i}")
+    axes[0].set(xlabel="t", ylabel="T", title="temperature: review grid (dashed) and S = 5 "
+                                             "grid (solid)")
+    axes[1].set(xlabel="t", title="negative-mass share int max(-f,0) / int |f|")
+    axes[0].legend(fontsize=7)
+    fig.savefig(out / "test3_resolution.png", dpi=100)
     plt.close(fig)
     for name, (t, T, _) in data.items():
         numpy.savetxt(out / f"test3_{name}_temperature.csv", numpy.c_[t, T], delimiter=",",

@@ -14,8 +14,10 @@ REPORTS = {
                         {"test1_a.png", "test1_c_fine.png"}),
     "review_test2.py": ({f"{k}_e{e}" for k in ("maxwell", "hard_spheres") for e in (0.3, 0.5, 0.7)},
                         "noise_floor", {"test2_tails.png"}),
-    "review_test3.py": ({"haff_tanh0.8", "haff_const0.2", "lambda0.5", "heated_e0.95"}, "T_final",
-                        {"test3_haff.png", "test3_lambda.png", "test3_heated.png"}),
+    "review_test3.py": ({"haff_tanh0.8", "haff_const0.2", "lambda0.5", "heated_e0.95",
+                         "lambda1_S5"}, "T_final",
+                        {"test3_haff.png", "test3_lambda.png", "test3_heated.png",
+                         "test3_resolution.png"}),
 }
 
 
