@@ -116,8 +116,16 @@ def report(stores: dict, out) -> dict:
                          "wall_seconds": progress.get("wall_seconds"),
                          "max_negative_mass_share": float(ds.negative_mass_fraction.max()),
                          "kurtosis_final": float(ds.kurtosis.values[-1])}
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), constrained_layout=True)
-    for ax, e0 in zip(axes, (0.8, 0.2)):
+    fig, axes = plt.subplots(1, 3, figsize=(17, 4.5), constrained_layout=True)
+    speed = numpy.linspace(0.0, 8.0, 400)
+    for e0 in (0.8, 0.2):   # the review's left panels: the restitution laws themselves
+        axes[0].plot(speed, (e0 - 1) / 2 * numpy.tanh(speed - 4) + (e0 + 1) / 2,
+                     label=f"e(|g|), e0 = {e0}")
+        axes[0].axhline(e0, ls="--", lw=1, color="C0" if e0 == 0.8 else "C1")
+    axes[0].set(xlabel="|g|", ylabel="e", title="restitution: tanh law (solid), constant "
+                                               "(dashed)")
+    axes[0].legend()
+    for ax, e0 in zip(axes[1:], (0.8, 0.2)):
         for kind, style in (("tanh", "-"), ("const", "--")):
             name = f"haff_{kind}{e0}"
             t, T, negative = data[name]
@@ -130,8 +138,9 @@ def report(stores: dict, out) -> dict:
                 label += f", stopped at t = {t[-1]:.3g}"
             line, = ax.plot(t, T, style, label=f"{label} (Haff fit t0 = {t0:.3g})")
             ax.plot(t[valid][-1], T[valid][-1], "o", color=line.get_color(), ms=5)
-        ax.set(xlabel="t", ylabel="T", title=f"free cooling, e0 = {e0} (dot: negative mass "
-                                               f"reaches {VALID_NEGATIVE_SHARE:.0%}; fit before it)")
+        ax.set(xlabel="t", ylabel="T", title=f"free cooling, review grid, e0 = {e0}\n(dot: "
+                                               f"negative mass reaches {VALID_NEGATIVE_SHARE:.0%}; "
+                                               "Haff fit before it)")
         ax.legend()
     fig.savefig(out / "test3_haff.png", dpi=100)
     plt.close(fig)
