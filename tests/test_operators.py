@@ -47,27 +47,6 @@ def test_mass_vanishes_to_round_off(backend, method, dimension, n_modes, law):
     assert relative_mass(grid, q) <= 1e-13
 
 
-@pytest.mark.parametrize("law", [("constant", {"value": 0.5}),
-                                 ("tanh", {"asymptotic_value": 0.2, "centre": 1.5, "width": 0.5})],
-                         ids=["constant", "tanh"])
-def test_hard_sphere_dissipation_in_3d_against_the_exact_rate(law):
-    """3D hard spheres, B = |g|/(4 pi), e(|g|): for a Maxwellian f the relative velocity u is
-    Gaussian with variance 2T, so int Q |v|^2 = -(1/8) int_{|u|<R} M_2T(u) |u|^3 (1-e(|u|)^2) du,
-    a 1-D integral (truncated at R like the operator)."""
-    grid, temperature = gf.VelocityGrid(3, 40, 3.0), 0.6
-    restitution = gf.restitution_law(law[0], **law[1])
-    op = build("fast_spectral", grid, "hard_spheres", restitution, FAST_BACKEND,
-               radial_points=60, sphere=gf.SphereProduct(8))
-    f = grid.maxwellian(temperature=temperature)
-    rate = float(numpy.sum(op(f) * grid.speed_squared())) * grid.cell_volume
-    u = numpy.polynomial.legendre.leggauss(400)
-    u, w = (u[0] + 1) * grid.truncation_radius / 2, u[1] * grid.truncation_radius / 2
-    density = 4 * numpy.pi * u ** 2 * (4 * numpy.pi * temperature) ** -1.5 * numpy.exp(
-        -u ** 2 / (4 * temperature))
-    exact = -(1 / 8) * w @ (density * u ** 3 * (1 - restitution(u) ** 2))
-    assert rate == pytest.approx(exact, rel=1e-7)
-
-
 @pytest.mark.parametrize("dimension,sizes", [(2, (16, 24, 32, 48)), (3, (16, 24, 32))])
 def test_bkw_spectral_convergence(dimension, sizes):
     errors = []
