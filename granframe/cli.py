@@ -110,11 +110,17 @@ def _run_one(description, out, args) -> int:
     from granframe.storage import RunStore
 
     if args.resume and RunStore.exists(out):
+        # an ended run is reported from its store, without building the operator
         progress = RunStore.open(out).progress
-        if progress.get("status") == "failed":   # ended: resuming would fail again
+        if progress.get("status") == "failed":   # resuming would fail again
             print(f"{out}: stopped earlier by a health check ({progress.get('message')}); "
                   "not resumed", file=sys.stderr)
             return 3
+        if progress.get("status") == "finished":
+            RunStore.resume(out, description.to_dict())   # refuses another description
+            print(f"{out}: the run is already finished (t = {progress['time']:g}, "
+                  f"{progress['step']} steps, {progress.get('wall_seconds', 0.0):.1f} s)")
+            return 0
     try:
         result = Simulation(description).run(out, resume=args.resume, overwrite=args.overwrite,
                                              progress=args.progress)
@@ -126,12 +132,8 @@ def _run_one(description, out, args) -> int:
         print(f"\ngranframe: interrupted; the store '{out}' holds every complete snapshot: "
               "continue with --resume", file=sys.stderr)
         return 130
-    if result.status == "already finished":
-        print(f"{out}: the run is already finished (t = {result.time:g}, "
-              f"{result.steps} steps, {result.wall_seconds:.1f} s)")
-    else:
-        print(f"{out}: finished, {result.steps} steps to t = {result.time:g} in "
-              f"{result.wall_seconds:.1f} s, {result.snapshots} snapshots")
+    print(f"{out}: finished, {result.steps} steps to t = {result.time:g} in "
+          f"{result.wall_seconds:.1f} s, {result.snapshots} snapshots")
     return 0
 
 

@@ -267,3 +267,14 @@ def test_cli_run_plot_info(tmp_path, capsys):
     toml.write_text(bad.to_toml())
     assert main(["run", str(toml), "--out", str(tmp_path / "bad.zarr")]) == 3
     assert "run stopped: health check failed" in capsys.readouterr().err
+
+
+def test_cli_resume_of_a_finished_run_checks_the_description(tmp_path, capsys):
+    toml, store = tmp_path / "run.toml", tmp_path / "run.zarr"
+    toml.write_text(heated(final_time=0.5).to_toml())
+    assert main(["run", str(toml), "--out", str(store)]) == 0
+    assert main(["run", str(toml), "--out", str(store), "--resume"]) == 0
+    assert "already finished (t = 0.5, 10 steps" in capsys.readouterr().out
+    toml.write_text(heated(final_time=0.5, heat_bath=0.2).to_toml())
+    assert main(["run", str(toml), "--out", str(store), "--resume"]) == 2
+    assert "another description (differs in: heat_bath)" in capsys.readouterr().err
