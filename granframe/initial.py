@@ -16,6 +16,7 @@ from typing import Callable
 
 import attrs
 import numpy
+import scipy.special
 
 from granframe import validators as check
 from granframe.exact import bkw
@@ -84,6 +85,17 @@ class Box(InitialCondition):
     Each grid value is the cell average (the fraction of the cell
     [v_j - h/2, v_j + h/2]^d inside the cube times the height), so the grid mass is
     rho exactly and the discontinuity does not depend on where the grid points fall.
+
+    With ``edge_width`` sigma > 0 the cube is convolved with a Gaussian of standard
+    deviation sigma in each direction, a smooth profile with the same mass and centre,
+
+        f0(v) = rho / (2 w0)^d prod_i [erf((v_i - u_i + w0) / (sqrt 2 sigma))
+                                       - erf((v_i - u_i - w0) / (sqrt 2 sigma))] / 2,
+
+    and temperature w0^2 / 3 + sigma^2; it is sampled at the grid points. A
+    discontinuous f0 limits every spectral method to low-order accuracy (Gibbs
+    ringing; docs/reproduction.md, Test 1); sigma of one or two cells restores
+    spectral accuracy.
     """
 
     half_width: float = attrs.field(converter=check.to_float,
@@ -92,14 +104,21 @@ class Box(InitialCondition):
                                  validator=check.real(0.0, math.inf, lower_open=True))
     velocity: tuple | None = attrs.field(default=None, converter=_tuple_or_none,
                                          validator=_velocity)
+    edge_width: float = attrs.field(default=0.0, converter=check.to_float,
+                                    validator=check.real(0.0, math.inf))
 
     def sample(self, grid):
         _check_dimension("Box", self.velocity, grid)
         u = self.velocity or (0.0,) * grid.dimension
-        h, w = grid.spacing, self.half_width
+        h, w, sigma = grid.spacing, self.half_width, self.edge_width
         points = grid.points()
         factors = []
         for ui in u:
+            if sigma > 0:
+                scale = math.sqrt(2) * sigma
+                factors.append((scipy.special.erf((points - ui + w) / scale)
+                                - scipy.special.erf((points - ui - w) / scale)) / 2)
+                continue
             overlap = (numpy.minimum(points + h / 2, ui + w)
                        - numpy.maximum(points - h / 2, ui - w)).clip(min=0.0)
             factors.append(overlap / h)
