@@ -18,6 +18,10 @@ import scipy.fft
 from granframe import validators as check
 
 
+#: Supported precisions: real dtype and its complex counterpart.
+PRECISIONS = {"float64": ("float64", "complex128"), "float32": ("float32", "complex64")}
+
+
 def available_cpus() -> int:
     """CPUs this process may run on."""
     try:
@@ -58,9 +62,10 @@ class ArrayBackend:
     xp: ModuleType
     concurrency: int = 1
 
-    def real_fft(self, shape, axes, threads: int = 1) -> "RealFFT":
-        """A planned real transform pair over ``axes`` of arrays of ``shape``."""
-        return RealFFT(self, tuple(shape), tuple(axes))
+    def real_fft(self, shape, axes, threads: int = 1, precision: str = "float64") -> "RealFFT":
+        """A planned real transform pair over ``axes`` of arrays of ``shape``, in
+        ``precision`` (a key of :data:`PRECISIONS`)."""
+        return RealFFT(self, tuple(shape), tuple(axes), precision=precision)
 
     def asarray(self, a, dtype=None):
         return self.xp.asarray(a, dtype=dtype)
@@ -125,16 +130,19 @@ class RealFFT:
     ``irfftn`` times the number of points; callers fold the 1/N^d into their
     own factors instead of paying an extra pass. This generic version calls
     the backend's ``rfftn``/``irfftn``; backends with real planners (FFTW,
-    cuFFT) override it.
+    cuFFT) override it. The buffers have the real and complex dtypes of
+    ``precision``; the backend's transforms must preserve them.
     """
 
-    def __init__(self, backend: ArrayBackend, shape: tuple, axes: tuple, zeros=None):
+    def __init__(self, backend: ArrayBackend, shape: tuple, axes: tuple, zeros=None,
+                 precision: str = "float64"):
         zeros = backend.xp.zeros if zeros is None else zeros   # e.g. an aligned allocator
         self.backend, self.shape, self.axes = backend, shape, axes
         half = list(shape)
         half[axes[-1]] = shape[axes[-1]] // 2 + 1
-        self.real = zeros(shape, dtype="float64")
-        self.spectrum = zeros(tuple(half), dtype="complex128")
+        real, complex_ = PRECISIONS[precision]
+        self.real = zeros(shape, dtype=real)
+        self.spectrum = zeros(tuple(half), dtype=complex_)
         self._sizes = tuple(shape[a] for a in axes)
 
     def forward(self):
@@ -197,15 +205,16 @@ class NumpyBackend(CPUBackend):
     def irfftn(self, a, s, axes=None):
         return scipy.fft.irfftn(a, s=s, axes=axes, workers=self.workers)
 
-    def real_fft(self, shape, axes, threads: int = 1) -> RealFFT:
-        return _ScipyRealFFT(self, tuple(shape), tuple(axes), threads)
+    def real_fft(self, shape, axes, threads: int = 1, precision: str = "float64") -> RealFFT:
+        return _ScipyRealFFT(self, tuple(shape), tuple(axes), threads, precision)
 
 
 class _ScipyRealFFT(RealFFT):
-    """pocketfft transforms on ``threads`` threads, overwriting the input."""
+    """pocketfft transforms on ``threads`` threads, overwriting the input (pocketfft keeps
+    float32 in single precision)."""
 
-    def __init__(self, backend, shape, axes, threads):
-        super().__init__(backend, shape, axes)
+    def __init__(self, backend, shape, axes, threads, precision):
+        super().__init__(backend, shape, axes, precision=precision)
         self.threads = threads
 
     def forward(self):

@@ -48,7 +48,8 @@ def _median_time(function, repeats: int, synchronize) -> float:
 
 
 def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int,
-            backend: str, threads: int, repeats: int, method: str = "fast_spectral") -> dict:
+            backend: str, threads: int, repeats: int, method: str = "fast_spectral",
+            precision: str = "float64") -> dict:
     """Build and time one operator in this process; returns a JSON-ready record."""
     import granframe as gf
     from granframe.quadratures import CircleTrapezoid, SphereProduct
@@ -68,13 +69,15 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
     operator = gf.collision_operator(method, grid, gf.collision_kernel("hard_spheres"),
                                      gf.restitution_law("constant", value=0.8),
                                      backend=array_backend, radial_points=radial_points,
-                                     sphere=sphere)
+                                     sphere=sphere,
+                                     **({} if precision == "float64" else {"precision": precision}))
     precompute = time.perf_counter() - start
     f = array_backend.asarray(grid.maxwellian(temperature=1.0))
     operator(f)
     array_backend.synchronize()
     evaluation = _median_time(lambda: operator(f), repeats, array_backend.synchronize)
-    fft = array_backend.real_fft(grid.shape, tuple(range(dimension)), threads=threads)
+    fft = array_backend.real_fft(grid.shape, tuple(range(dimension)), threads=threads,
+                                 precision=precision)
     fft.real[...] = f
 
     def pair():
@@ -88,6 +91,7 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
     return {
         "dimension": dimension, "n_modes": n_modes, "radial_points": radial_points,
         "sphere_points": sphere_points, "method": method, "backend": backend, "threads": threads,
+        "precision": precision,
         "transform_pairs": operator.transform_pairs, "precompute_s": precompute,
         "evaluation_s": evaluation, "repeats": repeats, "fft_pair_s": single, "floor_s": floor,
         "time_over_floor": evaluation / floor, "peak_rss_gib": peak / 2 ** 20,
@@ -95,14 +99,15 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
     }
 
 
-def run(configs, backend: str, threads: int, repeats: int) -> list[dict]:
+def run(configs, backend: str, threads: int, repeats: int,
+        precision: str = "float64") -> list[dict]:
     """Measure each configuration in its own subprocess."""
     records = []
     for dimension, n_modes, radial, sphere in configs:
         command = [sys.executable, "-c",
                    "import json, sys; from granframe.bench import measure; "
                    f"print(json.dumps(measure({dimension}, {n_modes}, {radial}, {sphere}, "
-                   f"{backend!r}, {threads}, {repeats})))"]
+                   f"{backend!r}, {threads}, {repeats}, precision={precision!r})))"]
         done = subprocess.run(command, capture_output=True, text=True)
         if done.returncode != 0:
             raise ValueError(f"bench: configuration d={dimension} N={n_modes} failed:\n"
@@ -113,11 +118,12 @@ def run(configs, backend: str, threads: int, repeats: int) -> list[dict]:
 
 def table(records) -> str:
     """Markdown table of bench records."""
-    lines = ["| d | N | N_rho | M | pairs | precompute | time / eval | FFT floor | time/floor "
-             "| peak RSS |", "|---|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| d | N | N_rho | M | precision | pairs | precompute | time / eval | FFT floor "
+             "| time/floor | peak RSS |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in records:
         lines.append(
             f"| {r['dimension']} | {r['n_modes']} | {r['radial_points']} | {r['sphere_points']} "
+            f"| {r.get('precision', 'float64')} "
             f"| {r['transform_pairs']} | {r['precompute_s']:.2f} s | {_ms(r['evaluation_s'])} "
             f"| {_ms(r['floor_s'])} | {r['time_over_floor']:.2f} | {r['peak_rss_gib']:.2f} GiB |")
     return "\n".join(lines)

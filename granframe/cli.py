@@ -5,7 +5,8 @@ Commands
 plugins [--json]
     List every registered implementation per family with its source and a
     one-line description. The JSON form is documented in docs/plugins.md.
-bench [--json] [--backend NAME] [--threads T] [--repeats R] [--config D:N[:N_RHO:M]]
+bench [--json] [--backend NAME] [--threads T] [--repeats R] [--precision P]
+      [--config D:N[:N_RHO:M]]
     Time the fast operator against the FFT floor (docs/benchmarks.md).
 run SOURCE --out STORE [--resume] [--overwrite] [--quick] [--only NAMES] [--progress]
     Run a description (a TOML file or a study module under studies/) into a zarr store;
@@ -51,13 +52,13 @@ def _bench(args) -> int:
     backend = bench.preferred_backend() if args.backend is None else args.backend
     configs = ([bench.parse_config(c) for c in args.config] if args.config
                else list(bench.DEFAULT_CONFIGS))
-    records = bench.run(configs, backend, args.threads, args.repeats)
+    records = bench.run(configs, backend, args.threads, args.repeats, args.precision)
     if args.json:
         json.dump({"schema": "granframe.bench/1", "granframe_version": __version__,
                    "records": records}, sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
-        print(f"fast_spectral, backend {backend}, {args.threads} threads, float64, "
+        print(f"fast_spectral, backend {backend}, {args.threads} threads, {args.precision}, "
               f"median of {args.repeats} evaluations after warm-up")
         print(bench.table(records))
     return 0
@@ -167,6 +168,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "installed, else numpy)")
     bench.add_argument("--threads", type=int, default=2, help="threads (default 2)")
     bench.add_argument("--repeats", type=int, default=7, help="timed evaluations (default 7)")
+    bench.add_argument("--precision", default="float64", choices=["float64", "float32"],
+                       help="arithmetic of the operator and of the floor (default float64)")
     bench.add_argument("--config", action="append", metavar="D:N[:N_RHO:M]",
                        help="configuration (repeatable); default: the review's five")
     bench.set_defaults(handler=_bench)

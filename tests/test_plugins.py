@@ -190,6 +190,10 @@ def test_cli_bench_runs_and_reports_the_floor():
     assert record["transform_pairs"] == 8 * 4
     assert record["evaluation_s"] > 0 and record["floor_s"] > 0
     assert record["time_over_floor"] == record["evaluation_s"] / record["floor_s"]
+    single = subprocess.run([sys.executable, "-m", "granframe.cli", "bench", "--precision",
+                             "float32", "--config", "2:16:8:8", "--repeats", "2", "--backend",
+                             "numpy"], capture_output=True, text=True, check=True)
+    assert "float32" in single.stdout.splitlines()[0] and "| float32 |" in single.stdout
     bad = subprocess.run([sys.executable, "-m", "granframe.cli", "bench", "--config", "4:16"],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "parameter 'config' = '4:16'" in bad.stderr

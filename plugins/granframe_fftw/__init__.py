@@ -86,16 +86,17 @@ class PyFFTWBackend(CPUBackend):
     def irfftn(self, a, s, axes=None):
         return self._interfaces().irfftn(a, s=s, axes=axes, threads=self.workers)
 
-    def real_fft(self, shape, axes, threads: int = 1) -> RealFFT:
-        return _FFTWRealFFT(self, tuple(shape), tuple(axes), threads)
+    def real_fft(self, shape, axes, threads: int = 1, precision: str = "float64") -> RealFFT:
+        return _FFTWRealFFT(self, tuple(shape), tuple(axes), threads, precision)
 
 
 class _FFTWRealFFT(RealFFT):
-    """FFTW r2c/c2r plans over aligned buffers ``real`` and ``spectrum``."""
+    """FFTW r2c/c2r plans over aligned buffers ``real`` and ``spectrum`` (fftw for
+    float64, fftwf for float32)."""
 
-    def __init__(self, backend, shape, axes, threads):
+    def __init__(self, backend, shape, axes, threads, precision):
         pyfftw = _pyfftw()
-        super().__init__(backend, shape, axes, zeros=pyfftw.zeros_aligned)
+        super().__init__(backend, shape, axes, zeros=pyfftw.zeros_aligned, precision=precision)
         flags = (backend.planner_effort,)
         self._forward = pyfftw.FFTW(self.real, self.spectrum, axes=axes, threads=threads,
                                     flags=flags + ("FFTW_DESTROY_INPUT",))

@@ -14,6 +14,7 @@ import numpy
 import threadpoolctl
 
 from granframe import validators as check
+from granframe.backends import PRECISIONS
 from granframe.operators import CollisionOperator
 from granframe.quadratures import (CircleTrapezoid, SphereProduct, SurfaceQuadrature,
                                    antipodal_pairs, sphere_area)
@@ -48,6 +49,12 @@ class FastSpectral(CollisionOperator):
     memory_budget : int
         Bytes the operator's work buffers may use; precomputation refuses to
         exceed it.
+    precision : {"float64", "float32"}
+        Arithmetic of the evaluation: transforms, phase tables, weights and
+        accumulators. The tables are computed in float64 and rounded once. In
+        float32, f is rounded on entry and Q is returned in float32 (a time
+        integrator may keep its state in float64). docs/accuracy-vs-cost.md
+        gives its measured accuracy floor.
 
     Notes
     -----
@@ -73,7 +80,7 @@ class FastSpectral(CollisionOperator):
     """
 
     def __init__(self, grid, kernel, restitution, backend, *, radial_points=None, sphere=None,
-                 sigma=None, batch=None, memory_budget=2 ** 31):
+                 sigma=None, batch=None, memory_budget=2 ** 31, precision="float64"):
         super().__init__(grid, kernel, restitution, backend)
         d = grid.dimension
         owner = "fast_spectral"
@@ -90,6 +97,11 @@ class FastSpectral(CollisionOperator):
             check.reject(owner, "batch", batch, "must be None or an integer >= 1")
         if not check.is_integer(memory_budget) or memory_budget <= 0:
             check.reject(owner, "memory_budget", memory_budget, "must be a positive number of bytes")
+        if precision not in PRECISIONS:
+            check.reject(owner, "precision", precision, f"must be one of {list(PRECISIONS)}")
+        self.precision = precision
+        self._real_dtype, self._complex_dtype = PRECISIONS[precision]
+        self._itemsize = numpy.dtype(self._real_dtype).itemsize
         self.radial_points, self.sphere, self.sigma = int(radial_points), sphere, sigma
         self._build(batch, int(memory_budget))
 
@@ -136,7 +148,8 @@ class FastSpectral(CollisionOperator):
             weights = (radial * sphere_area(d))[:, None] * j.reshape(len(rho), -1)
         else:
             weights = numpy.repeat(radial[:, None], kk.size, axis=1)
-        self._radial_weights = xp.asarray(weights.reshape((len(rho),) + half_shape))
+        self._radial_weights = xp.asarray(weights.reshape((len(rho),) + half_shape),
+                                          dtype=self._complex_dtype)
 
         # Loss multiplier G_loss(m) on the half layout (same rho, ghat rule as the gain).
         g_loss = numpy.zeros(half_shape, dtype=complex)
@@ -145,17 +158,18 @@ class FastSpectral(CollisionOperator):
                 factors = [numpy.exp(sign * 1j * math.pi * r / L * numpy.outer(reps[:, i], k))
                            for i, k in enumerate(self._k_axes)]                 # each (P, N_i)
                 g_loss += w * _separable_sum(f0, factors)
-        self._g_loss = xp.asarray(g_loss / total)
+        self._g_loss = xp.asarray(g_loss / total, dtype=self._complex_dtype)
 
         # Work split: contiguous ranges of rho values over pipelines; pairs in batches.
         pipelines = max(1, min(backend.concurrency, len(rho)))
         # per pair in a batch: real buffer, spectrum buffer, and the weighted spectrum that
         # the generic ArrayBackend.lowrank_accumulate allocates (fused kernels need none)
-        per_pair = 8 * total + 2 * 16 * numpy.prod(half_shape)
+        real, complex_ = self._itemsize, 2 * self._itemsize
+        per_pair = real * total + 2 * complex_ * numpy.prod(half_shape)
         # radial weights, loss multiplier, accumulators and the operator's own transform
-        fixed = 16 * numpy.prod(half_shape) * (len(rho) + 4 + 2 * pipelines)
+        fixed = complex_ * numpy.prod(half_shape) * (len(rho) + 4 + 2 * pipelines)
         if batch is None:
-            batch = _default_batch(16 * int(numpy.prod(half_shape)), self.n_pairs)
+            batch = _default_batch(complex_ * int(numpy.prod(half_shape)), self.n_pairs)
         if fixed + pipelines * batch * per_pair > memory_budget:
             batch = int((memory_budget - fixed) // (pipelines * per_pair))
             if batch < 1:
@@ -173,7 +187,8 @@ class FastSpectral(CollisionOperator):
         # OpenMP workers keep spinning after a threaded transform and took a core from the
         # pipelines (3D N = 16: 7.8 ms per evaluation instead of 4.3 ms).
         self._fft = backend.real_fft(grid.shape, tuple(range(d)),
-                                     threads=1 if pipelines > 1 else backend.concurrency)
+                                     threads=1 if pipelines > 1 else backend.concurrency,
+                                     precision=self.precision)
 
     @property
     def transform_pairs(self) -> int:
@@ -208,7 +223,9 @@ class FastSpectral(CollisionOperator):
         total = gain - fft.forward()
         total *= self._keep
         fft.spectrum[...] = total
-        return fft.inverse() * (energy_factor(self.kernel, self.grid, f_n, xp) * inverse_count)
+        # a Python float keeps float32 results in float32 (NumPy's scalar promotion)
+        return fft.inverse() * float(energy_factor(self.kernel, self.grid, f_n, xp)
+                                     * inverse_count)
 
     def close(self):
         """Stop the worker threads (also done when the operator is garbage collected)."""
@@ -270,7 +287,7 @@ class _PhaseTables:
         self.rho, self.a, self.b = (xp.asarray(v) for v in (op._rho, op._a, op._b))
         n0, rest = op._half_shape[0], int(numpy.prod(op._half_shape[1:]))
         terms = self.coef.shape[1]
-        size = 16 * len(op._rho) * op.n_pairs * (n0 + rest) * (1 + terms)
+        size = 2 * op._itemsize * len(op._rho) * op.n_pairs * (n0 + rest) * (1 + terms)
         self.nbytes = size if size <= memory_budget // 4 else 0
         self._all = self.compute(slice(0, len(op._rho))) if self.nbytes else None
 
@@ -306,7 +323,8 @@ class _PhaseTables:
         g4 = g[:, :, None, :]
         eta = xp.concatenate([a * g4 - a * self.sig, b * g4 - a * self.sig], axis=2)
         angular_head = (self._phases(eta, 0) * self.coef[None, :, :, None]).transpose(0, 1, 3, 2)
-        return shift_head, shift_tail, xp.ascontiguousarray(angular_head), self._tail(eta)
+        tables = shift_head, shift_tail, angular_head, self._tail(eta)
+        return tuple(xp.ascontiguousarray(t, dtype=op._complex_dtype) for t in tables)
 
 
 class _Pipeline:
@@ -326,7 +344,7 @@ class _Pipeline:
         d = grid.dimension
         self.batch = op.batch
         self.fft = backend.real_fft((op.batch,) + grid.shape, tuple(range(1, d + 1)),
-                                    threads=1)
+                                    threads=1, precision=op.precision)
         self._n0, self._rest = op._half_shape[0], int(numpy.prod(op._half_shape[1:]))
         self.radial_weights = op._radial_weights.reshape(-1, self._n0, self._rest)
 
@@ -334,7 +352,7 @@ class _Pipeline:
         op, backend = self.op, self.op.backend
         xp = backend.xp
         n0, rest = self._n0, self._rest
-        gain = xp.zeros((n0, rest), dtype=xp.complex128)
+        gain = xp.zeros((n0, rest), dtype=op._complex_dtype)
         spec2 = spectrum.reshape(n0, rest)
         n_pairs = op.n_pairs
         # blocks of q rho values x p pairs: all pairs of several rho at once (small grids),
@@ -346,7 +364,7 @@ class _Pipeline:
             rhos = slice(r0, min(r0 + q, r_last))
             nq = rhos.stop - rhos.start
             shift_head, shift_tail, angular_head, angular_tail = op._tables(rhos)
-            acc = xp.zeros((nq, n0, rest), dtype=xp.complex128)
+            acc = xp.zeros((nq, n0, rest), dtype=op._complex_dtype)
             for start in range(0, n_pairs, p):
                 pairs = slice(start, min(start + p, n_pairs))
                 count = nq * (pairs.stop - pairs.start)
