@@ -37,7 +37,8 @@ def preferred_backend() -> str:
     return "numpy"
 
 
-def _median_time(function, repeats: int, synchronize) -> float:
+def median_time(function, repeats: int, synchronize) -> float:
+    """Median wall time of ``repeats`` calls of ``function``, each followed by ``synchronize``."""
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
@@ -75,7 +76,7 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
     f = array_backend.asarray(grid.maxwellian(temperature=1.0))
     operator(f)
     array_backend.synchronize()
-    evaluation = _median_time(lambda: operator(f), repeats, array_backend.synchronize)
+    evaluation = median_time(lambda: operator(f), repeats, array_backend.synchronize)
     fft = array_backend.real_fft(grid.shape, tuple(range(dimension)), threads=threads,
                                  precision=precision)
     fft.real[...] = f
@@ -85,7 +86,7 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
         fft.inverse()
 
     pair()
-    single = _median_time(pair, max(20, 3 * repeats), array_backend.synchronize)
+    single = median_time(pair, max(20, 3 * repeats), array_backend.synchronize)
     floor = single * operator.transform_pairs
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     return {

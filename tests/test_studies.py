@@ -1,6 +1,7 @@
 """Smoke tests: every study of the review's numerical section runs in its --quick variant and
 writes its report (figures and summary.json). The full runs are made once (docs/reproduction.md)."""
 
+import csv
 import importlib.util
 import json
 import pathlib
@@ -35,8 +36,38 @@ def test_quick_study_runs_and_reports(study, tmp_path, capsys):
 def test_flat_data_limits_test1_and_its_smoothing_restores_spectral_accuracy():
     """Test 1(c)'s claim in docs/reproduction.md: with M = 32 the discrete dissipation rate
     of the sharp box is off by ~1e-3, of the box with edges smoothed over one unit by ~2e-6."""
-    spec = importlib.util.spec_from_file_location("review_test1", STUDIES / "review_test1.py")
-    study = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(study)
+    study = _load_study("review_test1")
     [row] = study.flat_data_dissipation([(64, 10.0, 32)])
     assert row["smooth"] < 1e-5 and row["sharp"] > 1e-4, row
+
+
+def _load_study(name):
+    spec = importlib.util.spec_from_file_location(name, STUDIES / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_pareto_front_keeps_exactly_the_non_dominated_configurations():
+    study = _load_study("accuracy_vs_cost")
+    records = [{"seconds": s, "error": e} for s, e in
+               [(1, 1e-2), (2, 1e-4), (2, 1e-3), (3, 1e-4), (4, 1e-8), (0.5, 1.0), (4, 1e-8),
+                (5, 1.05e-8), (6, 5e-9)]]
+    # (2, 1e-3) and (3, 1e-4) are beaten by (2, 1e-4); (5, 1.05e-8) buys only 5 % of error
+    assert study.pareto(records) == [True, True, False, False, True, True, True, False, True]
+
+
+def test_accuracy_vs_cost_quick_writes_fronts(tmp_path):
+    study = _load_study("accuracy_vs_cost")
+    summary = study.run(tmp_path, quick=True)
+    for scene in ("bkw_2d", "heated_2d"):
+        assert {f"{scene}.csv", f"{scene}.png"} <= {p.name for p in tmp_path.iterdir()}
+        front = summary[scene]["front"]
+        assert front and all(a["seconds"] <= b["seconds"] and a["error"] > b["error"]
+                             for a, b in zip(front, front[1:]))
+    # float32 costs no accuracy where the discretisation error dominates (BKW, N = 32)
+    rows = list(csv.DictReader(open(tmp_path / "bkw_2d.csv")))
+    errors = {r["precision"]: float(r["error"]) for r in rows
+              if r["N"] == "32" and r["method"] == "fast_spectral"}
+    assert errors["float32"] == pytest.approx(errors["float64"], rel=1e-3)
+    assert json.loads((tmp_path / "summary.json").read_text()) == summary
