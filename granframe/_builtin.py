@@ -53,6 +53,11 @@ def granframe_register_time_integrators(registry):
                  description="integrating-factor (Lawson) RK4: the heat bath tau Delta exactly")
     registry.add("dopri54", integrators.DormandPrince54,
                  description="adaptive Dormand-Prince 5(4) embedded pair with error control")
+    registry.add("penalised_euler", integrators.PenalisedEuler,
+                 description="Filbet-Jin BGK-penalised IMEX Euler, order 1: stable as eps -> 0")
+    registry.add("penalised_ars222", integrators.PenalisedARS222,
+                 description="BGK-penalised IMEX ARS(2,2,2) with Strang heat bath, order 2: "
+                             "stable as eps -> 0")
 
 
 @hookimpl

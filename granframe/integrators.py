@@ -38,6 +38,17 @@ class Equation(abc.ABC):
         """The whole right-hand side N(t, f) + L f."""
         return self.nonlinear(t, f) + self.linear(f)
 
+    def relaxation(self, f):
+        r"""A relaxation P(f) = r (M[f] - f) that penalised schemes treat implicitly.
+
+        Returns ``(r, M)``: a rate r >= 0 of the size of the stiff part's Lipschitz
+        constant and a target M[f] that P leaves invariant, M[f + s (M[f] - f)] = M[f]
+        for every s, so that the implicit stage f = g + a dt P(f) has the explicit
+        solution (g + a dt r M[g]) / (1 + a dt r). The default, ``(0.0, f)``, has no
+        penalisation: the penalised schemes are then their explicit parts.
+        """
+        return 0.0, f
+
 
 class TimeIntegrator(abc.ABC):
     """One step f(t) -> f(t + dt) of a one-step method.
@@ -237,6 +248,104 @@ class DormandPrince54(AdaptiveIntegrator):
     def accept(self):
         """Tell the scheme its last attempt was accepted (its last stage starts the next step)."""
         self._last = self._candidate
+
+
+class PenalisedIMEX(TimeIntegrator):
+    r"""Implicit-explicit Runge-Kutta with the BGK penalisation of Filbet & Jin (2010).
+
+    The stiff part N = Q/eps is split as N = (N - P) + P with the relaxation
+    P(f) = r (M[f] - f) of :meth:`Equation.relaxation`: N - P explicitly, P
+    implicitly. Stage i of the pair (A_E, b_E), (A_I, b_I):
+
+    .. math:: g_i = f^n + \Delta t \sum_{j<i} (a^E_{ij} K^E_j + a^I_{ij} K^I_j),\qquad
+              F_i = rac{g_i + a^I_{ii}\Delta t\, r\, M[g_i]}{1 + a^I_{ii}\Delta t\, r},
+
+    K^I_i = r (M[F_i] - F_i), K^E_i = N(F_i) - K^I_i, f^{n+1} = f^n + dt sum_i
+    (b^E_i K^E_i + b^I_i K^I_i). Since M[F_i] = M[g_i], every stage is explicit.
+    The linear part L (the heat bath) is split off and integrated exactly:
+    Strang splitting e^{dt L/2} (IMEX step) e^{dt L/2} for the second-order
+    scheme, Lie splitting (IMEX step) e^{dt L} for the first-order one.
+
+    As eps -> 0 the implicit part relaxes f to M[f] in one step: the scheme is
+    stable for dt >> eps (asymptotic preserving), where explicit schemes need
+    dt = O(eps). What stays explicit is N - P; for the inelastic operator the
+    energy dissipation (rate (1-e^2) rho / (4 eps) for Maxwell molecules) is in
+    it and keeps its own, much milder, step limit (docs/stability.md).
+
+    Reference: F. Filbet, S. Jin, "A class of asymptotic-preserving schemes for
+    kinetic equations and related problems with stiff sources", J. Comput. Phys.
+    229 (2010) 7625-7648.
+    """
+
+    explicit: ClassVar[Tableau]
+    implicit: ClassVar[tuple]      # (A_I rows including the diagonal, b_I)
+    strang: ClassVar[bool]
+
+    def _imex(self, equation, t, f, dt):
+        a_e, b_e = self.explicit.a, self.explicit.b
+        a_i, b_i = self.implicit
+        c = self.explicit.c
+        stages = len(b_e)
+        # K^E_i is needed only where a later stage or the update uses it
+        needed = [b_e[i] != 0.0 or any(a_e[k][i] != 0.0 for k in range(i + 1, stages))
+                  for i in range(stages)]
+        k_e, k_i = [], []
+        for i in range(stages):
+            g = f
+            for j in range(i):
+                for w, k in ((a_e[i][j], k_e[j]), (a_i[i][j], k_i[j])):
+                    if w != 0.0 and k is not None:
+                        g = g + (dt * w) * k
+            rate, target = equation.relaxation(g)
+            diagonal = a_i[i][i] * dt * rate
+            stage = g if diagonal == 0.0 else (g + diagonal * target) * (1.0 / (1.0 + diagonal))
+            k_i.append(rate * (target - stage) if rate else None)
+            if needed[i]:
+                k = equation.nonlinear(t + c[i] * dt, stage)
+                k_e.append(k - k_i[i] if k_i[i] is not None else k)
+            else:
+                k_e.append(None)
+        result = f
+        for weights, ks in ((b_e, k_e), (b_i, k_i)):
+            for w, k in zip(weights, ks):
+                if w != 0.0 and k is not None:
+                    result = result + (dt * w) * k
+        return result
+
+    def step(self, equation, t, f, dt):
+        if self.strang:
+            half = equation.propagate(f, 0.5 * dt)
+            return equation.propagate(self._imex(equation, t, half, dt), 0.5 * dt)
+        return equation.propagate(self._imex(equation, t, f, dt), dt)
+
+
+class PenalisedEuler(PenalisedIMEX):
+    """First-order penalised scheme of Filbet & Jin: forward Euler on Q - P, backward
+    Euler on P, Lie splitting for the heat bath (one collision evaluation per step)."""
+
+    order = 1
+    explicit = Tableau(a=((), (1.0,)), b=(1.0, 0.0))
+    implicit = (((0.0, 0.0), (0.0, 1.0)), (0.0, 1.0))
+    strang = False
+
+
+_GAMMA = 1.0 - 1.0 / math.sqrt(2.0)
+_DELTA = 1.0 - 1.0 / (2.0 * _GAMMA)
+
+
+class PenalisedARS222(PenalisedIMEX):
+    """Second-order penalised scheme: the stiffly accurate, L-stable IMEX pair ARS(2,2,2)
+    (two collision evaluations per step), Strang splitting for the heat bath.
+
+    Reference: U. M. Ascher, S. J. Ruuth, R. J. Spiteri, Appl. Numer. Math. 25 (1997),
+    section 2.6, with gamma = 1 - 1/sqrt 2, delta = 1 - 1/(2 gamma).
+    """
+
+    order = 2
+    explicit = Tableau(a=((), (_GAMMA,), (_DELTA, 1.0 - _DELTA)), b=(_DELTA, 1.0 - _DELTA, 0.0))
+    implicit = (((0.0, 0.0, 0.0), (0.0, _GAMMA, 0.0), (0.0, 1.0 - _GAMMA, _GAMMA)),
+                (0.0, 1.0 - _GAMMA, _GAMMA))
+    strang = True
 
 
 class StepSizeError(RuntimeError):
