@@ -158,6 +158,10 @@ class Health:
         Largest f0 on the faces of the box, relative to max f0.
     initial_mass_tolerance : float
         Largest relative error of the grid mass of f0 against its intended mass.
+    step_limit : bool
+        Refuse, before the first step, a fixed time step above the integrator's
+        explicit stability limit (:mod:`granframe.stability`). Set it false only to
+        study the instability itself; the step-by-step checks then stop the run.
     """
 
     mass_tolerance: float = attrs.field(default=1e-8, converter=check.to_float,
@@ -168,6 +172,7 @@ class Health:
                                         validator=check.real(0.0, 1.0))
     initial_mass_tolerance: float = attrs.field(default=1e-6, converter=check.to_float,
                                                 validator=check.real(0.0, 1.0, lower_open=True))
+    step_limit: bool = attrs.field(default=True, validator=attrs.validators.instance_of(bool))
 
 
 def _table(cls):

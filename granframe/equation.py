@@ -68,6 +68,34 @@ class HomogeneousBoltzmann(Equation):
         return (self._frequency_constant * density * speed
                 * kernel.energy_factor(energy))
 
+    def stiffness(self, f) -> dict:
+        r"""Spectral radii at f that bound explicit time steps (:mod:`granframe.stability`).
+
+        - ``linear``: the heat bath, tau max |k|^2 (pi/L)^2 over the evolved modes;
+        - ``nonlinear``: the collisions, nu_max / eps with the largest loss frequency
+          nu_max = C int b dsigma rho R^lambda E^gamma (relative speeds are cut at R);
+          exact for Maxwell molecules, where the linearised operator's spectrum lies
+          in [-nu, 0];
+        - ``dissipation``: the energy loss, (1 - e_min^2) nu_max / (4 eps) with e_min the
+          smallest restitution coefficient over relative speeds in [0, R]; for Maxwell
+          molecules and constant e the exact rate of dT/dt = -(1-e^2) rho T / (4 eps).
+        """
+        grid = self.operator.grid
+        xp = numpy if isinstance(f, numpy.ndarray) else self.operator.backend.xp
+        density = grid.mass(f, xp)
+        energy = grid.kinetic_energy(f, xp)
+        kernel = self.operator.kernel
+        cut = grid.truncation_radius ** kernel.exponent
+        factor = kernel.energy_factor(energy) if energy > 0 else 1.0
+        frequency = self._frequency_constant * density * cut * factor
+        speeds = numpy.linspace(0.0, grid.truncation_radius, 257)
+        e_min = float(numpy.min(self.operator.restitution(speeds)))
+        rates = {"nonlinear": frequency / self.knudsen,
+                 "dissipation": (1.0 - e_min ** 2) * frequency / (4.0 * self.knudsen)}
+        if self.heat.tau:
+            rates["linear"] = self.heat.spectral_radius
+        return rates
+
     def relaxation(self, f):
         r"""BGK penalisation for :class:`~granframe.integrators.PenalisedIMEX`.
 

@@ -38,6 +38,12 @@ class Equation(abc.ABC):
         """The whole right-hand side N(t, f) + L f."""
         return self.nonlinear(t, f) + self.linear(f)
 
+    def stiffness(self, f) -> dict:
+        """Estimated spectral radii of the parts of the equation at f, by part name
+        (``linear``, ``nonlinear``, ``dissipation``): what explicit step limits are
+        computed from (:mod:`granframe.stability`). None known by default."""
+        return {}
+
     def relaxation(self, f):
         r"""A relaxation P(f) = r (M[f] - f) that penalised schemes treat implicitly.
 
@@ -60,10 +66,18 @@ class TimeIntegrator(abc.ABC):
     adaptive : bool
         True for schemes with an embedded error estimate
         (:class:`AdaptiveIntegrator`); the runner then controls the step.
+    explicit_parts : frozenset of str
+        Which stiff parts of an equation (:meth:`Equation.stiffness`) the scheme
+        treats explicitly, so that dt rate must stay within ``stability_interval``.
+    stability_interval : float
+        Extent of the scheme's (explicit part's) stability region along the negative
+        real axis: stable for dt lambda in [-stability_interval, 0].
     """
 
     order: ClassVar[int]
     adaptive: ClassVar[bool] = False
+    explicit_parts: ClassVar[frozenset] = frozenset({"linear", "nonlinear"})
+    stability_interval: ClassVar[float] = math.inf
 
     @abc.abstractmethod
     def step(self, equation: Equation, t: float, f, dt: float):
@@ -137,6 +151,7 @@ class ForwardEuler(ExplicitRungeKutta):
     """Forward Euler, order 1."""
 
     order = 1
+    stability_interval = 2.0
     tableau = Tableau(a=((),), b=(1.0,))
 
 
@@ -144,6 +159,7 @@ class SSPRK2(ExplicitRungeKutta):
     """Strong-stability-preserving RK2 (Heun; Shu-Osher), order 2, SSP coefficient 1."""
 
     order = 2
+    stability_interval = 2.0
     tableau = Tableau(a=_fractions([[], ["1"]]), b=(0.5, 0.5))
 
 
@@ -151,6 +167,7 @@ class SSPRK3(ExplicitRungeKutta):
     """Strong-stability-preserving RK3 of Shu and Osher (1988), order 3, SSP coefficient 1."""
 
     order = 3
+    stability_interval = 2.5127   # |1 + z + z^2/2 + z^3/6| = 1 at z = -2.5127
     tableau = Tableau(a=_fractions([[], ["1"], ["1/4", "1/4"]]),
                       b=tuple(float(Fraction(x)) for x in ("1/6", "1/6", "2/3")))
 
@@ -163,6 +180,7 @@ class RK4(ExplicitRungeKutta):
     """Classical fourth-order Runge-Kutta method (the review's time integrator)."""
 
     order = 4
+    stability_interval = 2.7853   # |1 + z + ... + z^4/24| = 1 at z = -2.7853
     tableau = RK4_TABLEAU
 
 
@@ -181,6 +199,8 @@ class IntegratingFactorRK4(TimeIntegrator):
     """
 
     order = 4
+    explicit_parts = frozenset({"nonlinear"})
+    stability_interval = 2.7853
     tableau = RK4_TABLEAU
 
     def step(self, equation, t, f, dt):
@@ -280,6 +300,10 @@ class PenalisedIMEX(TimeIntegrator):
     explicit: ClassVar[Tableau]
     implicit: ClassVar[tuple]      # (A_I rows including the diagonal, b_I)
     strang: ClassVar[bool]
+    # relaxation is implicit and the heat bath exact: only the energy dissipation, which the
+    # penalisation conserves, is explicit (forward Euler / the ARS explicit part: [-2, 0])
+    explicit_parts = frozenset({"dissipation"})
+    stability_interval = 2.0
 
     def _imex(self, equation, t, f, dt):
         a_e, b_e = self.explicit.a, self.explicit.b

@@ -30,6 +30,7 @@ from granframe.description import _FAMILIES, RunDescription
 from granframe.equation import HomogeneousBoltzmann
 from granframe.initial import check_fits
 from granframe.integrators import StepController, StepSizeError
+from granframe.stability import check_time_step
 from granframe.registry import default_registries
 from granframe.storage import SCALAR_MOMENTS, RunStore
 
@@ -190,6 +191,12 @@ class Simulation:
         check_fits(d.grid, sampled, initial, d.health.edge_tolerance,
                    d.health.initial_mass_tolerance)
         self.f0 = d.grid.project(sampled)
+        if d.health.step_limit and not self.integrator.adaptive:
+            registries = default_registries()
+            schemes = [(name, registries.get("time_integrators", name).factory)
+                       for name in registries.names("time_integrators")]
+            check_time_step(self.integrator, d.integrator.name, self.equation, self.f0,
+                            d.time_step, schemes)
 
     def provenance(self) -> dict:
         """Versions and plugins behind this run (stored with it)."""

@@ -11,6 +11,7 @@ import zarr
 import granframe as gf
 from granframe.cli import main
 from granframe.description import RunDescription
+from granframe.heatbath import HeatBath
 from granframe.initial import check_fits
 from granframe.runner import HealthError, Simulation, health_problem, load_description
 from granframe.storage import RunStore, StoreError
@@ -249,9 +250,10 @@ def test_health_problems_are_named():
 
 
 def test_a_blow_up_stops_the_run_and_keeps_a_valid_store(tmp_path):
-    """Forward Euler far beyond the heat bath's stability limit (tau (pi N / 2L)^2 dt >> 2)."""
+    """Forward Euler far beyond the heat bath's stability limit (tau (pi N / 2L)^2 dt >> 2),
+    with the up-front step check switched off: the step-by-step health check stops it."""
     d = heated(integrator="forward_euler", heat_bath=50.0, time_step=0.05, final_time=5.0,
-               output={"snapshot_interval": 0.5})
+               output={"snapshot_interval": 0.5}, health={"step_limit": False})
     with pytest.raises(HealthError, match=r"health check failed at step \d+, t = [0-9.]+: "
                                           r"(loss of positivity|f is not finite)"):
         Simulation(d).run(tmp_path / "bad.zarr", progress=False)
@@ -262,6 +264,64 @@ def test_a_blow_up_stops_the_run_and_keeps_a_valid_store(tmp_path):
     assert ds.sizes["step_time"] == store.progress["step"] + 1  # moments up to the failure
     with pytest.raises(StoreError, match="stopped by a health check"):
         Simulation(d).run(tmp_path / "bad.zarr", resume=True, progress=False)
+
+
+@pytest.mark.parametrize("integrator,changes,part,suggested", [
+    ("forward_euler", {"heat_bath": 50.0, "time_step": 0.05}, "the heat bath tau Delta_v",
+     "if_rk4, penalised_ars222, penalised_euler"),
+    ("if_rk4", {"knudsen": 1e-3, "time_step": 0.01}, "the collision term Q/eps",
+     "penalised_ars222, penalised_euler"),
+    ("penalised_ars222", {"knudsen": 1e-3, "restitution": {"name": "constant", "value": 0.1},
+                          "time_step": 0.01}, "the energy dissipation", None),
+])
+def test_a_time_step_above_the_explicit_limit_is_refused_before_the_run(
+        tmp_path, integrator, changes, part, suggested):
+    """The limit is dt <= interval / spectral radius: the heat bath tau max|k|^2 (pi/L)^2,
+    the collisions nu/eps (nu = 1 for these Maxwell molecules), the energy dissipation
+    (1 - e^2)/(4 eps) for the penalised schemes."""
+    d = heated(integrator=integrator, final_time=1.0, **changes)
+    with pytest.raises(ValueError, match=r"parameter 'time_step' = [0-9.]+ is invalid; must be "
+                                         rf"<= [0-9.e-]+, the explicit stability limit of "
+                                         rf"'{integrator}' for {part}") as error:
+        Simulation(d)
+    if suggested:
+        assert str(error.value).endswith(f"treats it implicitly or exactly: {suggested}")
+    else:   # no registered fixed-step scheme treats the energy dissipation implicitly
+        assert "use an integrator" not in str(error.value)
+    assert not (tmp_path / "run.zarr").exists()
+
+
+def test_step_limits_match_the_observed_blow_up():
+    """RK4 on the heat bath alone: stable just below dt = 2.7853 / (tau max|k|^2),
+    unstable just above (the highest mode grows from round-off over 800 steps)."""
+    from granframe.integrators import Equation
+    from granframe.stability import step_limits
+
+    grid = gf.VelocityGrid(2, 32, 4.0)
+    heat = HeatBath(grid, 0.5, gf.array_backend())
+
+    class Heat(Equation):
+        def nonlinear(self, t, f):
+            return 0.0 * f
+
+        def linear(self, f):
+            return heat(f)
+
+        def propagate(self, f, dt):
+            return heat.propagate(f, dt)
+
+        def stiffness(self, f):
+            return {"linear": heat.spectral_radius}
+
+    rk4 = gf.time_integrator("rk4")
+    [limit] = step_limits(rk4, Heat(), grid.maxwellian())
+    growth = {}
+    for factor in (0.98, 1.02):
+        f = grid.maxwellian()
+        for i in range(800):
+            f = rk4.step(Heat(), 0.0, f, factor * limit.limit)
+        growth[factor] = numpy.abs(f).max()
+    assert growth[0.98] < 1.0 < 1e3 < growth[1.02], growth
 
 
 # -- command line ---------------------------------------------------------------------
@@ -285,6 +345,10 @@ def test_cli_run_plot_info(tmp_path, capsys):
     assert "'final_time' = 1.01" in capsys.readouterr().err
     bad = heated(integrator="forward_euler", heat_bath=50.0, final_time=5.0)
     toml.write_text(bad.to_toml())
+    assert main(["run", str(toml), "--out", str(tmp_path / "bad.zarr")]) == 2
+    assert "the explicit stability limit of 'forward_euler'" in capsys.readouterr().err
+    toml.write_text(heated(integrator="forward_euler", heat_bath=50.0, final_time=5.0,
+                           health={"step_limit": False}).to_toml())
     assert main(["run", str(toml), "--out", str(tmp_path / "bad.zarr")]) == 3
     assert "run stopped: health check failed" in capsys.readouterr().err
 
