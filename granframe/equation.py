@@ -24,10 +24,13 @@ class HomogeneousBoltzmann(Equation):
         tau >= 0.
     knudsen : float
         eps > 0.
+    penalty : float
+        Multiple of the mean collision frequency used as the BGK penalisation rate of
+        the penalised integrators (:meth:`relaxation`).
     """
 
     def __init__(self, operator, heat_bath: float = 0.0, knudsen: float = 1.0,
-                 penalty: float = 1.0):
+                 penalty: float = 2.0):
         self.operator = operator
         self.heat = HeatBath(operator.grid, heat_bath, operator.backend)
         self.knudsen = float(knudsen)
@@ -99,7 +102,11 @@ class HomogeneousBoltzmann(Equation):
     def relaxation(self, f):
         r"""BGK penalisation for :class:`~granframe.integrators.PenalisedIMEX`.
 
-        r = penalty nu(rho, T) / eps with :meth:`collision_frequency`, and M[f] the
+        r = penalty nu(rho, T) / eps with :meth:`collision_frequency`. The penalty (2 by
+        default) must bound the spectrum of the linearised collision operator, which
+        extends beyond -nu: in the stiff limit ARS(2,2,2) is stable only for modes with
+        |lambda| <= r eps, and the stability map (docs/stability.md) blows up with penalty
+        1 and 1.5 and holds with 2. M[f] is the
         grid Maxwellian with the mass, momentum and temperature of f, scaled to f's grid
         mass exactly. P(f) = r (M[f] - f) conserves them, so M is invariant under P
         [Filbet & Jin, J. Comput. Phys. 229 (2010), section 4]. Where T is not positive

@@ -57,14 +57,18 @@ def test_observed_order_on_a_problem_with_known_solution(name):
 @pytest.mark.parametrize("name", INTEGRATORS)
 def test_self_convergence_on_the_heated_collision_problem(name):
     """d_t f = Q(f,f) + 0.1 Delta f (2D Maxwell molecules, e = 0.5) from T0 = 8 to t = 1:
-    successive differences with dt = 1/4, 1/8, 1/16 shrink by 2^order."""
+    successive differences with dt = 1/4, 1/8, 1/16 (penalised: 1/16 ... 1/64) shrink by
+    2^order."""
     grid = gf.VelocityGrid(2, 32, 10.0)
     op = gf.collision_operator("fast_spectral", grid, gf.collision_kernel("maxwell"),
                                gf.restitution_law("constant", value=0.5),
                                backend=gf.array_backend("numpy", threads=1), radial_points=16,
                                sphere=gf.CircleTrapezoid(8))
     equation, f0 = HomogeneousBoltzmann(op, heat_bath=0.1), grid.maxwellian(temperature=8.0)
-    solutions = [integrate(name, equation, f0, n) for n in (4, 8, 16)]
+    # the penalised schemes reach their order once dt r < ~0.1 (r = 2 here): IMEX order
+    # reduction at dt r ~ 1 gives 0.55 for penalised_euler with dt = 1/4 ... 1/16
+    steps = (16, 32, 64) if name.startswith("penalised") else (4, 8, 16)
+    solutions = [integrate(name, equation, f0, n) for n in steps]
     d1 = numpy.abs(solutions[0] - solutions[1]).max()
     d2 = numpy.abs(solutions[1] - solutions[2]).max()
     order = gf.time_integrator(name).order
@@ -196,15 +200,17 @@ def _stiff_run(name, restitution, knudsen, heat_bath, dt, steps, n_modes=32):
 def test_explicit_rk4_fails_where_penalised_schemes_hold():
     """eps = 1e-4, dt = 0.01 (dt/eps = 100), elastic Maxwell molecules with heat bath, from
     two Maxwellians: RK4 blows up in its first step; the penalised schemes conserve mass to
-    1e-11, reach the Maxwellian, and follow T0 + 2 tau t to 1e-5 (N = 48, where Q(M) ~ 1e-10;
+    1e-11, approach the Maxwellian, and follow T0 + 2 tau t to 1e-5 (N = 48, where Q(M) ~ 1e-10;
     at N = 32 the discrete energy error of Q, amplified by dt/eps, gives ~2e-3)."""
     assert _stiff_run("rk4", 1.0, 1e-4, 0.1, 0.01, 3) is None
     euler = _stiff_run("penalised_euler", 1.0, 1e-4, 0.1, 0.01, 20, n_modes=48)
     ars = _stiff_run("penalised_ars222", 1.0, 1e-4, 0.1, 0.01, 20, n_modes=48)
     for result in (euler, ars):
         assert result["mass_drift"] < 1e-11 and result["T_error"] < 1e-5, result
-    assert euler["distance_to_maxwellian"] < 1e-3, euler
-    assert ars["distance_to_maxwellian"] < 0.1, ars      # weakly damped (|R| up to 0.96)
+    # per step, a mode lam of the linearised operator is damped by |1 - lam/r eps| (Euler);
+    # the slowest non-conserved modes keep 1e-2 after 20 steps, ARS(2,2,2) damps them faster
+    assert euler["distance_to_maxwellian"] < 2e-2, euler
+    assert ars["distance_to_maxwellian"] < 1e-3, ars
 
 
 def test_penalised_schemes_follow_the_stiff_inelastic_temperature_law():

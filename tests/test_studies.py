@@ -71,3 +71,17 @@ def test_accuracy_vs_cost_quick_writes_fronts(tmp_path):
               if r["N"] == "32" and r["method"] == "fast_spectral"}
     assert errors["float32"] == pytest.approx(errors["float64"], rel=1e-3)
     assert json.loads((tmp_path / "summary.json").read_text()) == summary
+
+
+def test_stability_map_quick_separates_explicit_and_penalised(tmp_path):
+    """At eps = 1e-3, dt = 0.01 (above RK4's predicted limit 2.79e-3) RK4 blows up and the
+    penalised Euler scheme stays stable; at eps = 1 both are accurate."""
+    study = _load_study("stability_map")
+    summary = study.run(tmp_path, quick=True)
+    rows = list(csv.DictReader(open(tmp_path / "collisions.csv")))
+    verdict = {(r["scheme"], float(r["eps"]), float(r["dt"])): r["verdict"] for r in rows}
+    assert verdict[("rk4", 1e-3, 0.01)] == "unstable"
+    assert verdict[("penalised_euler", 1e-3, 0.01)] == "accurate"
+    assert verdict[("rk4", 1.0, 0.1)] == verdict[("penalised_euler", 1.0, 0.1)] == "accurate"
+    assert summary["collisions"]["unpredicted_blow_ups"] == []
+    assert (tmp_path / "collisions.png").stat().st_size > 10_000

@@ -1,0 +1,170 @@
+"""Where time integrators fail: stability maps over (dt, eps) and (dt, tau) (docs/stability.md).
+
+    python studies/stability_map.py --out docs/figures/stability      # about 5 min, 2 cores
+    python studies/stability_map.py --out /tmp/stability --quick      # seconds (CI)
+
+2D Maxwell molecules on N = 32, S = 4 (N_rho = 16, M = 16), 200 fixed steps per point.
+
+- ``collisions``: d_t f = Q(f, f)/eps, elastic (e = 1), no heat bath, from two Maxwellians
+  (densities 0.6 / 0.4, drifts (0.8, 0) / (-1.2, 0.3), T = 0.8 / 0.5). The temperature is
+  conserved exactly, so T(t) = T0 is the reference. Schemes: rk4, if_rk4, penalised_euler,
+  penalised_ars222 over dt in [1e-3, 1] and eps in [1e-4, 1].
+- ``heat_bath``: d_t f = Q(f, f) + tau Delta f, e = 0.5, from the same data; the reference is
+  the exact heated Maxwell law. Schemes: rk4 and if_rk4 over dt and tau in [0.01, 100].
+
+A point is *unstable* when f stops being finite or max |f| exceeds 10 max f0,
+*inaccurate* when stable with max |T/T_exact - 1| > 1e-3, *accurate* otherwise. Each map
+draws the predicted explicit limit of :mod:`granframe.stability`, dt = interval / rate.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import pathlib
+import time
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy  # noqa: E402
+
+import granframe as gf  # noqa: E402
+from granframe.equation import HomogeneousBoltzmann  # noqa: E402
+from granframe.exact import heated_maxwell_temperature  # noqa: E402
+from granframe.stability import step_limits  # noqa: E402
+
+STEPS = 200
+ACCURATE = 1e-3
+
+
+def _equation(restitution, knudsen, heat_bath):
+    grid = gf.VelocityGrid(2, 32, 4.0)
+    operator = gf.collision_operator(
+        "fast_spectral", grid, gf.collision_kernel("maxwell"),
+        gf.restitution_law("constant", value=restitution),
+        backend=gf.array_backend("numpy", threads=1), radial_points=16,
+        sphere=gf.CircleTrapezoid(16))
+    f0 = grid.maxwellian(0.6, [0.8, 0.0], 0.8) + grid.maxwellian(0.4, [-1.2, 0.3], 0.5)
+    return grid, HomogeneousBoltzmann(operator, heat_bath, knudsen), f0
+
+
+def classify(scheme, restitution, knudsen, heat_bath, dt, steps=STEPS) -> dict:
+    """Run ``steps`` fixed steps; return the class, the worst temperature error and the
+    predicted explicit limit."""
+    grid, equation, f = _equation(restitution, knudsen, heat_bath)
+    integrator = gf.time_integrator(scheme)
+    limits = step_limits(integrator, equation, f)
+    rho, T0, peak = grid.mass(f), grid.temperature(f), float(numpy.abs(f).max())
+    worst, verdict = 0.0, "accurate"
+    for i in range(steps):
+        f = integrator.step(equation, i * dt, f, dt)
+        if not numpy.all(numpy.isfinite(f)) or numpy.abs(f).max() > 10 * peak:
+            verdict = "unstable"
+            break
+        exact = heated_maxwell_temperature((i + 1) * dt, T0, restitution, heat_bath,
+                                           rho / knudsen)
+        worst = max(worst, abs(grid.temperature(f) / exact - 1))
+    if verdict != "unstable" and worst > ACCURATE:
+        verdict = "inaccurate"
+    bounded = [limit for limit in limits if math.isfinite(limit.limit)]
+    return {"verdict": verdict, "T_error": worst if verdict != "unstable" else None,
+            "predicted_limit": bounded[0].limit if bounded else None,
+            "limited_by": bounded[0].part if bounded else None}
+
+
+def maps(quick: bool) -> dict:
+    if quick:
+        return {"collisions": dict(schemes=("rk4", "penalised_euler"), axis="eps",
+                                   values=(1e-3, 1.0), dts=(0.01, 0.1), steps=20)}
+    dts = tuple(numpy.logspace(-3, 0, 10))
+    return {
+        "collisions": dict(schemes=("rk4", "if_rk4", "penalised_euler", "penalised_ars222"),
+                           axis="eps", values=tuple(numpy.logspace(-4, 0, 9)), dts=dts,
+                           steps=STEPS),
+        "heat_bath": dict(schemes=("rk4", "if_rk4"), axis="tau",
+                          values=tuple(numpy.logspace(-2, 2, 9)), dts=dts, steps=STEPS),
+    }
+
+
+MARKERS = {"accurate": ("o", "C2"), "inaccurate": ("s", "C1"), "unstable": ("x", "C3")}
+
+
+def _figure(name, spec, rows, out):
+    schemes = spec["schemes"]
+    fig, axes = plt.subplots(1, len(schemes), figsize=(4.2 * len(schemes), 4),
+                             constrained_layout=True, sharey=True, squeeze=False)
+    for ax, scheme in zip(axes[0], schemes):
+        chosen = [r for r in rows if r["scheme"] == scheme]
+        for verdict, (marker, colour) in MARKERS.items():
+            pts = [r for r in chosen if r["verdict"] == verdict]
+            ax.loglog([r[spec["axis"]] for r in pts], [r["dt"] for r in pts], marker,
+                      color=colour, label=verdict)
+        predicted = sorted((r[spec["axis"]], r["predicted_limit"]) for r in chosen
+                           if r["predicted_limit"] is not None and r["dt"] == chosen[0]["dt"])
+        if predicted:
+            x, y = zip(*predicted)
+            ax.loglog(x, y, "k--", lw=1, label="predicted limit")
+        ax.set(xlabel=spec["axis"], title=scheme)
+        ax.set_ylim(min(spec["dts"]) / 1.5, max(spec["dts"]) * 1.5)
+    axes[0][0].set_ylabel("dt")
+    axes[0][0].legend(loc="lower right", fontsize=8)
+    fig.suptitle(f"{name}: {STEPS if spec['steps'] == STEPS else spec['steps']} steps, "
+                 f"accurate = max |T/T_exact - 1| <= {ACCURATE:g}")
+    fig.savefig(out / f"{name}.png", dpi=100)
+    plt.close(fig)
+
+
+def run(out: pathlib.Path, quick: bool = False) -> dict:
+    out.mkdir(parents=True, exist_ok=True)
+    summary = {}
+    for name, spec in maps(quick).items():
+        started = time.perf_counter()
+        rows = []
+        for scheme in spec["schemes"]:
+            for value in spec["values"]:
+                for dt in spec["dts"]:
+                    if spec["axis"] == "eps":
+                        result = classify(scheme, 1.0, value, 0.0, dt, spec["steps"])
+                    else:
+                        result = classify(scheme, 0.5, 1.0, value, dt, spec["steps"])
+                    rows.append({"scheme": scheme, spec["axis"]: float(value), "dt": float(dt),
+                                 **result})
+        fields = ["scheme", spec["axis"], "dt", "verdict", "T_error", "predicted_limit",
+                  "limited_by"]
+        with open(out / f"{name}.csv", "w", newline="") as stream:
+            writer = csv.DictWriter(stream, fields)
+            writer.writeheader()
+            writer.writerows(rows)
+        _figure(name, spec, rows, out)
+        summary[name] = {
+            "wall_seconds": time.perf_counter() - started,
+            "counts": {scheme: {v: sum(1 for r in rows if r["scheme"] == scheme
+                                       and r["verdict"] == v) for v in MARKERS}
+                       for scheme in spec["schemes"]},
+            # points where the prediction and the observation disagree
+            "unpredicted_blow_ups": [r for r in rows if r["verdict"] == "unstable" and (
+                r["predicted_limit"] is None or r["dt"] <= r["predicted_limit"])],
+            "stable_above_prediction": [r for r in rows if r["verdict"] != "unstable"
+                                        and r["predicted_limit"] is not None
+                                        and r["dt"] > r["predicted_limit"]],
+        }
+        print(f"{name}: {len(rows)} points in {summary[name]['wall_seconds']:.0f} s", flush=True)
+    (out / "summary.json").write_text(json.dumps(summary, indent=1))
+    return summary
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=pathlib.Path, required=True)
+    parser.add_argument("--quick", action="store_true", help="four points (smoke test)")
+    args = parser.parse_args(argv)
+    run(args.out, args.quick)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
