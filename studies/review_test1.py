@@ -11,7 +11,9 @@ Not in the review: b_fine and c_fine repeat b and c with N = 128, S = 12 (L = 26
 and M = 32. They show what limits the temperature error of b and c on the review's grid
 (docs/reproduction.md). c_smooth is c_fine with the flat data's edges smoothed by a
 Gaussian of deviation EDGE = 1 (T0 = 8 + 1): the discontinuity, not the method, keeps c
-above 1e-5 (the report's test1_flat_dissipation.csv measures it). Measured on b's own f, the dissipation-rate error:
+above 1e-5 (the report's test1_flat_dissipation.csv measures it).
+
+Measured on b's own f, the dissipation-rate error:
 - at t <= 15 it is set by the circle rule: M = 16 gives 4e-5, M = 32 gives 3e-7;
 - later, by the resolution of the overpopulated tails: N = 96 gives 5e-5, N = 128 gives
   2e-6;
