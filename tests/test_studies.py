@@ -92,3 +92,13 @@ def test_aliasing_quick_shows_the_box_bound(tmp_path):
     rows = _load_study("aliasing").run(tmp_path, quick=True)["rows"]
     errors = {row["L_over_S"]: row["error"] for row in rows}
     assert errors[1.5] > 1e-3 and errors[2.21] < 1e-7, errors
+
+
+def test_strong_inelasticity_quick_loses_more_positivity_as_e_falls(tmp_path):
+    """N = 32 to t = 1: sticky collisions (e = 0) leave a larger negative-mass share than
+    e = 0.9; both are reported with min f / max f and the temperature error."""
+    rows = _load_study("strong_inelasticity").run(tmp_path, quick=True)["rows"]
+    share = {row["e"]: row["negative_share"] for row in rows}
+    assert share[0.0] > 2 * share[0.9] > 0, share
+    assert all(row["T_error"] < 1e-2 for row in rows)
+    assert (tmp_path / "inelasticity.png").exists()
