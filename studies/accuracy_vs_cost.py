@@ -32,8 +32,6 @@ A configuration is on the Pareto front when no other one is cheaper and as accur
 
 from __future__ import annotations
 
-import argparse
-import csv
 import itertools
 import json
 import pathlib
@@ -48,6 +46,7 @@ import numpy  # noqa: E402
 import granframe as gf  # noqa: E402
 from granframe.bench import median_time, preferred_backend  # noqa: E402
 from granframe.exact import bkw  # noqa: E402
+from granframe.studykit import command, write_csv  # noqa: E402
 from granframe.testing import heated_maxwell_error  # noqa: E402
 
 PRECISIONS = ("float64", "float32")
@@ -290,10 +289,7 @@ def run(out: pathlib.Path, quick: bool = False, only=None) -> dict:
             rows.append(_row(name, scene, config, result))
         for row, flag in zip(rows, pareto(rows)):
             row["pareto"] = flag
-        with open(out / f"{name}.csv", "w", newline="") as stream:
-            writer = csv.DictWriter(stream, FIELDS)
-            writer.writeheader()
-            writer.writerows(rows)
+        write_csv(out / f"{name}.csv", rows, FIELDS)
         _figure(name, scene, rows, out)
         float32 = [r["error"] for r in rows if r["precision"] == "float32"]
         summary[name] = {
@@ -312,14 +308,7 @@ def run(out: pathlib.Path, quick: bool = False, only=None) -> dict:
     return summary
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=pathlib.Path, required=True)
-    parser.add_argument("--quick", action="store_true", help="two small scenes (smoke test)")
-    parser.add_argument("--only", default=None, help="comma-separated scene names")
-    args = parser.parse_args(argv)
-    run(args.out, args.quick, set(args.only.split(",")) if args.only else None)
-    return 0
+main = command(run, __doc__, "two small scenes (smoke test)", parts="scene")
 
 
 if __name__ == "__main__":

@@ -14,8 +14,6 @@ around the periodic box onto B_S. granframe's grid refuses smaller L or R unless
 
 from __future__ import annotations
 
-import argparse
-import csv
 import json
 import pathlib
 import warnings
@@ -30,6 +28,7 @@ import granframe as gf  # noqa: E402
 from granframe.bench import preferred_backend  # noqa: E402
 from granframe.exact import bkw  # noqa: E402
 from granframe.grid import ANTI_ALIASING_FACTOR  # noqa: E402
+from granframe.studykit import command, write_csv  # noqa: E402
 
 SUPPORT = 5.0
 SPACING = 0.35
@@ -58,10 +57,7 @@ def run(out: pathlib.Path, quick: bool = False) -> dict:
     boxes = (1.5, 2.21) if quick else (1.0, 1.25, 1.5, 1.75, 2.0, 2.21, 2.5, 3.0)
     truncations = (2.0,) if quick else (1.0, 1.5, 2.0, 2.5)
     rows = [error(b, r) for r in truncations for b in boxes]
-    with open(out / "aliasing.csv", "w", newline="") as stream:
-        writer = csv.DictWriter(stream, ["L_over_S", "R_over_S", "N", "error"])
-        writer.writeheader()
-        writer.writerows(rows)
+    write_csv(out / "aliasing.csv", rows)
     fig, ax = plt.subplots(figsize=(7, 5), constrained_layout=True)
     for r in truncations:
         chosen = [row for row in rows if row["R_over_S"] == r]
@@ -80,15 +76,13 @@ def run(out: pathlib.Path, quick: bool = False) -> dict:
     return summary
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=pathlib.Path, required=True)
-    parser.add_argument("--quick", action="store_true", help="two points (smoke test)")
-    args = parser.parse_args(argv)
-    for row in run(args.out, args.quick)["rows"]:
+def _show(summary):
+    for row in summary["rows"]:
         print(f"L/S = {row['L_over_S']:<5g} R/S = {row['R_over_S']:<4g} N = {row['N']:<4d} "
               f"error {row['error']:.2e}")
-    return 0
+
+
+main = command(run, __doc__, "two points (smoke test)", show=_show)
 
 
 if __name__ == "__main__":

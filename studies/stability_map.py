@@ -23,8 +23,6 @@ draws the predicted explicit limit of :mod:`granframe.stability`, dt = interval 
 
 from __future__ import annotations
 
-import argparse
-import csv
 import json
 import math
 import pathlib
@@ -40,6 +38,7 @@ import granframe as gf  # noqa: E402
 from granframe.equation import HomogeneousBoltzmann  # noqa: E402
 from granframe.exact import heated_maxwell_temperature  # noqa: E402
 from granframe.stability import step_limit  # noqa: E402
+from granframe.studykit import command, write_csv  # noqa: E402
 
 STEPS = 200
 ACCURATE = 1e-3
@@ -146,10 +145,7 @@ def run(out: pathlib.Path, quick: bool = False, only=None) -> dict:
                                  **result})
         fields = ["scheme", spec["axis"], "dt", "verdict", "T_error", "predicted_limit",
                   "limited_by"]
-        with open(out / f"{name}.csv", "w", newline="") as stream:
-            writer = csv.DictWriter(stream, fields)
-            writer.writeheader()
-            writer.writerows(rows)
+        write_csv(out / f"{name}.csv", rows, fields)
         _figure(name, spec, rows, out)
         summary[name] = {
             "wall_seconds": time.perf_counter() - started,
@@ -168,14 +164,7 @@ def run(out: pathlib.Path, quick: bool = False, only=None) -> dict:
     return summary
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=pathlib.Path, required=True)
-    parser.add_argument("--quick", action="store_true", help="four points (smoke test)")
-    parser.add_argument("--only", default=None, help="comma-separated map names")
-    args = parser.parse_args(argv)
-    run(args.out, args.quick, set(args.only.split(",")) if args.only else None)
-    return 0
+main = command(run, __doc__, "four points (smoke test)", parts="map")
 
 
 if __name__ == "__main__":

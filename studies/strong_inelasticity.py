@@ -14,8 +14,6 @@ molecules, the temperature against the exact law.
 
 from __future__ import annotations
 
-import argparse
-import csv
 import json
 import pathlib
 
@@ -29,6 +27,7 @@ import granframe as gf  # noqa: E402
 from granframe.bench import preferred_backend  # noqa: E402
 from granframe.equation import HomogeneousBoltzmann  # noqa: E402
 from granframe.exact import heated_maxwell_temperature  # noqa: E402
+from granframe.studykit import command, write_csv  # noqa: E402
 
 TAU, FINAL, DT = 0.1, 10.0, 0.02
 
@@ -64,10 +63,7 @@ def run(out: pathlib.Path, quick: bool = False) -> dict:
     sizes = (32,) if quick else (32, 64, 128)
     final = 1.0 if quick else FINAL
     rows = [steady_state(k, e, n, final) for k in kernels for n in sizes for e in restitutions]
-    with open(out / "inelasticity.csv", "w", newline="") as stream:
-        writer = csv.DictWriter(stream, list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    write_csv(out / "inelasticity.csv", rows)
     fig, axes = plt.subplots(1, len(kernels), figsize=(6.5 * len(kernels), 4.5),
                              constrained_layout=True, squeeze=False)
     for ax, kernel in zip(axes[0], kernels):
@@ -87,17 +83,15 @@ def run(out: pathlib.Path, quick: bool = False) -> dict:
     return summary
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=pathlib.Path, required=True)
-    parser.add_argument("--quick", action="store_true", help="two runs to t = 1 (smoke test)")
-    args = parser.parse_args(argv)
-    for r in run(args.out, args.quick)["rows"]:
+def _show(summary):
+    for r in summary["rows"]:
+        error = "-" if r["T_error"] is None else f"{r['T_error']:.1e}"
         print(f"{r['kernel']:<12} e = {r['e']:<4g} N = {r['N']:<3d} negative share "
-              f"{r['negative_share']:.1e}  min/max {r['min_over_max']:.1e}  T {r['temperature']:.4f}"
-              f"  kurtosis {r['kurtosis']:.3f}  T error {r['T_error'] if r['T_error'] is None else format(r['T_error'], '.1e')}",
-              flush=True)
-    return 0
+              f"{r['negative_share']:.1e}  min/max {r['min_over_max']:.1e}  "
+              f"T {r['temperature']:.4f}  kurtosis {r['kurtosis']:.3f}  T error {error}")
+
+
+main = command(run, __doc__, "two runs to t = 1 (smoke test)", show=_show)
 
 
 if __name__ == "__main__":

@@ -87,10 +87,13 @@ def test_stability_map_quick_separates_explicit_and_penalised(tmp_path):
     assert (tmp_path / "collisions.png").stat().st_size > 10_000
 
 
-def test_aliasing_quick_shows_the_box_bound(tmp_path):
-    """BKW 2D with R = 2S: L = 1.5 S aliases (error 7e-3), L = 2.21 S does not (2e-8)."""
-    rows = _load_study("aliasing").run(tmp_path, quick=True)["rows"]
-    errors = {row["L_over_S"]: row["error"] for row in rows}
+def test_aliasing_quick_shows_the_box_bound(tmp_path, capsys):
+    """BKW 2D with R = 2S: L = 1.5 S aliases (error 7e-3), L = 2.21 S does not (2e-8);
+    through the study's command line (granframe.studykit.command)."""
+    assert _load_study("aliasing").main(["--out", str(tmp_path), "--quick"]) == 0
+    assert "L/S = 2.21" in capsys.readouterr().out
+    rows = list(csv.DictReader(open(tmp_path / "aliasing.csv")))
+    errors = {float(row["L_over_S"]): float(row["error"]) for row in rows}
     assert errors[1.5] > 1e-3 and errors[2.21] < 1e-7, errors
 
 
