@@ -77,8 +77,8 @@ class HomogeneousBoltzmann(Equation):
         - ``linear``: the heat bath, tau max |k|^2 (pi/L)^2 over the evolved modes;
         - ``nonlinear``: the collisions, nu_max / eps with the largest loss frequency
           nu_max = C int b dsigma rho R^lambda E^gamma (relative speeds are cut at R);
-          exact for Maxwell molecules, where the linearised operator's spectrum lies
-          in [-nu, 0];
+          for Maxwell molecules nu_max = nu, and RK4's observed boundary lies on
+          2.7853 eps / nu within the resolution of the stability map (docs/stability.md);
         - ``dissipation``: the energy loss, (1 - e_min^2) nu_max / (4 eps) with e_min the
           smallest restitution coefficient over relative speeds in [0, R]; for Maxwell
           molecules and constant e the exact rate of dT/dt = -(1-e^2) rho T / (4 eps).

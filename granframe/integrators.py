@@ -278,7 +278,7 @@ class PenalisedIMEX(TimeIntegrator):
     implicitly. Stage i of the pair (A_E, b_E), (A_I, b_I):
 
     .. math:: g_i = f^n + \Delta t \sum_{j<i} (a^E_{ij} K^E_j + a^I_{ij} K^I_j),\qquad
-              F_i = rac{g_i + a^I_{ii}\Delta t\, r\, M[g_i]}{1 + a^I_{ii}\Delta t\, r},
+              F_i = \frac{g_i + a^I_{ii}\Delta t\, r\, M[g_i]}{1 + a^I_{ii}\Delta t\, r},
 
     K^I_i = r (M[F_i] - F_i), K^E_i = N(F_i) - K^I_i, f^{n+1} = f^n + dt sum_i
     (b^E_i K^E_i + b^I_i K^I_i). Since M[F_i] = M[g_i], every stage is explicit.

@@ -1,9 +1,9 @@
 """Explicit time-step limits, checked before a run starts (docs/stability.md).
 
-A scheme that treats a part of the equation explicitly is stable only while
-dt rho(part) <= its stability interval on the negative real axis
-(:attr:`TimeIntegrator.stability_interval`), where rho(part) is the spectral
-radius that :meth:`Equation.stiffness` estimates:
+A scheme is stable only while dt times the sum of the spectral radii of the
+parts it treats explicitly stays within its stability interval on the negative
+real axis (:attr:`TimeIntegrator.stability_interval`). The radii are those that
+:meth:`Equation.stiffness` estimates:
 
 - the heat bath tau Delta (``linear``): tau max |k|^2 (pi/L)^2, exact;
 - the collisions Q/eps (``nonlinear``): the largest loss frequency over eps;
