@@ -8,7 +8,6 @@ import numpy
 
 from granframe.heatbath import HeatBath
 from granframe.integrators import Equation
-from granframe.quadratures import sphere_area
 
 
 class HomogeneousBoltzmann(Equation):
@@ -36,15 +35,7 @@ class HomogeneousBoltzmann(Equation):
         self.knudsen = float(knudsen)
         self.penalty = float(penalty)
         kernel, d = operator.kernel, operator.grid.dimension
-        if kernel.is_isotropic:
-            angular = sphere_area(d)
-        elif d == 2:
-            angular = 2 * math.pi * float(numpy.mean(kernel.angular_part(
-                numpy.cos(numpy.linspace(0, 2 * math.pi, 4097)[:-1]))))
-        else:
-            x, w = numpy.polynomial.legendre.leggauss(200)
-            angular = 2 * math.pi * float(w @ kernel.angular_part(x))
-        self._frequency_constant = kernel.prefactor(d) * angular
+        self._frequency_constant = kernel.prefactor(d) * kernel.angular_integral(d)
 
     def nonlinear(self, t, f):
         q = self.operator(f)

@@ -64,17 +64,7 @@ def maxwell_energy_dissipation(grid, f, restitution: float, kernel) -> float:
     if kernel.exponent != 0.0:
         check.reject("maxwell_energy_dissipation", "kernel.exponent", kernel.exponent,
                      "must be 0 (Maxwell molecules)")
-    if kernel.is_isotropic:
-        from granframe.quadratures import sphere_area
-
-        beta = sphere_area(d)
-    else:
-        t = numpy.cos(numpy.linspace(0, 2 * math.pi, 4097)[:-1])
-        if d == 2:
-            beta = 2 * math.pi * numpy.mean(kernel.angular_part(t) * (1 - t))
-        else:
-            x, w = numpy.polynomial.legendre.leggauss(200)
-            beta = 2 * math.pi * w @ (kernel.angular_part(x) * (1 - x))
+    beta = kernel.angular_integral(d, lambda t: 1 - t)
     rho = grid.mass(f)
     second = 2.0 * grid.kinetic_energy(f)
     momentum = grid.momentum(f)

@@ -105,6 +105,20 @@ class VariableHardSpheres:
         return numpy.broadcast_to(numpy.asarray(self.angular(cos_theta), dtype=float),
                                   numpy.shape(cos_theta))
 
+    def angular_integral(self, dimension: int, weight: Callable | None = None) -> float:
+        """int_{S^{d-1}} b(cos theta) w(cos theta) dsigma (w = 1 when ``weight`` is None).
+
+        In 2D the trapezoidal rule on 4096 equispaced angles (spectral for smooth b); in
+        3D 2 pi times the 200-point Gauss-Legendre rule in cos theta. |S^{d-1}| for b = 1.
+        """
+        if dimension == 2:
+            t = numpy.cos(numpy.linspace(0, 2 * math.pi, 4097)[:-1])
+            values = self.angular_part(t) * (1.0 if weight is None else weight(t))
+            return 2 * math.pi * float(numpy.mean(values))
+        t, w = numpy.polynomial.legendre.leggauss(200)
+        values = self.angular_part(t) * (1.0 if weight is None else weight(t))
+        return 2 * math.pi * float(w @ values)
+
     def energy_factor(self, energy: float) -> float:
         """E^gamma for the kinetic energy E = int |v|^2/2 f dv."""
         if self.energy_exponent == 0.0:

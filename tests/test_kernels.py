@@ -51,3 +51,15 @@ def test_energy_factor_needs_positive_energy():
 def test_kernels_by_name():
     assert granframe.collision_kernel("hard_spheres").exponent == 1.0
     assert granframe.collision_kernel("vhs", exponent=0.5).exponent == 0.5
+
+
+@pytest.mark.parametrize("dimension,area", [(2, 2 * math.pi), (3, 4 * math.pi)])
+def test_angular_integral_against_closed_forms(dimension, area):
+    """int b w dsigma: |S| for b = 1; for b = 2 + c and w = c, int c^2 dsigma = pi (2D),
+    4 pi/3 (3D)."""
+    isotropic = VariableHardSpheres(0.0)
+    assert isotropic.angular_integral(dimension) == pytest.approx(area, rel=1e-14)
+    assert isotropic.angular_integral(dimension, lambda t: 1 - t) == pytest.approx(area, rel=1e-14)
+    linear = VariableHardSpheres(0.0, angular=lambda c: 2 + c)
+    second = math.pi if dimension == 2 else 4 * math.pi / 3
+    assert linear.angular_integral(dimension, lambda t: t) == pytest.approx(second, rel=1e-12)
