@@ -126,11 +126,6 @@ def _component(value):
         return value  # the validator reports it against the right parameter
 
 
-def _optional_positive(instance, attribute, value):
-    if value is not None:
-        check.real(0.0, math.inf, lower_open=True)(instance, attribute, value)
-
-
 @attrs.frozen(kw_only=True)
 class Output:
     """What is written: f every ``snapshot_interval`` in time (and at the start and end).
@@ -141,7 +136,7 @@ class Output:
     """
 
     snapshot_interval: float | None = attrs.field(default=None, converter=check.to_float,
-                                                  validator=_optional_positive)
+                                                  validator=check.optional_positive)
 
 
 @attrs.frozen(kw_only=True)
@@ -172,7 +167,7 @@ class Health:
                                         validator=check.real(0.0, 1.0))
     initial_mass_tolerance: float = attrs.field(default=1e-6, converter=check.to_float,
                                                 validator=check.real(0.0, 1.0, lower_open=True))
-    step_limit: bool = attrs.field(default=True, validator=attrs.validators.instance_of(bool))
+    step_limit: bool = attrs.field(default=True, validator=check.boolean)
 
 
 def _table(cls):
@@ -244,9 +239,9 @@ class RunDescription:
     integrator: Component = attrs.field(default=Component("rk4"), converter=_component,
                                         validator=_instance_of(Component, "a name or a table"))
     time_step: float | None = attrs.field(default=None, converter=check.to_float,
-                                          validator=_optional_positive)
+                                          validator=check.optional_positive)
     tolerance: float | None = attrs.field(default=None, converter=check.to_float,
-                                          validator=_optional_positive)
+                                          validator=check.optional_positive)
     heat_bath: float = attrs.field(default=0.0, converter=check.to_float,
                                    validator=check.real(0.0, math.inf))
     knudsen: float = attrs.field(default=1.0, converter=check.to_float,

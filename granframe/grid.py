@@ -28,11 +28,6 @@ from granframe.errors import AliasingWarning
 ANTI_ALIASING_FACTOR = (3.0 + math.sqrt(2.0)) / 2.0
 
 
-def _optional_positive(instance, attribute, value):
-    if value is not None:
-        check.real(0.0, math.inf, lower_open=True)(instance, attribute, value)
-
-
 @attrs.frozen
 class VelocityGrid:
     """Uniform periodic velocity grid of ``n_modes**dimension`` points.
@@ -77,9 +72,9 @@ class VelocityGrid:
     support_radius: float = attrs.field(
         converter=check.to_float, validator=check.real(0.0, math.inf, lower_open=True))
     half_width: float = attrs.field(default=None, converter=check.to_float,
-                                    validator=_optional_positive)
+                                    validator=check.optional_positive)
     truncation_radius: float = attrs.field(default=None, converter=check.to_float,
-                                           validator=_optional_positive)
+                                           validator=check.optional_positive)
     allow_aliasing: bool = attrs.field(default=False, validator=check.boolean, kw_only=True)
 
     def __attrs_post_init__(self):

@@ -220,7 +220,7 @@ class FromCallable(InitialCondition):
     function: object = attrs.field(validator=_function)
     mass: float | None = attrs.field(
         default=None, converter=check.to_float,
-        validator=attrs.validators.optional(check.real(0.0, math.inf, lower_open=True)))
+        validator=check.optional_positive)
 
     def sample(self, grid):
         function = resolve_callable("FromCallable", "function", self.function)

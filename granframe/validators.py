@@ -101,6 +101,12 @@ def to_int(value):
     return int(value) if is_integer(value) else value
 
 
+def optional_positive(instance, attribute: attrs.Attribute, value):
+    """attrs validator: ``None`` or a finite real number > 0."""
+    if value is not None:
+        real(0.0, math.inf, lower_open=True)(instance, attribute, value)
+
+
 def boolean(instance, attribute: attrs.Attribute, value):
     """attrs validator: exactly ``True`` or ``False``."""
     if not isinstance(value, bool):
