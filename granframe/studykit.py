@@ -1,12 +1,19 @@
 """Small pieces shared by measurement studies (``studies/*.py`` that sweep settings in one
-process instead of writing run stores): their command line and their CSV tables."""
+process instead of writing run stores): their command line, CSV tables, figures and
+``summary.json``."""
 
 from __future__ import annotations
 
 import argparse
 import csv
+import json
 import pathlib
 from typing import Callable
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
 
 
 def write_csv(path, rows: list[dict], fields=None) -> None:
@@ -15,6 +22,24 @@ def write_csv(path, rows: list[dict], fields=None) -> None:
         writer = csv.DictWriter(stream, list(fields or rows[0]))
         writer.writeheader()
         writer.writerows(rows)
+
+
+def save_figure(fig, path) -> None:
+    """Write ``fig`` as a PNG (100 dpi) and release it."""
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def read_summary(out, only) -> dict:
+    """The summary to update: the existing ``out/summary.json`` when only some parts are
+    measured again (``only``), so that the others keep their entries; else empty."""
+    path = pathlib.Path(out) / "summary.json"
+    return json.loads(path.read_text()) if only and path.exists() else {}
+
+
+def write_summary(out, summary: dict) -> None:
+    """``out/summary.json``, indented."""
+    (pathlib.Path(out) / "summary.json").write_text(json.dumps(summary, indent=1))
 
 
 def command(run: Callable, doc: str, quick_help: str, parts: str | None = None,

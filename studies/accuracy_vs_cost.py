@@ -33,7 +33,6 @@ A configuration is on the Pareto front when no other one is cheaper and as accur
 from __future__ import annotations
 
 import itertools
-import json
 import pathlib
 import time
 
@@ -46,7 +45,8 @@ import numpy  # noqa: E402
 import granframe as gf  # noqa: E402
 from granframe.bench import median_time, preferred_backend  # noqa: E402
 from granframe.exact import bkw  # noqa: E402
-from granframe.studykit import command, write_csv  # noqa: E402
+from granframe.studykit import (command, read_summary, save_figure, write_csv,  # noqa: E402
+                                write_summary)
 from granframe.testing import heated_maxwell_error  # noqa: E402
 
 PRECISIONS = ("float64", "float32")
@@ -267,16 +267,14 @@ def _figure(name, scene, rows, out):
     ax.set(xlabel=cost, ylabel=what, title=name)
     ax.grid(True, which="major", alpha=0.3)
     ax.legend()
-    fig.savefig(out / f"{name}.png", dpi=100)
-    plt.close(fig)
+    save_figure(fig, out / f"{name}.png")
 
 
 def run(out: pathlib.Path, quick: bool = False, only=None) -> dict:
     """Measure every scene (or those in ``only``), write ``<scene>.csv`` and ``<scene>.png``,
     and update ``summary.json``."""
     out.mkdir(parents=True, exist_ok=True)
-    summary_file = out / "summary.json"
-    summary = json.loads(summary_file.read_text()) if only and summary_file.exists() else {}
+    summary = read_summary(out, only)
     repeats = 3 if quick else 7
     for name, scene in scenes(quick).items():
         if only and name not in only:
@@ -304,7 +302,7 @@ def run(out: pathlib.Path, quick: bool = False, only=None) -> dict:
               flush=True)
     if not quick and (not only or "hard_spheres_tanh_3d" in only):
         summary["reference_check"] = reference_check()
-    summary_file.write_text(json.dumps(summary, indent=1))
+    write_summary(out, summary)
     return summary
 
 

@@ -14,7 +14,6 @@ around the periodic box onto B_S. granframe's grid refuses smaller L or R unless
 
 from __future__ import annotations
 
-import json
 import pathlib
 import warnings
 
@@ -28,7 +27,7 @@ import granframe as gf  # noqa: E402
 from granframe.bench import preferred_backend  # noqa: E402
 from granframe.exact import bkw  # noqa: E402
 from granframe.grid import ANTI_ALIASING_FACTOR  # noqa: E402
-from granframe.studykit import command, write_csv  # noqa: E402
+from granframe.studykit import command, save_figure, write_csv, write_summary  # noqa: E402
 
 SUPPORT = 5.0
 SPACING = 0.35
@@ -69,10 +68,9 @@ def run(out: pathlib.Path, quick: bool = False) -> dict:
            title=f"aliasing: BKW 2D, S = {SUPPORT:g}, h = {SPACING:g}")
     ax.grid(True, alpha=0.3)
     ax.legend()
-    fig.savefig(out / "aliasing.png", dpi=100)
-    plt.close(fig)
+    save_figure(fig, out / "aliasing.png")
     summary = {"rows": rows}
-    (out / "summary.json").write_text(json.dumps(summary, indent=1))
+    write_summary(out, summary)
     return summary
 
 

@@ -23,7 +23,6 @@ draws the predicted explicit limit of :mod:`granframe.stability`, dt = interval 
 
 from __future__ import annotations
 
-import json
 import math
 import pathlib
 import time
@@ -38,7 +37,8 @@ import granframe as gf  # noqa: E402
 from granframe.equation import HomogeneousBoltzmann  # noqa: E402
 from granframe.exact import heated_maxwell_temperature  # noqa: E402
 from granframe.stability import step_limit  # noqa: E402
-from granframe.studykit import command, write_csv  # noqa: E402
+from granframe.studykit import (command, read_summary, save_figure, write_csv,  # noqa: E402
+                                write_summary)
 
 STEPS = 200
 ACCURATE = 1e-3
@@ -118,16 +118,14 @@ def _figure(name, spec, rows, out):
     axes[0][0].legend(loc="lower right", fontsize=8)
     fig.suptitle(f"{name}: {STEPS if spec['steps'] == STEPS else spec['steps']} steps, "
                  f"accurate = max |T/T_exact - 1| <= {ACCURATE:g}")
-    fig.savefig(out / f"{name}.png", dpi=100)
-    plt.close(fig)
+    save_figure(fig, out / f"{name}.png")
 
 
 def run(out: pathlib.Path, quick: bool = False, only=None) -> dict:
     """Classify every point of every map (or those in ``only``); write ``<map>.csv``,
     ``<map>.png`` and update ``summary.json``."""
     out.mkdir(parents=True, exist_ok=True)
-    summary_file = out / "summary.json"
-    summary = json.loads(summary_file.read_text()) if only and summary_file.exists() else {}
+    summary = read_summary(out, only)
     for name, spec in maps(quick).items():
         if only and name not in only:
             continue
@@ -160,7 +158,7 @@ def run(out: pathlib.Path, quick: bool = False, only=None) -> dict:
                                         and r["dt"] > r["predicted_limit"]],
         }
         print(f"{name}: {len(rows)} points in {summary[name]['wall_seconds']:.0f} s", flush=True)
-    summary_file.write_text(json.dumps(summary, indent=1))
+    write_summary(out, summary)
     return summary
 
 

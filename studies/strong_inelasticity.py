@@ -14,7 +14,6 @@ molecules, the temperature against the exact law.
 
 from __future__ import annotations
 
-import json
 import pathlib
 
 import matplotlib
@@ -27,7 +26,8 @@ import granframe as gf  # noqa: E402
 from granframe.bench import preferred_backend  # noqa: E402
 from granframe.equation import HomogeneousBoltzmann  # noqa: E402
 from granframe.exact import heated_maxwell_temperature  # noqa: E402
-from granframe.studykit import command, write_csv  # noqa: E402
+from granframe.runner import moments  # noqa: E402
+from granframe.studykit import command, save_figure, write_csv, write_summary  # noqa: E402
 
 TAU, FINAL, DT = 0.1, 10.0, 0.02
 
@@ -45,13 +45,13 @@ def steady_state(kernel: str, restitution: float, n_modes: int, final=FINAL) -> 
     steps = round(final / DT)
     for i in range(steps):
         f = rk4.step(equation, i * DT, f, DT)
-    negative = float(numpy.clip(-f, 0, None).sum() / numpy.abs(f).sum())
+    state = moments(grid, f, numpy)      # the runner's moments, positivity check included
     row = {"kernel": kernel, "e": restitution, "N": n_modes, "h": grid.spacing,
-           "negative_share": negative, "min_over_max": float(f.min() / f.max()),
-           "temperature": grid.temperature(f), "kurtosis": grid.kurtosis(f),
-           "T_error": None}
+           "negative_share": state["negative_mass_fraction"],
+           "min_over_max": state["min_f"] / float(f.max()),
+           "temperature": state["temperature"], "kurtosis": state["kurtosis"], "T_error": None}
     if kernel == "maxwell":
-        exact = heated_maxwell_temperature(final, 1.0, restitution, TAU, grid.mass(f))
+        exact = heated_maxwell_temperature(final, 1.0, restitution, TAU, state["mass"])
         row["T_error"] = abs(row["temperature"] / exact - 1)
     return row
 
@@ -76,10 +76,9 @@ def run(out: pathlib.Path, quick: bool = False) -> dict:
                title=f"{kernel}, tau = {TAU}, S = 6")
         ax.grid(True, alpha=0.3)
         ax.legend()
-    fig.savefig(out / "inelasticity.png", dpi=100)
-    plt.close(fig)
+    save_figure(fig, out / "inelasticity.png")
     summary = {"rows": rows}
-    (out / "summary.json").write_text(json.dumps(summary, indent=1))
+    write_summary(out, summary)
     return summary
 
 
