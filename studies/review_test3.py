@@ -36,10 +36,12 @@ import numpy  # noqa: E402
 import scipy.optimize  # noqa: E402
 import xarray  # noqa: E402
 
+import granframe as gf  # noqa: E402
 from granframe.description import RunDescription  # noqa: E402
 from granframe.storage import RunStore  # noqa: E402
 
 HALF_WIDTH = 5 * (3 + math.sqrt(2))
+TANH = {"centre": 4.0, "width": 1.0}    # the review's tanh law, e0 given per run
 HEATED = (0.5, 0.6, 0.7, 0.8, 0.9, 0.95)
 
 
@@ -70,8 +72,8 @@ def runs(quick: bool = False) -> dict:
     for e0 in (0.8, 0.2):
         made[f"haff_tanh{e0}"] = _run(f"free cooling, e(|g|) = {(e0 - 1) / 2:g} tanh(|g| - 4) + "
                                       f"{(e0 + 1) / 2:g}", "hard_spheres",
-                                      {"name": "tanh", "asymptotic_value": e0, "centre": 4.0,
-                                       "width": 1.0}, 0.0, quick)
+                                      {"name": "tanh", "asymptotic_value": e0, **TANH}, 0.0,
+                                      quick)
         made[f"haff_const{e0}"] = _run(f"free cooling, e = {e0}", "hard_spheres",
                                        {"name": "constant", "value": e0}, 0.0, quick)
     for lam in (0.0, 0.5, 1.0):
@@ -119,7 +121,7 @@ def report(stores: dict, out) -> dict:
     fig, axes = plt.subplots(1, 3, figsize=(17, 4.5), constrained_layout=True)
     speed = numpy.linspace(0.0, 8.0, 400)
     for e0 in (0.8, 0.2):   # the review's left panels: the restitution laws themselves
-        axes[0].plot(speed, (e0 - 1) / 2 * numpy.tanh(speed - 4) + (e0 + 1) / 2,
+        axes[0].plot(speed, gf.restitution_law("tanh", asymptotic_value=e0, **TANH)(speed),
                      label=f"e(|g|), e0 = {e0}")
         axes[0].axhline(e0, ls="--", lw=1, color="C0" if e0 == 0.8 else "C1")
     axes[0].set(xlabel="|g|", ylabel="e", title="restitution: tanh law (solid), constant "
