@@ -90,10 +90,11 @@ def check_time_step(integrator, name: str, equation, f, dt: float, alternatives=
     others = sorted(other for other, scheme in alternatives
                     if not treats_explicitly(scheme, limit.dominant)
                     and not getattr(scheme, "adaptive", False))
+    dominant = PART_NAMES.get(limit.dominant, limit.dominant)
     check.reject(
         "RunDescription", "time_step", dt,
         f"must be <= {limit.limit:.4g}, the explicit stability limit of '{name}', set by "
-        f"{PART_NAMES.get(limit.dominant, limit.dominant)} (spectral radii: {radii}); "
+        f"{dominant} (spectral radii: {radii}); "
         f"'{name}' is stable for dt * (sum of radii) <= {limit.interval:g}"
-        + (f"; or use an integrator that treats {PART_NAMES.get(limit.dominant)} implicitly "
-           f"or exactly: {', '.join(others)}" if others else ""))
+        + (f"; or use an integrator that treats {dominant} implicitly or exactly: "
+           f"{', '.join(others)}" if others else ""))
