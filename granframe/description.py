@@ -51,6 +51,7 @@ from granframe import validators as check
 from granframe.grid import VelocityGrid
 from granframe.initial import callable_reference, resolve_callable
 from granframe.registry import default_registries
+from granframe.rescaling import check_rescalable
 
 #: Tolerance on "final_time and snapshot_interval are whole multiples of time_step".
 _MULTIPLE_TOLERANCE = 1e-9
@@ -217,6 +218,11 @@ class RunDescription:
         tau >= 0.
     knudsen : float
         epsilon > 0.
+    rescaled : bool
+        Solve free cooling in self-similar variables (:mod:`granframe.rescaling`):
+        the stored f is g(s, xi) and the run's times are the rescaled time s
+        (final_time, time_step and the snapshot interval too); the map to the physical
+        t and f is stored with the run (``RunStore.metadata["rescaling"]``).
     output : Output
     health : Health
     title : str
@@ -246,6 +252,7 @@ class RunDescription:
                                    validator=check.real(0.0, math.inf))
     knudsen: float = attrs.field(default=1.0, converter=check.to_float,
                                  validator=check.real(0.0, math.inf, lower_open=True))
+    rescaled: bool = attrs.field(default=False, validator=check.boolean)
     output: Output = attrs.field(factory=Output, converter=_table(Output),
                                  validator=_instance_of(Output, "an Output table"))
     health: Health = attrs.field(factory=Health, converter=_table(Health),
@@ -267,7 +274,10 @@ class RunDescription:
                 except TypeError as exc:
                     check.reject("RunDescription", "operator", component.params,
                                  f"has an unknown option ({exc})", error=TypeError)
-        self.build("kernel"), self.build("restitution"), self.build("initial")
+        kernel, restitution = self.build("kernel"), self.build("restitution")
+        self.build("initial")
+        if self.rescaled:
+            check_rescalable(kernel, restitution, self.heat_bath, "RunDescription")
         self.build("backend")
         self._operator_options()   # quadratures given as tables are built (cheap)
         integrator = self.build("integrator")
@@ -323,10 +333,10 @@ class RunDescription:
 
     # -- TOML / dict ------------------------------------------------------------------
     def to_dict(self) -> dict:
-        """JSON- and TOML-ready nested dict (None values left out)."""
+        """JSON- and TOML-ready nested dict (None values, and ``rescaled = false``, left out)."""
         data = {"title": self.title, "final_time": self.final_time, "time_step": self.time_step,
                 "tolerance": self.tolerance, "heat_bath": self.heat_bath,
-                "knudsen": self.knudsen,
+                "knudsen": self.knudsen, "rescaled": self.rescaled or None,
                 "grid": attrs.asdict(self.grid),
                 **{field: getattr(self, field).to_dict(field) for field in _FAMILIES},
                 "output": attrs.asdict(self.output), "health": attrs.asdict(self.health)}

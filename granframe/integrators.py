@@ -72,12 +72,18 @@ class TimeIntegrator(abc.ABC):
     stability_interval : float
         Extent of the scheme's (explicit part's) stability region along the negative
         real axis: stable for dt lambda in [-stability_interval, 0].
+    imaginary_interval : float
+        Extent along the imaginary axis: stable for dt lambda in i[-b, b] with b this
+        value; 0 for schemes unstable there at any step (forward Euler, two-stage
+        second-order schemes). Transport terms (the drift of the rescaled
+        formulation, :mod:`granframe.rescaling`) have an imaginary spectrum.
     """
 
     order: ClassVar[int]
     adaptive: ClassVar[bool] = False
-    explicit_parts: ClassVar[frozenset] = frozenset({"linear", "nonlinear"})
+    explicit_parts: ClassVar[frozenset] = frozenset({"linear", "nonlinear", "drift"})
     stability_interval: ClassVar[float] = math.inf
+    imaginary_interval: ClassVar[float] = 0.0
 
     @abc.abstractmethod
     def step(self, equation: Equation, t: float, f, dt: float):
@@ -168,6 +174,7 @@ class SSPRK3(ExplicitRungeKutta):
 
     order = 3
     stability_interval = 2.5127   # |1 + z + z^2/2 + z^3/6| = 1 at z = -2.5127
+    imaginary_interval = math.sqrt(3.0)
     tableau = Tableau(a=_fractions([[], ["1"], ["1/4", "1/4"]]),
                       b=tuple(float(Fraction(x)) for x in ("1/6", "1/6", "2/3")))
 
@@ -181,6 +188,7 @@ class RK4(ExplicitRungeKutta):
 
     order = 4
     stability_interval = 2.7853   # |1 + z + ... + z^4/24| = 1 at z = -2.7853
+    imaginary_interval = 2.0 * math.sqrt(2.0)
     tableau = RK4_TABLEAU
 
 
@@ -199,8 +207,9 @@ class IntegratingFactorRK4(TimeIntegrator):
     """
 
     order = 4
-    explicit_parts = frozenset({"nonlinear"})
+    explicit_parts = frozenset({"nonlinear", "drift"})
     stability_interval = 2.7853
+    imaginary_interval = 2.0 * math.sqrt(2.0)
     tableau = RK4_TABLEAU
 
     def step(self, equation, t, f, dt):
@@ -301,8 +310,9 @@ class PenalisedIMEX(TimeIntegrator):
     implicit: ClassVar[tuple]      # (A_I rows including the diagonal, b_I)
     strang: ClassVar[bool]
     # relaxation is implicit and the heat bath exact: only the energy dissipation, which the
-    # penalisation conserves, is explicit (forward Euler / the ARS explicit part: [-2, 0])
-    explicit_parts = frozenset({"dissipation"})
+    # penalisation conserves, is explicit (forward Euler / the ARS explicit part: [-2, 0]),
+    # and a drift term (neither is stable on the imaginary axis)
+    explicit_parts = frozenset({"dissipation", "drift"})
     stability_interval = 2.0
 
     def _imex(self, equation, t, f, dt):

@@ -44,6 +44,10 @@ def _angular_validator(instance, attribute, value):
                      f"on [-1, 1] (found min {numpy.nanmin(samples):.3g})")
 
 
+#: Largest kernel constant C accepted: C R^lambda b(cos theta) must not overflow.
+_LARGEST_CONSTANT = 1e100
+
+
 @attrs.frozen
 class VariableHardSpheres:
     """Variable hard-sphere kernel B = C |g|^lambda b(cos theta) E^gamma.
@@ -58,7 +62,7 @@ class VariableHardSpheres:
     energy_exponent : float
         gamma, real; the kernel is multiplied by E(f)^gamma.
     constant : float or None
-        C > 0. ``None`` takes the review's numerical-section value for the
+        0 < C <= 1e100 (larger values overflow the kernel). ``None`` takes the review's numerical-section value for the
         grid's dimension: 1/(2 pi) in 2D and 1/(4 pi) in 3D.
 
     Notes
@@ -76,7 +80,8 @@ class VariableHardSpheres:
     @constant.validator
     def _check_constant(self, attribute, value):
         if value is not None:
-            check.real(0.0, math.inf, lower_open=True)(self, attribute, value)
+            # bounded so that C |g|^lambda b stays finite for any representable grid
+            check.real(0.0, _LARGEST_CONSTANT, lower_open=True)(self, attribute, value)
 
     @property
     def is_isotropic(self) -> bool:

@@ -32,6 +32,7 @@ from granframe.initial import check_fits
 from granframe.integrators import StepController, StepSizeError
 from granframe.stability import check_time_step
 from granframe.registry import default_registries
+from granframe.rescaling import RescaledBoltzmann
 from granframe.storage import SCALAR_MOMENTS, RunStore
 
 
@@ -184,13 +185,17 @@ class Simulation:
         self.backend = d.build("backend")
         self.operator = d.build("operator", grid=d.grid, kernel=d.build("kernel"),
                                 restitution=d.build("restitution"), backend=self.backend)
-        self.equation = HomogeneousBoltzmann(self.operator, d.heat_bath, d.knudsen)
         self.integrator = d.build("integrator")
         initial = d.build("initial")
         sampled = initial.sample(d.grid)
         check_fits(d.grid, sampled, initial, d.health.edge_tolerance,
                    d.health.initial_mass_tolerance)
         self.f0 = d.grid.project(sampled)
+        if d.rescaled:
+            self.equation = RescaledBoltzmann(self.operator, self.backend.asarray(self.f0),
+                                              d.knudsen)
+        else:
+            self.equation = HomogeneousBoltzmann(self.operator, d.heat_bath, d.knudsen)
         if d.health.step_limit and not self.integrator.adaptive:
             registries = default_registries()
             schemes = [(name, registries.get("time_integrators", name).factory)
@@ -248,8 +253,10 @@ class Simulation:
             resumes = state.get("resumes", []) + [step]
             wall_before = float(state.get("wall_seconds", 0.0))
         else:
+            rescaling = getattr(self.equation, "rescaling", None)
             store = RunStore.create(out, description, d.to_toml(), grid, self.provenance(),
-                                    overwrite=overwrite)
+                                    overwrite=overwrite,
+                                    rescaling=None if rescaling is None else rescaling.to_dict())
             f, t, step = backend.asarray(self.f0), 0.0, 0
             record = moments(grid, f, xp)
             # adaptive schemes without a first trial step start from 1% of the run

@@ -8,7 +8,11 @@ real axis (:attr:`TimeIntegrator.stability_interval`). The radii are those that
 - the heat bath tau Delta (``linear``): tau max |k|^2 (pi/L)^2, exact;
 - the collisions Q/eps (``nonlinear``): the largest loss frequency over eps;
 - the energy dissipation (``dissipation``), which the penalised schemes keep
-  explicit: (1 - e^2) nu / (4 eps).
+  explicit: (1 - e^2) nu / (4 eps);
+- the drift of the rescaled formulation (``drift``, :mod:`granframe.rescaling`), a
+  transport term with an imaginary spectrum: schemes not stable on the imaginary
+  axis (:attr:`TimeIntegrator.imaginary_interval` = 0) are refused at any step, and
+  the others get the smaller of their two intervals.
 
 A fixed step above a limit would amplify the stiff modes from round-off on
 and blow up a few hundred steps later; the runner refuses it up front, with
@@ -23,7 +27,8 @@ from granframe import validators as check
 
 PART_NAMES = {"linear": "the heat bath tau Delta_v",
               "nonlinear": "the collision term Q/eps",
-              "dissipation": "the energy dissipation of Q/eps"}
+              "dissipation": "the energy dissipation of Q/eps",
+              "drift": "the drift of the rescaled formulation"}
 
 
 #: the energy dissipation is a part of the collision term: a scheme explicit in the
@@ -73,7 +78,12 @@ def step_limit(integrator, equation, f) -> StepLimit | None:
              if treats_explicitly(integrator, part)}
     if "nonlinear" in parts:
         parts.pop("dissipation", None)        # contained in the collision term
-    return StepLimit(parts, integrator.stability_interval) if parts else None
+    if not parts:
+        return None
+    interval = integrator.stability_interval
+    if "drift" in parts:
+        interval = min(interval, getattr(integrator, "imaginary_interval", 0.0))
+    return StepLimit(parts, interval)
 
 
 def check_time_step(integrator, name: str, equation, f, dt: float, alternatives=()) -> None:
@@ -85,6 +95,14 @@ def check_time_step(integrator, name: str, equation, f, dt: float, alternatives=
     limit = step_limit(integrator, equation, f)
     if limit is None or dt <= limit.limit:
         return
+    if limit.interval == 0.0:
+        others = sorted(other for other, scheme in alternatives
+                        if getattr(scheme, "imaginary_interval", 0.0) > 0.0
+                        and not getattr(scheme, "adaptive", False))
+        check.reject("RunDescription", "integrator", name,
+                     f"is unstable at any step for {PART_NAMES['drift']}, whose spectrum is "
+                     f"imaginary; use a scheme stable on the imaginary axis: "
+                     f"{', '.join(others) or 'none registered'}")
     radii = ", ".join(f"{PART_NAMES.get(part, part)} = {rate:.4g}"
                       for part, rate in sorted(limit.rates.items(), key=lambda x: -x[1]))
     others = sorted(other for other, scheme in alternatives

@@ -74,8 +74,12 @@ class RunStore:
     # -- opening ----------------------------------------------------------------------
     @classmethod
     def create(cls, path, description: dict, description_toml: str, grid, provenance: dict,
-               overwrite: bool = False) -> "RunStore":
-        """A new, empty store for ``description``; refuses an existing path unless ``overwrite``."""
+               overwrite: bool = False, rescaling: dict | None = None) -> "RunStore":
+        """A new, empty store for ``description``; refuses an existing path unless ``overwrite``.
+
+        ``rescaling`` (rescaled runs) is the map to physical variables,
+        :meth:`granframe.rescaling.Rescaling.to_dict`, kept in the metadata.
+        """
         path = pathlib.Path(path)
         if path.is_file() or (path.is_dir() and any(path.iterdir())):
             if not overwrite:
@@ -107,6 +111,7 @@ class RunStore:
             "description_toml": description_toml, "provenance": provenance,
             "created": datetime.datetime.now(datetime.timezone.utc).isoformat(),
             "progress": {"snapshots": 0, "records": 0, "status": "created"},
+            **({} if rescaling is None else {"rescaling": rescaling}),
         }
         _consolidate(path)
         return cls(path, group)

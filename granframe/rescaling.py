@@ -1,0 +1,232 @@
+r"""Free cooling in self-similar variables: the rescaled formulation of Filbet and Rey.
+
+Without a heat bath the inelastic gas cools, and f concentrates towards a Dirac mass
+at its mean velocity u: T(t) -> 0 (Haff's law T ~ t^{-2} for hard spheres). On a fixed
+grid the spectral solution first loses resolution, then positivity
+(``studies/free_cooling.py`` shows when). Writing
+
+.. math:: f(t, v) = \omega(s)^d\, g\big(s,\ u + \omega(s)(v - u)\big),
+          \qquad \frac{dt}{ds} = \omega(s)^{\kappa},\quad \kappa = \lambda + 2\gamma,
+
+with the kernel |v - v_*|^\lambda E^\gamma, the collision operator scales as
+Q(f, f)(v) = \omega^{d - \kappa} Q(g, g)(\xi) for a speed-independent restitution
+coefficient, and g solves
+
+.. math:: \partial_s g = \frac{1}{\varepsilon} Q(g, g)
+          - a\, \nabla_\xi \cdot \big((\xi - u)\, g\big), \qquad a = \frac{d \ln \omega}{ds}.
+
+The anti-drift term spreads g at the rate f concentrates. Here a is the constant
+a_0 that keeps the energy of g stationary at s = 0,
+
+.. math:: a_0 = \frac{\int Q(g_0, g_0) |\xi - u|^2 d\xi / \varepsilon}
+                     {\int \nabla_\xi\cdot((\xi - u) g_0) |\xi - u|^2 d\xi},
+
+evaluated with the discrete operators. Then \omega = e^{a_0 s}, and t(s) is known in
+closed form: t = (e^{\kappa a_0 s} - 1)/(\kappa a_0), or t = s for \kappa = 0. For
+Maxwell molecules (\kappa = 0) a(g) is independent of g and a_0 is the exact
+cooling rate. For \kappa > 0 the temperature of g is attracted to the homogeneous
+cooling state (HCS) whose cooling rate is a_0, since a hotter g cools faster.
+Then T(t) = T_g(s) / (1 + \kappa a_0 t)^{2/\kappa}: Haff's law, with T_g(s)
+converging to the HCS. For \kappa < 0 that state repels, and such kernels are
+refused.
+
+References: F. Filbet, T. Rey, "A rescaling velocity method for dissipative kinetic
+equations. Applications to granular media", J. Comput. Phys. 248 (2013) 177-199;
+the review (Carrillo, Hu, Ma, Rey), section 3, Test 3.
+"""
+
+from __future__ import annotations
+
+import math
+
+import attrs
+import numpy
+
+from granframe import validators as check
+from granframe.equation import HomogeneousBoltzmann
+
+
+@attrs.frozen
+class Rescaling:
+    r"""The map between the rescaled run (s, \xi, g) and the physical one (t, v, f).
+
+    Parameters
+    ----------
+    rate : float
+        a_0 = d ln \omega / ds.
+    degree : float
+        \kappa = \lambda + 2\gamma, the homogeneity of the kernel: dt/ds = \omega^\kappa.
+    velocity : tuple of float
+        The mean velocity u, a fixed point of the rescaling.
+    """
+
+    rate: float
+    degree: float
+    velocity: tuple = attrs.field(converter=tuple)
+
+    def scale(self, s):
+        r"""\omega(s) = exp(a_0 s)."""
+        return numpy.exp(self.rate * numpy.asarray(s, dtype=float))
+
+    def physical_time(self, s):
+        r"""t(s) = (e^{\kappa a_0 s} - 1)/(\kappa a_0), or s when \kappa a_0 = 0."""
+        s = numpy.asarray(s, dtype=float)
+        growth = self.degree * self.rate
+        return s if growth == 0.0 else numpy.expm1(growth * s) / growth
+
+    def rescaled_time(self, t):
+        r"""s(t), the inverse of :meth:`physical_time`."""
+        t = numpy.asarray(t, dtype=float)
+        growth = self.degree * self.rate
+        return t if growth == 0.0 else numpy.log1p(growth * t) / growth
+
+    def temperature(self, s, rescaled_temperature):
+        r"""T(t(s)) = T_g(s) / \omega(s)^2."""
+        return numpy.asarray(rescaled_temperature) / self.scale(s) ** 2
+
+    def physical(self, grid, g, s):
+        r"""f(t(s), .) on its own grid: returns ``(axes, f)``.
+
+        The physical velocities of the grid points \xi_j are v_j = u + (\xi_j - u)/\omega
+        on each axis, and f = \omega^d g there.
+        """
+        omega = float(self.scale(s))
+        points = grid.points()
+        axes = [u + (points - u) / omega for u in self.velocity]
+        return axes, omega ** grid.dimension * numpy.asarray(g)
+
+    def to_dict(self) -> dict:
+        return {"rate": self.rate, "degree": self.degree, "velocity": list(self.velocity)}
+
+    @classmethod
+    def from_store(cls, store) -> "Rescaling":
+        """The map stored with a rescaled run (a :class:`~granframe.storage.RunStore`)."""
+        data = store.metadata.get("rescaling")
+        if data is None:
+            check.reject("Rescaling", "store", str(store.path), "must hold a rescaled run")
+        return cls(**data)
+
+    def history(self, store) -> dict:
+        r"""The physical history of a rescaled run's records, by name.
+
+        ``s`` and ``time`` (t(s)), ``scale`` (\omega), ``temperature`` (T = T_g/\omega^2),
+        ``rescaled_temperature`` (T_g) and the scale-free ``kurtosis``, ``sonine_a2``,
+        ``negative_mass_fraction``.
+        """
+        group = store.group
+        s = group["step_time"][:]
+        rescaled = group["temperature"][:]
+        return {"s": s, "time": self.physical_time(s), "scale": self.scale(s),
+                "temperature": self.temperature(s, rescaled), "rescaled_temperature": rescaled,
+                **{name: group[name][:] for name in ("kurtosis", "sonine_a2",
+                                                     "negative_mass_fraction")}}
+
+
+def check_rescalable(kernel, restitution, heat_bath: float, owner: str) -> float:
+    r"""Refuse a scene the rescaled formulation does not hold for; return \kappa = \lambda + 2\gamma.
+
+    It needs free cooling (no heat bath), a restitution coefficient independent of the
+    relative speed (e is then the same at every scale \omega), and \kappa >= 0.
+    """
+    if heat_bath != 0.0:
+        check.reject(owner, "heat_bath", heat_bath,
+                     "must be 0 in a rescaled run (the rescaled formulation is for free "
+                     "cooling; with a heat bath f reaches a steady state on a fixed grid)")
+    if not restitution.is_constant:
+        check.reject(owner, "restitution", restitution,
+                     "must not depend on the relative speed in a rescaled run (e would "
+                     "change with the scale omega); use a constant law, or run the "
+                     "unscaled equation")
+    degree = kernel.exponent + 2.0 * kernel.energy_exponent
+    if degree < 0.0:
+        check.reject(owner, "kernel", kernel,
+                     f"has lambda + 2 gamma = {degree:g} < 0; the rescaled formulation "
+                     "needs >= 0 (its cooling state repels otherwise)")
+    return degree
+
+
+class RescaledBoltzmann(HomogeneousBoltzmann):
+    r"""d_s g = Q(g, g)/eps - a_0 div((xi - u) chi g): free cooling in self-similar variables.
+
+    See the module notes for the formulation. The drift velocity is tapered,
+    chi(|xi - u|) = 1 up to the support radius S and cos^2 down to 0 at min(2S, L),
+    because (xi - u) jumps across the periodic box: untapered, the spectral
+    discretisation of the drift has eigenvalues with real part up to about
+    +0.04 N a_0 per axis (growing modes at the faces), tapered about +0.2 a_0, which
+    the collisional loss term damps. g is negligible where chi < 1 (it keeps
+    the temperature of f0, whose support is within S). The divergence is taken
+    spectrally in conservation form, so mass is conserved exactly and momentum and
+    energy to the accuracy of the collision operator.
+
+    Parameters
+    ----------
+    operator : CollisionOperator
+        Its restitution law must not depend on the relative speed (e is the same at
+        every scale), and its kernel must have lambda + 2 gamma >= 0.
+    initial : array
+        g(0) = f0 (backend array): fixes u and a_0.
+    knudsen, penalty : float
+        As for :class:`~granframe.equation.HomogeneousBoltzmann`.
+    """
+
+    def __init__(self, operator, initial, knudsen: float = 1.0, penalty: float = 2.0):
+        kernel = operator.kernel
+        degree = check_rescalable(kernel, operator.restitution, 0.0, "RescaledBoltzmann")
+        super().__init__(operator, 0.0, knudsen, penalty)
+        grid, backend = operator.grid, operator.backend
+        xp = backend.xp
+        self._fft = backend.real_fft(grid.shape, tuple(range(grid.dimension)), threads=1)
+        velocity = tuple(float(c) for c in grid.bulk_velocity(initial, xp))
+        if kernel.energy_exponent != 0.0 and any(abs(u) > 1e-12 for u in velocity):
+            check.reject("RescaledBoltzmann", "initial", f"f0 with mean velocity {velocity}",
+                         "must have mean velocity 0 when the kernel has an energy factor E^gamma "
+                         "(E = int |v|^2/2 f then does not scale with omega)")
+        mesh = [c - u for c, u in zip(grid.mesh(), velocity)]
+        radius = numpy.sqrt(sum(c * c for c in mesh))
+        outer = grid.half_width - max(abs(u) for u in velocity)
+        inner = min(1.5 * grid.support_radius, 0.75 * outer)
+        ramp = numpy.clip((radius - inner) / (outer - inner), 0.0, 1.0)
+        taper = numpy.cos(0.5 * math.pi * ramp) ** 2
+        self._field = [backend.asarray(taper * c) for c in mesh]
+        d = grid.dimension
+        factor = math.pi / grid.half_width / float(grid.n_modes) ** d
+        derivative = []
+        for axis, k in enumerate(grid.half_wavenumbers()):
+            symbol = numpy.reshape(1j * factor * k, [-1 if j == axis else 1 for j in range(d)])
+            symbol = numpy.broadcast_to(symbol, grid.half_shape).copy()
+            symbol[grid.nyquist_mask()] = 0.0
+            derivative.append(backend.asarray(symbol))
+        self._derivative = derivative
+        self._weight = backend.asarray(radius ** 2 * grid.cell_volume)
+        dissipation = float(xp.sum(operator(initial) * self._weight)) / self.knudsen
+        transport = float(xp.sum(self.divergence(initial) * self._weight))
+        rate = dissipation / transport if transport else 0.0
+        if not (math.isfinite(rate) and rate >= 0.0):
+            check.reject("RescaledBoltzmann", "initial", "f0",
+                         f"gives the cooling rate a_0 = {rate:.6g}; it must be finite and "
+                         ">= 0 (f0 must have positive temperature)")
+        self.rescaling = Rescaling(rate, degree, velocity)
+        # bound on the spectral radius of the discrete drift: sum over axes of
+        # max |chi (xi_j - u_j)| times the largest evolved wavenumber
+        k_max = math.pi / grid.half_width * (grid.n_modes // 2 - 1)
+        self._drift_radius = rate * k_max * sum(float(numpy.max(numpy.abs(taper * c)))
+                                                for c in mesh)
+
+    def divergence(self, g):
+        r"""div((xi - u) chi g), spectrally: IDFT(sum_j i k_j pi/L DFT((xi_j - u_j) chi g))."""
+        fft, total = self._fft, None
+        for field, symbol in zip(self._field, self._derivative):
+            fft.real[...] = field * g
+            term = fft.forward() * symbol
+            total = term if total is None else total + term
+        fft.spectrum[...] = total
+        return fft.inverse().copy()
+
+    def nonlinear(self, t, g):
+        drift = self.divergence(g) * self.rescaling.rate
+        return super().nonlinear(t, g) - drift
+
+    def stiffness(self, g) -> dict:
+        """The rates of :class:`HomogeneousBoltzmann` and the drift's, a_0 sum_j max|chi (xi_j -
+        u_j)| k_max, a bound on the (imaginary) spectrum of the discrete drift term."""
+        return {**super().stiffness(g), "drift": self._drift_radius}
