@@ -168,7 +168,7 @@ class VelocityGrid:
         |k_i| = N/2, so a Nyquist part of f0 would stay frozen for the whole run (for
         discontinuous data, a checkerboard over the whole box). Mass is unchanged.
         """
-        self._check_shape(f)
+        self.check_shape(f)
         axes = tuple(range(self.dimension))
         spectrum = numpy.fft.rfftn(f, axes=axes)
         spectrum[self.nyquist_mask()] = 0.0
@@ -186,19 +186,19 @@ class VelocityGrid:
         return functools.reduce(lambda a, b: a + b, (c * c for c in self.mesh(xp)))
 
     # -- moments ----------------------------------------------------------------------
-    def _check_shape(self, f):
+    def check_shape(self, f):
         if tuple(f.shape) != self.shape:
             check.reject("VelocityGrid", "f.shape", tuple(f.shape),
                          f"must equal the grid shape {self.shape}")
 
     def mass(self, f, xp=numpy) -> float:
         """rho = int f dv, by the rectangle rule h^d sum_j f_j."""
-        self._check_shape(f)
+        self.check_shape(f)
         return float(xp.sum(f)) * self.cell_volume
 
     def momentum(self, f, xp=numpy):
         """rho u = int v f dv, a length-d NumPy array."""
-        self._check_shape(f)
+        self.check_shape(f)
         return numpy.array([float(xp.sum(c * f)) for c in self.mesh(xp)]) * self.cell_volume
 
     def bulk_velocity(self, f, xp=numpy):
@@ -207,7 +207,7 @@ class VelocityGrid:
 
     def kinetic_energy(self, f, xp=numpy) -> float:
         """E = int |v|^2/2 f dv (the review's E(f), section 1)."""
-        self._check_shape(f)
+        self.check_shape(f)
         return 0.5 * float(xp.sum(self.speed_squared(xp) * f)) * self.cell_volume
 
     def _central_moment(self, f, power: int, xp) -> float:

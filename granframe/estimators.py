@@ -1,0 +1,67 @@
+r"""A-posteriori error indicators of a discrete f: what the grid fails to represent.
+
+Two quantities bound the two truncations of the spectral methods (review, section 2):
+
+- the **spectral tail**: the Fourier coefficients that the N modes per axis cut off are of
+  the size of those on the outermost evolved shell, so their size relative to
+  \hat f_0 estimates the resolution error in velocity (h too coarse for f);
+- the **mass beyond a radius**: the share of f outside the ball B_S that the operators
+  assume contains the support (relative velocities are cut at R = 2S), which estimates the
+  truncation error of the collision integral (S too small for f).
+
+Both are cheap (one FFT, one masked sum). They are indicators, not error bounds: the
+accuracy-vs-cost study (docs/accuracy-vs-cost.md) relates them to measured errors.
+"""
+
+from __future__ import annotations
+
+import numpy
+
+from granframe import validators as check
+
+
+def spectral_tail(grid, f, shell: int = 1, xp=numpy) -> float:
+    r"""max |\hat f_k| / |\hat f_0| over the outermost ``shell`` evolved shells.
+
+    The shells are the modes with N/2 - shell <= max_i |k_i| <= N/2 - 1 (the Nyquist modes
+    |k_i| = N/2 are not evolved, :meth:`VelocityGrid.project`). The coefficients are
+    \hat f_k = (-1)^{k_1 + ... + k_d} DFT(f)_k / N^d, so only moduli are needed. For a
+    Maxwellian of temperature T, \hat f_k / \hat f_0 = exp(-T (\pi |k| / L)^2 / 2) and the
+    result is exp(-T (\pi (N/2 - shell) / L)^2 / 2).
+
+    Parameters
+    ----------
+    grid : VelocityGrid
+    f : array of shape ``grid.shape`` (namespace ``xp``)
+    shell : int
+        Width of the outer band, 1 <= shell < N/2.
+    """
+    n = grid.n_modes
+    if not check.is_integer(shell) or not 1 <= int(shell) < n // 2:
+        check.reject("spectral_tail", "shell", shell, f"must be an integer in [1, {n // 2 - 1}]")
+    grid.check_shape(f)
+    spectrum = xp.abs(xp.fft.rfftn(f, axes=tuple(range(grid.dimension))))
+    largest = numpy.zeros(grid.half_shape, dtype=int)
+    for axis, k in enumerate(grid.half_wavenumbers()):
+        shape = [-1 if j == axis else 1 for j in range(grid.dimension)]
+        largest = numpy.maximum(largest, numpy.abs(k).astype(int).reshape(shape))
+    band = (largest >= n // 2 - int(shell)) & (largest <= n // 2 - 1)
+    zero = float(spectrum[(0,) * grid.dimension])
+    if not zero > 0.0:
+        check.reject("spectral_tail", "f", "f", "must have a positive mass (hat f_0 > 0)")
+    return float(xp.max(spectrum[xp.asarray(band)])) / zero
+
+
+def mass_beyond(grid, f, radius: float, xp=numpy) -> float:
+    r"""int_{|v - u| > radius} |f| dv / int |f| dv, with u the mean velocity of f.
+
+    For a Maxwellian of temperature T this is Q(d/2, radius^2 / (2T)), the regularised upper
+    incomplete gamma function (exp(-radius^2 / (2T)) in 2D).
+    """
+    if not check.is_real(radius) or not float(radius) > 0.0:
+        check.reject("mass_beyond", "radius", radius, "must be a positive real number")
+    grid.check_shape(f)
+    u = grid.bulk_velocity(f, xp)
+    distance = sum((c - float(ui)) ** 2 for c, ui in zip(grid.mesh(xp), u))
+    absolute = xp.abs(f)
+    return float(xp.sum(absolute * (distance > float(radius) ** 2))) / float(xp.sum(absolute))
