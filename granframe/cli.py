@@ -16,6 +16,9 @@ plot STORE --out DIR
     Draw the figures of a run (PNG).
 info STORE
     Say what is in a store.
+advise SCENE.toml [--out DESCRIPTION.toml] [--json]
+    Propose the cheapest configuration predicted to meet the scene's tolerance
+    (docs/advise.md); --out writes it as a run description for ``granframe run``.
 """
 
 from __future__ import annotations
@@ -153,6 +156,36 @@ def _info(args) -> int:
     return 0
 
 
+def _advise(args) -> int:
+    import tomllib
+
+    from granframe.advise import Scene, advise
+
+    path = pathlib.Path(args.scene)
+    if not path.is_file():
+        raise ValueError(f"advise: parameter 'scene' = '{args.scene}' is invalid; no such file")
+    try:
+        scene = Scene.from_dict(tomllib.loads(path.read_text()))
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"advise: the TOML text of '{path}' is invalid: {exc}") from None
+    advice = advise(scene)
+    if args.json:
+        json.dump({"schema": "granframe.advice/1", "closed_form": advice.closed_form,
+                   "errors": advice.errors, "predicted_seconds": advice.predicted_seconds,
+                   "evaluation_seconds": advice.evaluation_seconds,
+                   "evaluations": advice.evaluations, "reasons": list(advice.reasons),
+                   "description": None if advice.description is None
+                   else advice.description.to_dict()}, sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        print(advice.report())
+    if args.out and advice.description is not None:
+        pathlib.Path(args.out).write_text(advice.description.to_toml())
+        if not args.json:
+            print(f"description: {args.out} (granframe run {args.out} --out STORE)")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="granframe",
@@ -195,6 +228,14 @@ def build_parser() -> argparse.ArgumentParser:
     info = commands.add_parser("info", help="say what is in a run store")
     info.add_argument("store", metavar="STORE")
     info.set_defaults(handler=_info)
+    advise = commands.add_parser("advise", help="the cheapest configuration for a scene and "
+                                 "tolerance")
+    advise.add_argument("scene", metavar="SCENE.toml",
+                        help="physics, quantity (temperature or distribution) and tolerance")
+    advise.add_argument("--out", metavar="DESCRIPTION.toml",
+                        help="write the proposed run description")
+    advise.add_argument("--json", action="store_true", help="machine-readable output")
+    advise.set_defaults(handler=_advise)
     return parser
 
 

@@ -65,3 +65,32 @@ def mass_beyond(grid, f, radius: float, xp=numpy) -> float:
     distance = sum((c - float(ui)) ** 2 for c, ui in zip(grid.mesh(xp), u))
     absolute = xp.abs(f)
     return float(xp.sum(absolute * (distance > float(radius) ** 2))) / float(xp.sum(absolute))
+
+
+def pair_share_beyond(grid, f, radius: float, power: float = 0.0, xp=numpy) -> float:
+    r"""The share of pairs with |v - v_*| > ``radius``, weighted by |v - v_*|^p:
+
+    .. math:: \frac{\iint_{|v - v_*| > R} |v - v_*|^p |f(v)| |f(v_*)|\, dv\, dv_*}
+                   {\iint |v - v_*|^p |f(v)| |f(v_*)|\, dv\, dv_*}.
+
+    With p = 0 this is what truncating relative velocities to the ball B_R (R = 2S by default)
+    leaves out of the collision integral. With p = lambda it is the share of the loss
+    frequency, and with p = lambda + 2 the share of the energy dissipation of a
+    |g|^lambda kernel. The autocorrelation of |f| is computed by FFT on a grid padded to 2N
+    per axis, so that no lag wraps around. For a Maxwellian of temperature T the relative
+    velocity is Maxwellian at 2T, and the share is Q((d + p)/2, R^2 / (4T)).
+    """
+    if not check.is_real(radius) or not float(radius) > 0.0:
+        check.reject("pair_share_beyond", "radius", radius, "must be a positive real number")
+    grid.check_shape(f)
+    d, n, h = grid.dimension, grid.n_modes, grid.spacing
+    axes = tuple(range(d))
+    spectrum = xp.fft.rfftn(xp.abs(f), s=(2 * n,) * d, axes=axes)
+    correlation = xp.fft.irfftn(spectrum * xp.conj(spectrum), s=(2 * n,) * d, axes=axes)
+    lag = numpy.fft.fftfreq(2 * n, 1.0 / (2 * n)) * h
+    distance = sum(numpy.reshape(lag, [-1 if i == j else 1 for j in range(d)]) ** 2
+                   for i in range(d))
+    weight = xp.asarray(distance ** (float(power) / 2))
+    beyond = xp.asarray(distance > float(radius) ** 2)
+    weighted = correlation * weight
+    return float(xp.sum(weighted * beyond)) / float(xp.sum(weighted))
