@@ -37,8 +37,8 @@ How each choice is made (docs/advise.md):
    the tolerance.
 7. **Precision.** float32 where the tolerance is 1e-4 or looser (its measured floor is 4e-6,
    docs/benchmarks.md) and it is measured faster than float64 for the proposed operator.
-8. **Cost.** The proposed operator is built and timed (median of 5 evaluations) on this
-   machine, times the number of evaluations of the run.
+8. **Cost.** The proposed right-hand side is built and timed on this machine (median of 7
+   evaluations after 2 warm-ups), times the number of evaluations of the run.
 """
 
 from __future__ import annotations
@@ -418,14 +418,15 @@ def _quadrature(probe, grid, coldest, budget, horizon):
     return radial, size, error     # none within budget: the most accurate pair, flagged
 
 
-def _time_evaluation(description, repeats=5) -> float:
+def _time_evaluation(description, repeats=7) -> float:
     """Median seconds of one evaluation of the description's right-hand side on f0 (the
-    collision operator, and the drift of a rescaled run)."""
+    collision operator, and the drift of a rescaled run), after two warm-up evaluations."""
     from granframe.runner import Simulation
 
     simulation = Simulation(description)
     f = simulation.backend.asarray(simulation.f0)
-    simulation.equation.nonlinear(0.0, f)
+    for _ in range(2):
+        simulation.equation.nonlinear(0.0, f)
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
