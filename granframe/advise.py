@@ -23,12 +23,13 @@ How each choice is made (docs/advise.md):
    run (:func:`granframe.estimators.pair_share_beyond`). Also at most tol/10 of |f| may
    lie beyond 2.4 S, where the box aliases.
 4. **Modes N.** The smallest N whose spectral tail (:func:`granframe.estimators.spectral_tail`)
-   is below tol/3, for f0 and for the coldest Maxwellian. The factor 3 is calibrated on
+   times 3 is below tol/3, for f0 and for the coldest Maxwellian, on a grid the runner
+   accepts f0 on (:func:`granframe.initial.check_fits`). The factor 3 is calibrated on
    the free-cooling study: a temperature error of 1e-3 came with a tail of 3.5e-4.
 5. **Quadratures** (N_rho, circle or Lebedev rule). The cheapest pair (cost ~ N_rho M) whose
    operator, applied to f0, to the coldest Maxwellian and to an anisotropic Gaussian,
-   differs from a reference rule by less than half of what the resolution leaves of the
-   tolerance. The difference is measured in the quantity's norm, times the horizon over
+   differs from a reference rule by less than half of what the resolution and the
+   support leave of the tolerance. The difference is measured in the quantity's norm, times the horizon over
    which such an error acts. A rule whose error on the anisotropic Gaussian exceeds 10 % of
    max |Q| is not consistent and is never proposed.
 6. **Time step.** RK4 (IF-RK4 when the heat bath sets the explicit limit). dt is 0.9 times

@@ -148,15 +148,15 @@ def check_rescalable(kernel, restitution, heat_bath: float, owner: str) -> float
 class RescaledBoltzmann(HomogeneousBoltzmann):
     r"""d_s g = Q(g, g)/eps - a_0 div((xi - u) chi g): free cooling in self-similar variables.
 
-    See the module notes for the formulation. The drift velocity is tapered,
-    chi(|xi - u|) = 1 up to the support radius S and cos^2 down to 0 at min(2S, L),
-    because (xi - u) jumps across the periodic box: untapered, the spectral
-    discretisation of the drift has eigenvalues with real part up to about
-    +0.04 N a_0 per axis (growing modes at the faces), tapered about +0.2 a_0, which
-    the collisional loss term damps. g is negligible where chi < 1 (it keeps
-    the temperature of f0, whose support is within S). The divergence is taken
-    spectrally in conservation form, so mass is conserved exactly and momentum and
-    energy to the accuracy of the collision operator.
+    See the module notes for the formulation. The drift velocity is tapered:
+    chi(|xi - u|) = 1 up to min(1.5 S, 0.75 L'), then cos^2 down to 0 at L' = L - max|u_j|.
+    The taper is needed because (xi - u) jumps across the periodic box. Untapered, the
+    spectral discretisation of the drift has eigenvalues with real part up to 2.1, 3.3 and
+    4.9 a_0 per axis at N = 32, 64 and 128: growing modes at the faces. Tapered, they reach
+    0.56, 0.66 and 0.73 a_0, which the collisional loss term damps. g is small where
+    chi < 1, since it keeps the temperature of f0. The divergence is taken spectrally in
+    conservation form, so mass is conserved exactly, and momentum and energy to the
+    accuracy of the collision operator.
 
     Parameters
     ----------
