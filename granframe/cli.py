@@ -16,6 +16,9 @@ plot STORE --out DIR
     Draw the figures of a run (PNG).
 info STORE
     Say what is in a store.
+sweep SWEEP.toml --out STORE [--scheduler ADDRESS] [--workers N] [--progress]
+    Run every point of a parameter sweep on Dask into one zarr store (docs/scaling.md);
+    running it again skips ended runs and resumes cut ones. Exit status 3 when a run failed.
 advise SCENE.toml [--out DESCRIPTION.toml] [--json]
     Propose the cheapest configuration predicted to meet the scene's tolerance
     (docs/advise.md); --out writes it as a run description for ``granframe run``.
@@ -156,6 +159,20 @@ def _info(args) -> int:
     return 0
 
 
+def _sweep(args) -> int:
+    from granframe.sweep import Sweep, run_sweep
+
+    path = pathlib.Path(args.sweep)
+    if not path.is_file():
+        raise ValueError(f"sweep: parameter 'sweep' = '{args.sweep}' is invalid; no such file")
+    result = run_sweep(Sweep.from_toml(path.read_text()), args.out, scheduler=args.scheduler,
+                       workers=args.workers, progress=args.progress)
+    print(f"{result.store}: {result.finished} finished, {result.failed} failed "
+          f"({result.skipped} ended before) in {result.wall_seconds:.1f} s; table: "
+          f"xarray.open_zarr('{result.store}', group='table')")
+    return 3 if result.failed else 0
+
+
 def _advise(args) -> int:
     import tomllib
 
@@ -228,6 +245,17 @@ def build_parser() -> argparse.ArgumentParser:
     info = commands.add_parser("info", help="say what is in a run store")
     info.add_argument("store", metavar="STORE")
     info.set_defaults(handler=_info)
+    sweep = commands.add_parser("sweep", help="run a parameter sweep on Dask into one store")
+    sweep.add_argument("sweep", metavar="SWEEP.toml",
+                       help="a base description ([base]) and axes ([product], [zip])")
+    sweep.add_argument("--out", required=True, metavar="STORE", help="the sweep's zarr store")
+    sweep.add_argument("--scheduler", metavar="ADDRESS",
+                       help="an existing Dask scheduler (default: a LocalCluster here)")
+    sweep.add_argument("--workers", type=int, default=None,
+                       help="worker processes of the LocalCluster (default: one per core)")
+    sweep.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                       help="progress bar (default: only on a terminal)")
+    sweep.set_defaults(handler=_sweep)
     advise = commands.add_parser("advise", help="the cheapest configuration for a scene and "
                                  "tolerance")
     advise.add_argument("scene", metavar="SCENE.toml",

@@ -130,3 +130,14 @@ def test_advise_validation_quick_meets_the_tolerance(tmp_path):
     assert row["advised_meets"] and row["advised_error"] <= row["tolerance"]
     assert row["cheapest_error"] <= row["tolerance"]
     assert (tmp_path / "advise_validation.png").exists()
+
+
+def test_heated_state_sweep_quick_runs_on_one_and_two_workers(tmp_path):
+    """The sweep study on LocalClusters of 1 and 2 workers: every run finishes, Maxwell
+    molecules hold the exact steady temperature T = 1, and the sweep file is written."""
+    pytest.importorskip("distributed")
+    summary = _load_study("heated_state_sweep").run(tmp_path, quick=True)
+    assert summary["finished"] == summary["runs"] == 4
+    assert summary["maxwell_max_T_error"] < 1e-4
+    assert set(summary["wall_seconds"]) == {"1", "2"}
+    assert (tmp_path / "sweep.toml").exists() and (tmp_path / "heated_state.png").exists()
