@@ -163,3 +163,43 @@ def test_command_line_sweep(tmp_path, capsys):
     assert main(["sweep", str(path), "--out", str(tmp_path / "s.zarr"), "--workers", "1"]) == 0
     assert "1 finished, 0 failed" in capsys.readouterr().out
     assert main(["sweep", str(tmp_path / "missing.toml"), "--out", str(tmp_path / "t")]) == 2
+
+
+def test_rerunning_a_sweep_resumes_a_run_cut_short_and_records_a_health_stop(cluster,
+                                                                             tmp_path):
+    """A run whose process was killed (the sweep's driver and its worker gone) is resumed by
+    the next sweep over the store; a run stopped by a health check is recorded as failed with
+    the check's message, and the sweep goes on."""
+    import json
+    import subprocess
+    import sys
+
+    sweep = Sweep(BASE, product={"health.mass_tolerance": [1e-6, 1e-300]})
+    out = tmp_path / "s.zarr"
+    point = sweep.points()[0]
+    path = out / "runs" / run_name(point)
+    script = ("import json, sys; from granframe.sweep import run_point; "
+              "run_point(json.loads(sys.argv[1]), sys.argv[2])")
+    process = subprocess.Popen([sys.executable, "-c", script,
+                                json.dumps(apply(BASE, point)), str(path)])
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        try:
+            if RunStore.open(path).progress.get("snapshots", 0) >= 3:
+                break
+        except StoreError:
+            pass
+        time.sleep(0.02)
+    process.kill()
+    process.wait()
+    cut = RunStore.open(path).progress
+    assert cut["status"] == "running" and cut["step"] < 100
+
+    result = run_sweep(sweep, out, client=cluster, progress=False)
+    assert (result.finished, result.failed, result.skipped) == (1, 1, 0)
+    store = RunStore.open(path)
+    assert store.progress["status"] == "finished" and store.progress["resumes"]
+    assert list(store.group["step"][:]) == list(range(101))
+    table = read_table(out)
+    assert list(table["status"]) == ["finished", "failed"]
+    assert "mass drift" in str(table["message"][1])
