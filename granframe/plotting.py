@@ -22,6 +22,7 @@ import numpy  # noqa: E402
 from granframe.analysis import relative_entropy  # noqa: E402
 from granframe.description import RunDescription  # noqa: E402
 from granframe.exact import heated_maxwell_law  # noqa: E402
+from granframe.rescaling import Rescaling  # noqa: E402
 from granframe.storage import RunStore  # noqa: E402
 
 #: Largest max|f(t_end) - f(t_end - interval)| / max f for which f(t_end) is taken as f_infinity.
@@ -51,6 +52,14 @@ class _Run:
         self.count = k
         self.axes = [group[f"v{i + 1}"][:] for i in range(self.grid.dimension)]
         self.status = progress.get("status")
+        if "rescaling" in store.metadata:
+            # a rescaled run: times and temperatures in physical terms; f is the profile g
+            law = Rescaling.from_store(store)
+            self.moments["temperature"] = law.temperature(self.step_time,
+                                                          self.moments["temperature"])
+            self.step_time = law.physical_time(self.step_time)
+            self.times = law.physical_time(self.times)
+            self.title += " (rescaled; f shown as the profile g)"
 
     def snapshot(self, index):
         return self.f[index]

@@ -167,3 +167,19 @@ def test_a_step_above_the_drift_limit_is_refused_and_one_below_runs():
         Simulation(_description(time_step=0.5, final_time=2.0))
     simulation = Simulation(_description(integrator="ssp_rk3", time_step=0.05))
     assert simulation.equation.stiffness(simulation.f0)["drift"] > 0
+
+
+def test_plots_of_a_rescaled_run_are_in_physical_time_and_temperature(tmp_path):
+    """granframe plot reads the stored map: Maxwell molecules' T(t) against the exact law."""
+    from granframe.plotting import _Run, plot
+
+    description = _description(kernel="maxwell", final_time=4.0, time_step=0.1,
+                               grid=dict(dimension=2, n_modes=48, support_radius=5.0))
+    Simulation(description).run(tmp_path / "run.zarr", progress=False)
+    run = _Run(tmp_path / "run.zarr")
+    exact = run.exact_temperature()
+    assert run.step_time[-1] == pytest.approx(4.0)               # kappa = 0: t = s
+    assert run.moments["temperature"][-1] < 0.55                 # it cools, in physical terms
+    assert numpy.max(numpy.abs(run.moments["temperature"] / exact - 1)) < 1e-3
+    assert "rescaled" in run.title
+    assert len(plot(tmp_path / "run.zarr", tmp_path / "figures")) >= 1
