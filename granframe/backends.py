@@ -9,6 +9,7 @@ pyfftw or cupy.
 from __future__ import annotations
 
 import os
+import time
 from types import ModuleType
 
 import attrs
@@ -75,6 +76,18 @@ class ArrayBackend:
 
     def synchronize(self) -> None:
         """Block until queued work is done (no-op on CPU backends)."""
+
+    def elapsed(self, function) -> float:
+        """Seconds one call of ``function`` takes, its queued work included (host clock and
+        :meth:`synchronize`; a device backend may time with device events instead)."""
+        start = time.perf_counter()
+        function()
+        self.synchronize()
+        return time.perf_counter() - start
+
+    def device_memory(self) -> int | None:
+        """Bytes of device memory the backend holds; None for host backends."""
+        return None
 
     def separable_product(self, out, spectrum, head, tail):
         r"""Batch of spectra times separable factors, into ``out``.

@@ -10,6 +10,7 @@ ratio time/floor, and the peak resident set size of the process.
 
 from __future__ import annotations
 
+import inspect
 import json
 import resource
 import subprocess
@@ -37,15 +38,10 @@ def preferred_backend() -> str:
     return "numpy"
 
 
-def median_time(function, repeats: int, synchronize) -> float:
-    """Median wall time of ``repeats`` calls of ``function``, each followed by ``synchronize``."""
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        synchronize()
-        times.append(time.perf_counter() - start)
-    return float(numpy.median(times))
+def median_time(function, repeats: int, backend) -> float:
+    """Median of ``repeats`` timings of ``function`` by ``backend.elapsed`` (host clock with
+    synchronisation, or device events on a GPU)."""
+    return float(numpy.median([backend.elapsed(function) for _ in range(repeats)]))
 
 
 def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int,
@@ -57,7 +53,9 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
 
     baseline = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     grid = gf.VelocityGrid(dimension, n_modes, 4.0)
-    array_backend = gf.array_backend(backend, threads=threads)
+    factory = gf.default_registries().get("array_backends", backend).factory
+    takes_threads = "threads" in inspect.signature(factory).parameters
+    array_backend = gf.array_backend(backend, **({"threads": threads} if takes_threads else {}))
     if dimension == 2:
         sphere = CircleTrapezoid(sphere_points)
     else:
@@ -76,7 +74,7 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
     f = array_backend.asarray(grid.maxwellian(temperature=1.0))
     operator(f)
     array_backend.synchronize()
-    evaluation = median_time(lambda: operator(f), repeats, array_backend.synchronize)
+    evaluation = median_time(lambda: operator(f), repeats, array_backend)
     fft = array_backend.real_fft(grid.shape, tuple(range(dimension)), threads=threads,
                                  precision=precision)
     fft.real[...] = f
@@ -86,7 +84,7 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
         fft.inverse()
 
     pair()
-    single = median_time(pair, max(20, 3 * repeats), array_backend.synchronize)
+    single = median_time(pair, max(20, 3 * repeats), array_backend)
     floor = single * operator.transform_pairs
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     return {
@@ -97,6 +95,8 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
         "evaluation_s": evaluation, "repeats": repeats, "fft_pair_s": single, "floor_s": floor,
         "time_over_floor": evaluation / floor, "peak_rss_gib": peak / 2 ** 20,
         "baseline_rss_gib": baseline / 2 ** 20,
+        "device_memory_gib": (None if array_backend.device_memory() is None
+                              else array_backend.device_memory() / 2 ** 30),
     }
 
 
@@ -118,15 +118,18 @@ def run(configs, backend: str, threads: int, repeats: int,
 
 
 def table(records) -> str:
-    """Markdown table of bench records."""
+    """Markdown table of bench records (with the device memory of device backends)."""
+    device = any(r.get("device_memory_gib") is not None for r in records)
     lines = ["| d | N | N_rho | M | precision | pairs | precompute | time / eval | FFT floor "
-             "| time/floor | peak RSS |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| time/floor | peak RSS |" + (" device memory |" if device else ""),
+             "|---|---|---|---|---|---|---|---|---|---|---|" + ("---|" if device else "")]
     for r in records:
         lines.append(
             f"| {r['dimension']} | {r['n_modes']} | {r['radial_points']} | {r['sphere_points']} "
             f"| {r.get('precision', 'float64')} "
             f"| {r['transform_pairs']} | {r['precompute_s']:.2f} s | {_ms(r['evaluation_s'])} "
-            f"| {_ms(r['floor_s'])} | {r['time_over_floor']:.2f} | {r['peak_rss_gib']:.2f} GiB |")
+            f"| {_ms(r['floor_s'])} | {r['time_over_floor']:.2f} | {r['peak_rss_gib']:.2f} GiB |"
+            + (f" {r['device_memory_gib']:.2f} GiB |" if device else ""))
     return "\n".join(lines)
 
 

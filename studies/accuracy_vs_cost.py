@@ -171,7 +171,7 @@ def measure_evaluation(scene: dict, config: dict, repeats: int) -> dict:
     precompute = time.perf_counter() - start
     q = operator(f)
     error = float(numpy.abs(q - reference).max() / numpy.abs(reference).max())
-    seconds = median_time(lambda: operator(f), repeats, operator.backend.synchronize)
+    seconds = median_time(lambda: operator(f), repeats, operator.backend)
     return dict(error=error, seconds=seconds, precompute_s=precompute)
 
 
