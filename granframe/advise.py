@@ -46,7 +46,6 @@ from __future__ import annotations
 
 import functools
 import math
-import time
 
 import attrs
 import numpy
@@ -56,11 +55,11 @@ import scipy.special
 from granframe import validators as check
 from granframe.description import (_FAMILIES, Component, Health, RunDescription, _component,
                                    _instance_of)
-from granframe.equation import HomogeneousBoltzmann
+from granframe.equation import collision_frequency
 from granframe.estimators import mass_beyond, pair_share_beyond, spectral_tail
 from granframe.exact import heated_maxwell_law
 from granframe.grid import VelocityGrid
-from granframe.initial import check_fits
+from granframe.initial import check_fits, face_share
 from granframe.quadratures import LEBEDEV_ORDERS, CircleTrapezoid, Lebedev
 from granframe.registry import default_registries
 from granframe.stability import step_limit
@@ -227,9 +226,7 @@ class _Probe:
         for _ in range(12):
             grid = VelocityGrid(self.d, 96 if self.d == 2 else 48, support)
             f = self.initial.sample(grid)
-            edge = max(float(numpy.max(numpy.abs(numpy.take(f, [0], axis=a))))
-                       for a in range(self.d))
-            if edge <= 1e-12 * float(numpy.max(numpy.abs(f))):
+            if face_share(f) <= 1e-12:
                 break
             support *= 1.5
         else:
@@ -278,14 +275,13 @@ class _Probe:
         return float(values.min()), float(values.max()), float(values[-1]), zeta0, zeta
 
     def collision_frequency(self, temperature: float) -> float:
-        grid = VelocityGrid(self.d, 16, 5.0 * math.sqrt(temperature))
-        operator = _probe_operator(grid, self.kernel, self.law, self.backend, 8,
-                                   _sphere(self.d, 8 if self.d == 2 else 7))
+        """The loss frequency of the Maxwellian of f0's mass at ``temperature``."""
         energy = self.mass * self.d * temperature / 2
-        return HomogeneousBoltzmann(operator).collision_frequency(self.mass, temperature, energy)
+        return collision_frequency(self.kernel, self.d, self.mass, temperature, energy)
 
 
-def _support(probe, hottest: float, budget: float, amplification: float, states) -> float:
+def _support(probe, hottest: float, budget: float, amplification: float,
+             states) -> tuple[float, float]:
     """Smallest S (a multiple of sqrt(T)/4) such that
 
     - truncating relative speeds at R = 2S removes a share of the rate that matters (the
@@ -419,21 +415,27 @@ def _quadrature(probe, grid, coldest, budget, horizon):
     return radial, size, error     # none within budget: the most accurate pair, flagged
 
 
-def _time_evaluation(description, repeats=7) -> float:
-    """Median seconds of one evaluation of the description's right-hand side on f0 (the
-    collision operator, and the drift of a rescaled run), after two warm-up evaluations."""
+def evaluation_seconds(simulation, repeats: int = 7) -> float:
+    """Median seconds of one evaluation of a simulation's right-hand side on f0 (the
+    collision operator, and the drift of a rescaled run), after two warm-up evaluations,
+    timed by the backend (:func:`granframe.bench.median_time`)."""
+    from granframe.bench import median_time
+
+    f = simulation.backend.asarray(simulation.f0)
+
+    def evaluate():
+        simulation.equation.nonlinear(0.0, f)
+
+    for _ in range(2):
+        evaluate()
+    return median_time(evaluate, repeats, simulation.backend)
+
+
+def _time_evaluation(description) -> float:
+    """:func:`evaluation_seconds` of a description."""
     from granframe.runner import Simulation
 
-    simulation = Simulation(description)
-    f = simulation.backend.asarray(simulation.f0)
-    for _ in range(2):
-        simulation.equation.nonlinear(0.0, f)
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        simulation.equation.nonlinear(0.0, f)
-        times.append(time.perf_counter() - start)
-    return float(numpy.median(times))
+    return evaluation_seconds(Simulation(description))
 
 
 def advise(scene: Scene, *, backend: str = "auto", closed_forms: bool = True) -> Advice:

@@ -87,6 +87,7 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
     single = median_time(pair, max(20, 3 * repeats), array_backend)
     floor = single * operator.transform_pairs
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    device = array_backend.device_memory()
     return {
         "dimension": dimension, "n_modes": n_modes, "radial_points": radial_points,
         "sphere_points": sphere_points, "method": method, "backend": backend, "threads": threads,
@@ -95,8 +96,7 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
         "evaluation_s": evaluation, "repeats": repeats, "fft_pair_s": single, "floor_s": floor,
         "time_over_floor": evaluation / floor, "peak_rss_gib": peak / 2 ** 20,
         "baseline_rss_gib": baseline / 2 ** 20,
-        "device_memory_gib": (None if array_backend.device_memory() is None
-                              else array_backend.device_memory() / 2 ** 30),
+        "device_memory_gib": None if device is None else device / 2 ** 30,
     }
 
 

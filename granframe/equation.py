@@ -10,6 +10,23 @@ from granframe.heatbath import HeatBath
 from granframe.integrators import Equation
 
 
+def collision_frequency(kernel, dimension: int, density: float, temperature: float,
+                        energy: float, angular: float | None = None) -> float:
+    r"""Mean loss frequency of a Maxwellian: nu = C int b dsigma rho <|g|^lambda> E^gamma.
+
+    The relative velocity of two particles of a Maxwellian at temperature T is
+    Maxwellian at 2T, so <|g|^lambda> = (4T)^{lambda/2} Gamma((d+lambda)/2) /
+    Gamma(d/2); exact for Maxwell molecules (nu = C |S^{d-1}| rho). ``angular`` is
+    C int b dsigma when already known.
+    """
+    d, lam = dimension, kernel.exponent
+    if angular is None:
+        angular = kernel.prefactor(d) * kernel.angular_integral(d)
+    speed = (4.0 * temperature) ** (lam / 2) * math.exp(
+        math.lgamma((d + lam) / 2) - math.lgamma(d / 2))
+    return angular * density * speed * kernel.energy_factor(energy)
+
+
 class HomogeneousBoltzmann(Equation):
     r"""d_t f = Q_I(f, f)/\varepsilon + \tau \Delta_v f (review, eq. (homo_heat), with Knudsen \varepsilon).
 
@@ -49,18 +66,9 @@ class HomogeneousBoltzmann(Equation):
         return self.heat.propagate(f, dt)
 
     def collision_frequency(self, density: float, temperature: float, energy: float) -> float:
-        r"""Mean loss frequency of a Maxwellian: nu = C int b dsigma rho <|g|^lambda> E^gamma.
-
-        The relative velocity of two particles of a Maxwellian at temperature T is
-        Maxwellian at 2T, so <|g|^lambda> = (4T)^{lambda/2} Gamma((d+lambda)/2) /
-        Gamma(d/2); exact for Maxwell molecules (nu = C |S^{d-1}| rho).
-        """
-        kernel, d = self.operator.kernel, self.operator.grid.dimension
-        lam = kernel.exponent
-        speed = (4.0 * temperature) ** (lam / 2) * math.exp(
-            math.lgamma((d + lam) / 2) - math.lgamma(d / 2))
-        return (self._frequency_constant * density * speed
-                * kernel.energy_factor(energy))
+        """:func:`collision_frequency` of the operator's kernel (its angular factor cached)."""
+        return collision_frequency(self.operator.kernel, self.operator.grid.dimension, density,
+                                   temperature, energy, self._frequency_constant)
 
     def stiffness(self, f) -> dict:
         r"""Spectral radii at f that bound explicit time steps (:mod:`granframe.stability`).

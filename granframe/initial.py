@@ -242,6 +242,13 @@ class FromCallable(InitialCondition):
         return self.mass
 
 
+def face_share(f) -> float:
+    """max |f| on the faces of the box (the first and last point of each axis) / max |f|."""
+    faces = max(float(numpy.abs(numpy.take(f, index, axis=axis)).max())
+                for axis in range(f.ndim) for index in (0, -1))
+    return faces / float(numpy.abs(f).max())
+
+
 def check_fits(grid, f, condition: InitialCondition, edge_tolerance: float,
                mass_tolerance: float) -> None:
     """Refuse initial data that does not fit the grid.
@@ -260,10 +267,9 @@ def check_fits(grid, f, condition: InitialCondition, edge_tolerance: float,
     peak = float(f.max())
     if peak == 0.0:
         check.reject(owner, "max f0", 0.0, "must be > 0 (f0 carries no mass on the grid)")
-    faces = max(float(numpy.abs(numpy.take(f, index, axis=axis)).max())
-                for axis in range(grid.dimension) for index in (0, -1))
-    if faces > edge_tolerance * peak:
-        check.reject(owner, "f0 on the faces of the box / max f0", faces / peak,
+    share = face_share(f)
+    if share > edge_tolerance:
+        check.reject(owner, "f0 on the faces of the box / max f0", share,
                      f"must be <= edge_tolerance = {edge_tolerance:g}: the data does not fit in "
                      f"[-L, L]^d with L = {grid.half_width:.6g}; enlarge the grid's "
                      "support_radius (or half_width)")

@@ -62,8 +62,8 @@ class VariableHardSpheres:
     energy_exponent : float
         gamma, real; the kernel is multiplied by E(f)^gamma.
     constant : float or None
-        0 < C <= 1e100 (larger values overflow the kernel). ``None`` takes the review's numerical-section value for the
-        grid's dimension: 1/(2 pi) in 2D and 1/(4 pi) in 3D.
+        0 < C <= 1e100 (larger values overflow the kernel). ``None`` takes the review's
+        numerical-section value for the grid's dimension: 1/(2 pi) in 2D and 1/(4 pi) in 3D.
 
     Notes
     -----

@@ -197,9 +197,9 @@ class RescaledBoltzmann(HomogeneousBoltzmann):
             symbol[grid.nyquist_mask()] = 0.0
             derivative.append(backend.asarray(symbol))
         self._derivative = derivative
-        self._weight = backend.asarray(radius ** 2 * grid.cell_volume)
-        dissipation = float(xp.sum(operator(initial) * self._weight)) / self.knudsen
-        transport = float(xp.sum(self.divergence(initial) * self._weight))
+        weight = backend.asarray(radius ** 2 * grid.cell_volume)
+        dissipation = float(xp.sum(operator(initial) * weight)) / self.knudsen
+        transport = float(xp.sum(self.divergence(initial) * weight))
         rate = dissipation / transport if transport else 0.0
         if not (math.isfinite(rate) and rate >= 0.0):
             check.reject("RescaledBoltzmann", "initial", "f0",

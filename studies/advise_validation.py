@@ -35,7 +35,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
 from scipy.interpolate import CubicSpline  # noqa: E402
 
-from granframe.advise import Scene, advise  # noqa: E402
+from granframe.advise import Scene, advise, evaluation_seconds  # noqa: E402
 from granframe.description import RunDescription  # noqa: E402
 from granframe.exact import bkw, heated_maxwell_law  # noqa: E402
 from granframe.runner import Simulation  # noqa: E402
@@ -86,18 +86,11 @@ def _timing(description, cache):
     but the time step and the integrator."""
     op = description.operator
     key = (description.grid, repr(op.params), description.rescaled, description.integrator.name)
-    if key not in cache:
+    if key not in cache:    # timed as advise times its proposal
         simulation = Simulation(description)
-        equation, f = simulation.equation, simulation.backend.asarray(simulation.f0)
-        equation.nonlinear(0.0, f)
-        equation.nonlinear(0.0, f)
-        times = []
-        for _ in range(7):
-            start = time.perf_counter()
-            equation.nonlinear(0.0, f)
-            times.append(time.perf_counter() - start)
-        limit = step_limit(simulation.integrator, equation, simulation.f0)
-        cache[key] = (float(numpy.median(times)), math.inf if limit is None else limit.limit)
+        limit = step_limit(simulation.integrator, simulation.equation, simulation.f0)
+        cache[key] = (evaluation_seconds(simulation),
+                      math.inf if limit is None else limit.limit)
     return cache[key]
 
 
