@@ -218,6 +218,36 @@ def test_backends_agree(backend, kernel):
                                       atol=1e-13 * numpy.abs(reference).max())
 
 
+@pytest.mark.parametrize("batch_bytes", [2 ** 12, 4 * 2 ** 20, 2 ** 29])
+@pytest.mark.parametrize("n_modes,radial_points,threads", [(8, 30, 2), (16, 30, 2), (16, 7, 1),
+                                                           (32, 30, 2), (64, 30, 1)])
+def test_default_batches_follow_the_backend_and_carry_no_padding(batch_bytes, n_modes,
+                                                                 radial_points, threads):
+    """The default batch aims at the backend's batch_bytes and never transforms padding:
+    whole rho values split a pipeline's range into equal blocks, or one rho's pairs are
+    split into equal batches with less than one pair of padding each; a batch never exceeds a pipeline's pairs."""
+
+    class Sized(gf.backends.NumpyBackend):
+        pass
+
+    Sized.batch_bytes = batch_bytes
+    grid = gf.VelocityGrid(3, n_modes, 4.0)
+    op = gf.collision_operator("fast_spectral", grid, gf.collision_kernel("hard_spheres"),
+                               gf.restitution_law("constant", value=0.8),
+                               backend=Sized(threads=threads), radial_points=radial_points)
+    spectrum_bytes = 16 * numpy.prod(grid.half_shape)
+    pairs = op.n_pairs
+    for pipeline in op._pipelines:
+        first, last = pipeline.rho_range
+        assert op.batch <= (last - first) * pairs
+        if op.batch >= pairs:
+            assert op.batch % pairs == 0 and (last - first) % (op.batch // pairs) == 0
+        else:
+            assert -(-pairs // op.batch) * op.batch - pairs < -(-pairs // op.batch)
+    if op.batch > 1:   # not above the aim, unless one rho's pairs already exceed it
+        assert op.batch * spectrum_bytes <= max(batch_bytes, pairs * spectrum_bytes)
+
+
 def _heated_maxwell(support_radius):
     """The review's heated Maxwell-molecule test: N = 64, N_rho = 32, M = 16, RK4 dt = 0.01 to t = 2."""
     grid = gf.VelocityGrid(2, 64, support_radius)

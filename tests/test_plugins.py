@@ -190,6 +190,8 @@ def test_cli_bench_runs_and_reports_the_floor():
     assert record["transform_pairs"] == 8 * 4
     assert record["evaluation_s"] > 0 and record["floor_s"] > 0
     assert record["time_over_floor"] == record["evaluation_s"] / record["floor_s"]
+    # the floor transforms in the operator's own batches
+    assert record["floor_s"] == record["fft_batch_s"] * 8 * 4 / record["batch"]
     single = subprocess.run([sys.executable, "-m", "granframe.cli", "bench", "--precision",
                              "float32", "--config", "2:16:8:8", "--repeats", "2", "--backend",
                              "numpy"], capture_output=True, text=True, check=True)

@@ -169,7 +169,8 @@ class FastSpectral(CollisionOperator):
         # radial weights, loss multiplier, accumulators and the operator's own transform
         fixed = complex_ * numpy.prod(half_shape) * (len(rho) + 4 + 2 * pipelines)
         if batch is None:
-            batch = _default_batch(complex_ * int(numpy.prod(half_shape)), self.n_pairs)
+            batch = _default_batch(complex_ * int(numpy.prod(half_shape)), self.n_pairs,
+                                   -(-len(rho) // pipelines), backend.batch_bytes)
         if fixed + pipelines * batch * per_pair > memory_budget:
             batch = int((memory_budget - fixed) // (pipelines * per_pair))
             if batch < 1:
@@ -239,19 +240,21 @@ class FastSpectral(CollisionOperator):
 
 _BLAS = threadpoolctl.ThreadpoolController()
 
-#: Size of a pipeline's batched spectrum buffer that the default batch aims at. Measured
-#: (3D, 2 pipelines): 1 MiB -> 4 MiB took N = 16 from 3.6 to 3.1 ms and N = 32 from 30 to
-#: 25 ms; larger buffers fall out of cache (N = 16 with 240 pairs: 5.4 ms).
-BATCH_BYTES = 4 * 2 ** 20
 
+def _default_batch(spectrum_bytes: int, n_pairs: int, rho_per_pipeline: int,
+                   batch_bytes: int) -> int:
+    """Pairs per batch for about ``batch_bytes`` of spectra (the backend's
+    :attr:`~granframe.backends.ArrayBackend.batch_bytes`).
 
-def _default_batch(spectrum_bytes: int, n_pairs: int) -> int:
-    """Pairs per batch: about BATCH_BYTES of spectra, in whole rho values (a multiple of
-    ``n_pairs``), or the pairs of one rho split into equal batches (the last one at most
-    one pair short)."""
-    batch = max(1, BATCH_BYTES // spectrum_bytes)
+    When the pairs of one rho fit, a batch holds whole rho values and a pipeline's
+    ``rho_per_pipeline`` values are split into equal blocks, so that no batch transforms
+    padding. Otherwise the pairs of one rho are split into as few batches as the aim allows,
+    of equal size (padding below one pair per batch).
+    """
+    batch = max(1, batch_bytes // spectrum_bytes)
     if batch >= n_pairs:
-        return batch - batch % n_pairs
+        rhos = min(batch // n_pairs, rho_per_pipeline)
+        return -(-rho_per_pipeline // -(-rho_per_pipeline // rhos)) * n_pairs
     return -(-n_pairs // -(-n_pairs // batch))
 
 
