@@ -1,12 +1,46 @@
 import importlib
+import importlib.util
 import pathlib
 import textwrap
 
 import pytest
 
+import granframe as gf
 from granframe.registry import Registries, get_plugin_manager
+from granframe_cupy import gpu_available
 
 FAKE_SITE = pathlib.Path(__file__).parent / "fake_site"
+
+_GPU = [pytest.mark.gpu, pytest.mark.skipif(not gpu_available(),
+                                            reason="needs CuPy and a CUDA GPU")]
+
+#: Every array backend a backend-parametrised test body runs on: registry name, options,
+#: marks. "cupy-host" is the CuPy backend's code path with NumPy on the host (module =
+#: "numpy"); "cupy" and "cupy-generic" run on a GPU, with the fused kernels and with the
+#: generic xp steps.
+BACKENDS = {
+    "numpy": ("numpy", {}, []),
+    "pyfftw": ("pyfftw", {}, [pytest.mark.skipif(not importlib.util.find_spec("pyfftw"),
+                                                 reason="pyfftw not installed")]),
+    "cupy-host": ("cupy", {"module": "numpy"}, []),
+    "cupy": ("cupy", {}, _GPU),
+    "cupy-generic": ("cupy", {"fused": False}, _GPU),
+}
+
+
+@pytest.fixture(scope="session", params=[pytest.param(key, marks=marks, id=key)
+                                         for key, (_, _, marks) in BACKENDS.items()])
+def backend_table(request):
+    """Run-description table of each array backend of :data:`BACKENDS`."""
+    name, options, _ = BACKENDS[request.param]
+    return {"name": name, **options}
+
+
+@pytest.fixture(scope="session")
+def backend(backend_table):
+    """Each array backend of :data:`BACKENDS`, built (one test body for all of them)."""
+    table = dict(backend_table)
+    return gf.array_backend(table.pop("name"), **table)
 
 
 @pytest.fixture

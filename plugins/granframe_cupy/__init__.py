@@ -7,35 +7,71 @@ only notices when it asks for this backend (a clear error, not an import failure
 The operators are not rewritten for the GPU. They use ``backend.xp`` and the backend's
 transforms, so the same code runs on ``cupy``. The solution stays on the device across
 time steps; the runner moves f to the host only when it writes a snapshot, and the
-moments as scalars.
+moments as scalars. What this backend changes is how the work is cut and fused:
+
+- transforms through ``cupyx.scipy.fft`` (cuFFT plans cached by CuPy), the inverse
+  unnormalised by ``norm="forward"`` instead of a separate scaling pass;
+- large batches (:attr:`CuPyBackend.batch_bytes`), so that one cuFFT call and one kernel
+  launch cover many (rho, ghat) pairs;
+- the two element-wise steps of :class:`granframe.backends.ArrayBackend` as fused CUDA
+  kernels (``kernels.cu``), one pass over memory each.
 
 ``module = "numpy"`` runs this backend's own code path with NumPy on the host: the same
-methods, with ``numpy`` and ``numpy.fft`` in place of ``cupy`` and ``cupy.fft``. That is how
-the backend is checked where there is no GPU (tests/test_cupy_backend.py).
+methods, with ``numpy`` and ``scipy.fft`` (the same call signatures) in place of ``cupy``
+and ``cupyx.scipy.fft``, and the generic element-wise steps. That is how the backend is
+checked where there is no GPU (tests/test_cupy_backend.py); the CUDA source of the fused
+kernels is checked on the host by tests/test_cupy_kernels.py.
 """
 
 from __future__ import annotations
 
+import functools
 import importlib
+import importlib.resources
 
 import attrs
 import numpy
 
 from granframe import hookimpl
 from granframe import validators as check
-from granframe.backends import ArrayBackend
+from granframe.backends import ArrayBackend, RealFFT
 
-MODULES = ("cupy", "numpy")
+#: Array namespace and its SciPy-style transforms, per ``module``.
+MODULES = {"cupy": ("cupy", "cupyx.scipy.fft"), "numpy": ("numpy", "scipy.fft")}
+
+#: Threads per block of the fused kernels, and the most blocks a launch uses (the kernels
+#: loop over the rest: 8192 blocks of 256 fill an H100's 132 multiprocessors many times).
+THREADS, MAX_BLOCKS = 256, 8192
 
 
 def _import(module: str):
     if module not in MODULES:
         check.reject("CuPyBackend", "module", module, f"must be one of {', '.join(MODULES)}")
     try:
-        return importlib.import_module(module)
+        return tuple(importlib.import_module(name) for name in MODULES[module])
     except ImportError as exc:
         raise ValueError("array backend 'cupy' needs the cupy package and a CUDA GPU: "
                          "pip install 'granframe[gpu]'") from exc
+
+
+def kernel_source() -> str:
+    """CUDA source of the fused kernels (``kernels.cu`` beside this module)."""
+    return importlib.resources.files(__name__).joinpath("kernels.cu").read_text()
+
+
+#: CUDA name of each complex dtype in the kernels' templates.
+_CUDA_TYPES = {"complex64": "complex<float>", "complex128": "complex<double>"}
+_KERNELS = ("separable_product", "lowrank_accumulate")
+
+
+@functools.cache
+def _module(device: int):
+    """The fused kernels compiled for ``device`` (by CuPy's NVRTC, cached on disk by CuPy)."""
+    import cupy
+
+    names = [f"{kernel}<{t}>" for kernel in _KERNELS for t in _CUDA_TYPES.values()]
+    with cupy.cuda.Device(device):
+        return cupy.RawModule(code=kernel_source(), name_expressions=names)
 
 
 @attrs.frozen
@@ -51,14 +87,22 @@ class CuPyBackend(ArrayBackend):
     module : str
         ``cupy``, or ``numpy`` to run the same code path on the host (for checks
         without a GPU).
+    fused : bool
+        Use the fused CUDA kernels for the element-wise steps (on the GPU); False runs
+        the generic ``xp`` steps, to compare against them.
     """
 
     name = "cupy"
+    #: 512 MiB of spectra per batch: 3D N = 64 takes 15 rho values (240 pairs) per batch,
+    #: N = 128 one rho (16 pairs); the operator's memory_budget still caps it.
+    batch_bytes = 2 ** 29
     device: int = attrs.field(default=0, converter=check.to_int,
                               validator=check.integer(lower=0))
     memory_limit: int | None = attrs.field(default=None, converter=check.to_int)
     module: str = attrs.field(default="cupy")
+    fused: bool = attrs.field(default=True, validator=check.boolean)
     xp = attrs.field(init=False, repr=False, eq=False)
+    fft = attrs.field(init=False, repr=False, eq=False)
 
     @memory_limit.validator
     def _check_limit(self, attribute, value):
@@ -66,7 +110,7 @@ class CuPyBackend(ArrayBackend):
             check.integer(lower=1)(self, attribute, value)
 
     def __attrs_post_init__(self):
-        xp = _import(self.module)
+        xp, fft = _import(self.module)
         if self.module == "cupy":
             try:
                 count = xp.cuda.runtime.getDeviceCount()
@@ -79,6 +123,7 @@ class CuPyBackend(ArrayBackend):
             if self.memory_limit is not None:
                 xp.get_default_memory_pool().set_limit(size=self.memory_limit)
         object.__setattr__(self, "xp", xp)
+        object.__setattr__(self, "fft", fft)
 
     @property
     def on_device(self) -> bool:
@@ -108,16 +153,78 @@ class CuPyBackend(ArrayBackend):
         return int(self.xp.get_default_memory_pool().total_bytes()) if self.on_device else None
 
     def fftn(self, a, axes=None):
-        return self.xp.fft.fftn(a, axes=axes)
+        return self.fft.fftn(a, axes=axes)
 
     def ifftn(self, a, axes=None):
-        return self.xp.fft.ifftn(a, axes=axes)
+        return self.fft.ifftn(a, axes=axes)
 
     def rfftn(self, a, axes=None):
-        return self.xp.fft.rfftn(a, axes=axes)
+        return self.fft.rfftn(a, axes=axes)
 
     def irfftn(self, a, s, axes=None):
-        return self.xp.fft.irfftn(a, s=s, axes=axes)
+        return self.fft.irfftn(a, s=s, axes=axes)
+
+    def real_fft(self, shape, axes, threads: int = 1, precision: str = "float64") -> RealFFT:
+        return _CuFFTRealFFT(self, tuple(shape), tuple(axes), precision=precision)
+
+    @property
+    def _uses_kernels(self) -> bool:
+        return self.on_device and self.fused
+
+    def _launch(self, kernel: str, out, *arguments):
+        """Run a fused kernel of ``kernels.cu`` on ``out``'s elements (grid-stride loop)."""
+        function = _module(self.device).get_function(f"{kernel}<{_CUDA_TYPES[out.dtype.name]}>")
+        blocks = max(1, min(MAX_BLOCKS, -(-out.size // THREADS)))
+        function((blocks,), (THREADS,), (out,) + tuple(
+            a if hasattr(a, "dtype") else numpy.int64(a) for a in arguments))
+
+    def _operands(self, out, *arrays):
+        """``arrays`` C-contiguous, refused unless of ``out``'s complex dtype."""
+        if out.dtype.name not in _CUDA_TYPES or not out.flags.c_contiguous:
+            check.reject("CuPyBackend", "out", f"{out.dtype} array",
+                         "must be a C-contiguous complex64 or complex128 array", error=TypeError)
+        for a in arrays:
+            if a.dtype != out.dtype:
+                check.reject("CuPyBackend", "operand dtype", str(a.dtype),
+                             f"must equal the output's {out.dtype}", error=TypeError)
+        return [self.xp.ascontiguousarray(a) for a in arrays]
+
+    def separable_product(self, out, spectrum, head, tail):
+        """:meth:`ArrayBackend.separable_product`, one fused kernel on the GPU."""
+        if not self._uses_kernels:
+            return super().separable_product(out, spectrum, head, tail)
+        spectrum, head, tail = self._operands(out, spectrum, head, tail)
+        self._launch("separable_product", out, spectrum, head, tail, *out.shape)
+        return out
+
+    def lowrank_accumulate(self, acc, heads, tails, values):
+        """:meth:`ArrayBackend.lowrank_accumulate`, one fused kernel on the GPU (the
+        weights formed on the fly, never stored)."""
+        if not self._uses_kernels:
+            return super().lowrank_accumulate(acc, heads, tails, values)
+        heads, tails, values = self._operands(acc, heads, tails, values)
+        groups, rows, cols = acc.shape
+        batch, _, rank = heads.shape
+        self._launch("lowrank_accumulate", acc, heads, tails, values, groups, batch // groups,
+                     rows, cols, rank)
+        return acc
+
+
+class _CuFFTRealFFT(RealFFT):
+    """Real transforms through the backend's SciPy-style module (cuFFT on the GPU): the
+    input may be destroyed (``overwrite_x``), and the inverse is unnormalised by
+    ``norm="forward"`` rather than by a scaling pass."""
+
+    def __init__(self, backend, shape, axes, precision):
+        super().__init__(backend, shape, axes, precision=precision)
+        self.fft = backend.fft
+
+    def forward(self):
+        return self.fft.rfftn(self.real, axes=self.axes, overwrite_x=True)
+
+    def inverse(self):
+        return self.fft.irfftn(self.spectrum, s=self._sizes, axes=self.axes, norm="forward",
+                               overwrite_x=True)
 
 
 def gpu_available() -> bool:
