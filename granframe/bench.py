@@ -49,8 +49,9 @@ def median_time(function, repeats: int, backend) -> float:
 
 def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int,
             backend: str, threads: int, repeats: int, method: str = "fast_spectral",
-            precision: str = "float64") -> dict:
-    """Build and time one operator in this process; returns a JSON-ready record."""
+            precision: str = "float64", options: dict | None = None) -> dict:
+    """Build and time one operator in this process; returns a JSON-ready record.
+    ``options`` are further parameters of the array backend (e.g. ``{"fused": False}``)."""
     import granframe as gf
     from granframe.quadratures import CircleTrapezoid, SphereProduct
 
@@ -58,7 +59,8 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
     grid = gf.VelocityGrid(dimension, n_modes, 4.0)
     factory = gf.default_registries().get("array_backends", backend).factory
     takes_threads = "threads" in inspect.signature(factory).parameters
-    array_backend = gf.array_backend(backend, **({"threads": threads} if takes_threads else {}))
+    array_backend = gf.array_backend(backend, **({"threads": threads} if takes_threads else {}),
+                                     **(options or {}))
     if dimension == 2:
         sphere = CircleTrapezoid(sphere_points)
     else:
@@ -95,7 +97,7 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
     return {
         "dimension": dimension, "n_modes": n_modes, "radial_points": radial_points,
         "sphere_points": sphere_points, "method": method, "backend": backend, "threads": threads,
-        "precision": precision,
+        "precision": precision, "backend_options": options or {},
         "transform_pairs": operator.transform_pairs, "batch": batch, "precompute_s": precompute,
         "evaluation_s": evaluation, "repeats": repeats, "fft_batch_s": single, "floor_s": floor,
         "time_over_floor": evaluation / floor, "peak_rss_gib": peak / 2 ** 20,
@@ -105,14 +107,15 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
 
 
 def run(configs, backend: str, threads: int, repeats: int,
-        precision: str = "float64") -> list[dict]:
-    """Measure each configuration in its own subprocess."""
+        precision: str = "float64", options: dict | None = None) -> list[dict]:
+    """Measure each configuration in its own subprocess (``options``: see :func:`measure`)."""
     records = []
     for dimension, n_modes, radial, sphere in configs:
         command = [sys.executable, "-c",
                    "import json, sys; from granframe.bench import measure; "
                    f"print(json.dumps(measure({dimension}, {n_modes}, {radial}, {sphere}, "
-                   f"{backend!r}, {threads}, {repeats}, precision={precision!r})))"]
+                   f"{backend!r}, {threads}, {repeats}, precision={precision!r}, "
+                   f"options={options!r})))"]
         done = subprocess.run(command, capture_output=True, text=True)
         if done.returncode != 0:
             raise ValueError(f"bench: configuration d={dimension} N={n_modes} failed:\n"

@@ -4,6 +4,7 @@ without its fused kernels) equals the NumPy backend, one body per check. The GPU
 marked ``gpu`` and skip cleanly without one."""
 
 import importlib.util
+import json
 
 import numpy
 import pytest
@@ -105,6 +106,21 @@ def test_bench_times_with_cuda_events_and_reports_device_memory():
 
     record = measure(3, 16, 8, 32, "cupy", 1, 5)
     assert record["evaluation_s"] > 0 and record["device_memory_gib"] > 0
+
+
+def test_validation_benchmark_steps_on_the_host(tmp_path):
+    """The validation script's timing and report, on the host code path (small grids)."""
+    from granframe_cupy import validate
+
+    text = validate.benchmark(tmp_path, "host", 2, configs=[(3, 8, 4, 8), (3, 12, 4, 8)],
+                              options={"module": "numpy"})
+    records = json.loads((tmp_path / "bench.json").read_text())["records"]
+    assert [(r["n_modes"], r["precision"], r["backend_options"]) for r in records] == [
+        (n, precision, {**variant, "module": "numpy"}) for _, precision, variant in
+        validate.VARIANTS for n in (8, 12)]
+    assert all(r["evaluation_s"] > 0 and r["floor_s"] > 0 for r in records)
+    assert (tmp_path / "bench.md").read_text() == text
+    assert "### float64, generic steps" in text and "3D N = 12 ran." in text
 
 
 @pytest.mark.skipif(importlib.util.find_spec("cupy") is not None, reason="CuPy is installed")

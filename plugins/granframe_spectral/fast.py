@@ -45,7 +45,8 @@ class FastSpectral(CollisionOperator):
         Rule for the sigma-integral when b(cos theta) is not constant
         (ignored for isotropic kernels, whose sigma-integral is exact).
     batch : int or None
-        Pairs (rho, ghat) transformed together; ``None`` chooses from the grid size.
+        Pairs (rho, ghat) transformed together; ``None`` chooses from the grid size and
+        the backend's ``batch_bytes`` (a few MiB on a CPU, hundreds on a GPU).
     memory_budget : int
         Bytes the operator's work buffers may use; precomputation refuses to
         exceed it.
