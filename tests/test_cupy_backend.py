@@ -136,3 +136,5 @@ def test_bad_parameters_are_refused_by_name():
         CuPyBackend(device=-1, module="numpy")
     with pytest.raises((ValueError, TypeError), match="'memory_limit'"):
         CuPyBackend(memory_limit=0, module="numpy")
+    with pytest.raises((ValueError, TypeError), match="'fused' = 'yes'"):
+        CuPyBackend(fused="yes", module="numpy")

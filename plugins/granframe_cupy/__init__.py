@@ -20,7 +20,7 @@ moments as scalars. What this backend changes is how the work is cut and fused:
 methods, with ``numpy`` and ``scipy.fft`` (the same call signatures) in place of ``cupy``
 and ``cupyx.scipy.fft``, and the generic element-wise steps. That is how the backend is
 checked where there is no GPU (tests/test_cupy_backend.py); the CUDA source of the fused
-kernels is checked on the host by tests/test_cupy_kernels.py.
+kernels is checked on the host by tests/test_backend_kernels.py.
 """
 
 from __future__ import annotations
