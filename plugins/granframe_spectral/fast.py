@@ -376,12 +376,12 @@ class _Pipeline:
                 backend.separable_product(self.fft.spectrum[:count].reshape(count, n0, rest),
                                           spec2, shift_head[:, pairs].reshape(count, n0),
                                           shift_tail[:, pairs].reshape(count, rest))
-                s = self.fft.inverse()
-                s[:count] *= f_n
+                # s f_N written straight into the forward transform's input: one pass, in
+                # place where the inverse returned that buffer (FFTW), else no extra copy
+                real = self.fft.real
+                xp.multiply(self.fft.inverse()[:count], f_n, out=real[:count])
                 if count < self.batch:
-                    s[count:] = 0.0
-                if s is not self.fft.real:
-                    self.fft.real[...] = s
+                    real[count:] = 0.0
                 p_hat = self.fft.forward()[:count].reshape(count, n0, rest)
                 backend.lowrank_accumulate(acc, angular_head[:, pairs].reshape(count, n0, -1),
                                            angular_tail[:, pairs].reshape(count, -1, rest), p_hat)
