@@ -60,9 +60,24 @@ def test_float32_stays_within_its_floor(backend):
     assert numpy.max(numpy.abs(got - expected)) <= 2e-5 * numpy.max(numpy.abs(expected))
 
 
-def test_a_run_on_the_backend_equals_the_numpy_run(backend_table, tmp_path):
+#: Runs that reach every part of a right-hand side and integrator on the backend: the heat
+#: bath (explicit and as an integrating factor), the BGK penalisation, the rescaled
+#: formulation's spectral drift, and an adaptive step controller.
+SCENES = {
+    "rk4-heated": {"heat_bath": 0.1, "time_step": 0.05},
+    "if_rk4-heated": {"heat_bath": 0.1, "time_step": 0.05, "integrator": "if_rk4"},
+    "penalised": {"heat_bath": 0.1, "time_step": 0.05, "knudsen": 0.2,
+                  "integrator": "penalised_ars222"},
+    "rescaled": {"time_step": 0.05, "rescaled": True, "integrator": "ssp_rk3"},
+    "adaptive": {"heat_bath": 0.1, "time_step": 0.05, "tolerance": 1e-6,
+                 "integrator": "dopri54"},
+}
+
+
+@pytest.mark.parametrize("scene", SCENES)
+def test_a_run_on_the_backend_equals_the_numpy_run(backend_table, scene, tmp_path):
     """The runner keeps f on the backend between steps and writes host arrays."""
-    table = {"final_time": 0.5, "time_step": 0.05, "heat_bath": 0.1,
+    table = {"final_time": 0.5, **SCENES[scene],
              "grid": {"dimension": 2, "n_modes": 24, "support_radius": 4.0},
              "kernel": "hard_spheres", "restitution": {"name": "constant", "value": 0.7},
              "initial": {"name": "maxwellian", "temperature": 1.0},
