@@ -27,19 +27,19 @@ def complex_normal(rng, dtype, *shape):
     return (rng.standard_normal(shape) + 1j * rng.standard_normal(shape)).astype(dtype)
 
 
-def check_separable_product(implementation, to_device, to_host, dtype, batch, rows, cols):
+def check_separable_product(backend, dtype, batch, rows, cols):
     rng = numpy.random.default_rng(batch * rows + cols)
     spectrum = complex_normal(rng, dtype, rows, cols)
     head, tail = complex_normal(rng, dtype, batch, rows), complex_normal(rng, dtype, batch, cols)
-    out = to_device(numpy.full((batch, rows, cols), numpy.nan, dtype=dtype))
-    result = implementation.separable_product(out, *map(to_device, (spectrum, head, tail)))
+    out = backend.asarray(numpy.full((batch, rows, cols), numpy.nan, dtype=dtype))
+    result = backend.separable_product(out, *map(backend.asarray, (spectrum, head, tail)))
     expected = numpy.einsum("ij,bi,bj->bij", spectrum.astype(complex), head, tail)
     assert result is out
-    numpy.testing.assert_allclose(to_host(out), expected, rtol=0,
+    numpy.testing.assert_allclose(backend.to_numpy(out), expected, rtol=0,
                                   atol=DTYPES[dtype] * numpy.abs(expected).max())
 
 
-def check_lowrank_accumulate(implementation, to_device, to_host, dtype, rank, groups, per_group):
+def check_lowrank_accumulate(backend, dtype, rank, groups, per_group):
     rng = numpy.random.default_rng(100 * rank + 10 * groups + per_group)
     batch, rows, cols = groups * per_group, 9, 17
     heads = complex_normal(rng, dtype, batch, rows, rank)
@@ -48,24 +48,23 @@ def check_lowrank_accumulate(implementation, to_device, to_host, dtype, rank, gr
     start = complex_normal(rng, dtype, groups, rows, cols)
     expected = start + numpy.einsum("bit,btj,bij->bij", heads.astype(complex), tails,
                                     values).reshape(groups, per_group, rows, cols).sum(axis=1)
-    acc = to_device(start.copy())
-    result = implementation.lowrank_accumulate(acc, *map(to_device, (heads, tails, values)))
+    acc = backend.asarray(start.copy())
+    result = backend.lowrank_accumulate(acc, *map(backend.asarray, (heads, tails, values)))
     assert result is acc
-    numpy.testing.assert_allclose(to_host(acc), expected, rtol=0,
+    numpy.testing.assert_allclose(backend.to_numpy(acc), expected, rtol=0,
                                   atol=DTYPES[dtype] * numpy.abs(expected).max())
 
 
 @pytest.mark.parametrize("dtype", DTYPES)
 @pytest.mark.parametrize("batch,rows,cols", SEPARABLE_SHAPES)
 def test_separable_product(backend, dtype, batch, rows, cols):
-    check_separable_product(backend, backend.asarray, backend.to_numpy, dtype, batch, rows, cols)
+    check_separable_product(backend, dtype, batch, rows, cols)
 
 
 @pytest.mark.parametrize("dtype", DTYPES)
 @pytest.mark.parametrize("rank,groups,per_group", LOWRANK_CASES)
 def test_lowrank_accumulate(backend, dtype, rank, groups, per_group):
-    check_lowrank_accumulate(backend, backend.asarray, backend.to_numpy, dtype, rank, groups,
-                             per_group)
+    check_lowrank_accumulate(backend, dtype, rank, groups, per_group)
 
 
 # -- the CUDA source of the fused kernels, on the host -----------------------------------------
@@ -140,15 +139,13 @@ def host_launched(host_kernels, monkeypatch):
 @pytest.mark.parametrize("dtype", DTYPES)
 @pytest.mark.parametrize("batch,rows,cols", SEPARABLE_SHAPES)
 def test_cuda_separable_product_on_the_host(host_launched, dtype, batch, rows, cols):
-    check_separable_product(host_launched, numpy.asarray, numpy.asarray, dtype, batch, rows,
-                            cols)
+    check_separable_product(host_launched, dtype, batch, rows, cols)
 
 
 @pytest.mark.parametrize("dtype", DTYPES)
 @pytest.mark.parametrize("rank,groups,per_group", LOWRANK_CASES)
 def test_cuda_lowrank_accumulate_on_the_host(host_launched, dtype, rank, groups, per_group):
-    check_lowrank_accumulate(host_launched, numpy.asarray, numpy.asarray, dtype, rank, groups,
-                             per_group)
+    check_lowrank_accumulate(host_launched, dtype, rank, groups, per_group)
 
 
 @pytest.mark.parametrize("kernel", ["hard_spheres", gf.VariableHardSpheres(
