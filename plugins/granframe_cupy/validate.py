@@ -79,6 +79,11 @@ def main(argv=None) -> int:
     if not gpu_available():
         print("granframe_cupy.validate: no CuPy or no CUDA device here", file=sys.stderr)
         return 2
+    missing = [name for name in TEST_FILES if not pathlib.Path(name).is_file()]
+    if missing:
+        print(f"granframe_cupy.validate: run it from the repository root ({missing[0]} "
+              "not found here)", file=sys.stderr)
+        return 2
     import cupy
 
     args.out.mkdir(parents=True, exist_ok=True)
