@@ -34,3 +34,10 @@ def heated_maxwell_error(operator, restitution: float, heat_bath: float = 0.1,
                                            heat_bath, rho0)
         worst = max(worst, abs(grid.temperature(f, xp) / exact - 1))
     return worst, abs(grid.mass(f, xp) / rho0 - 1)
+
+
+def evaluate_on_host(operator, f):
+    """Q(f) for a host (NumPy) f, evaluated on the operator's array backend and returned as a
+    host array: the way one test body checks an operator on every backend."""
+    backend = operator.backend
+    return backend.to_numpy(operator(backend.asarray(f)))

@@ -7,7 +7,7 @@ import granframe as gf
 from granframe.bench import preferred_backend
 from granframe.exact import bkw, maxwell_energy_dissipation
 from granframe.heatbath import HeatBath
-from granframe.testing import heated_maxwell_error
+from granframe.testing import evaluate_on_host, heated_maxwell_error
 
 def build(name, grid, kernel="maxwell", law=("constant", {"value": 1.0}), backend="numpy",
           **options):
@@ -17,11 +17,6 @@ def build(name, grid, kernel="maxwell", law=("constant", {"value": 1.0}), backen
     law = gf.restitution_law(law[0], **law[1]) if isinstance(law, tuple) else law
     backend = gf.array_backend(backend) if isinstance(backend, str) else backend
     return gf.collision_operator(name, grid, kernel, law, backend=backend, **options)
-
-
-def evaluate(op, f):
-    """Q(f) of a host f, moved to and from the operator's backend."""
-    return op.backend.to_numpy(op(op.backend.asarray(f)))
 
 
 def relative_mass(grid, q):
@@ -44,7 +39,7 @@ def test_mass_vanishes_to_round_off(backend, method, dimension, n_modes, law):
     op = build(method, grid, kernel, law, backend, **({"radial_points": 12} if method ==
                                                        "fast_spectral" else {}))
     f = grid.maxwellian(velocity=[0.3, -0.2, 0.1][:dimension], temperature=0.9)
-    q = evaluate(op, f)
+    q = evaluate_on_host(op, f)
     assert q.shape == grid.shape and q.dtype == numpy.float64
     assert relative_mass(grid, q) <= 1e-13
 
@@ -214,7 +209,8 @@ def test_backends_agree(backend, kernel):
     law = ("constant", {"value": 0.7})
     reference = build("fast_spectral", grid, kernel, law, batch=1)(f)
     for batch in (3, None):
-        q = evaluate(build("fast_spectral", grid, kernel, law, backend, batch=batch), f)
+        q = evaluate_on_host(build("fast_spectral", grid, kernel, law, backend, batch=batch),
+                             f)
         numpy.testing.assert_allclose(q, reference, rtol=0,
                                       atol=1e-13 * numpy.abs(reference).max())
 
@@ -226,7 +222,8 @@ def test_default_batches_follow_the_backend_and_carry_no_padding(batch_bytes, n_
                                                                  radial_points, threads):
     """The default batch aims at the backend's batch_bytes and never transforms padding:
     whole rho values split a pipeline's range into equal blocks, or one rho's pairs are
-    split into equal batches with less than one pair of padding each; a batch never exceeds a pipeline's pairs."""
+    split into equal batches with less than one pair of padding each; a batch never exceeds
+    a pipeline's pairs."""
 
     class Sized(gf.backends.NumpyBackend):
         pass
@@ -314,8 +311,9 @@ def test_float32_operator_matches_float64_to_single_precision(backend, dimension
     f = grid.maxwellian(velocity=[0.3, -0.2, 0.1][:dimension], temperature=0.8)
     f += grid.maxwellian(density=0.5, velocity=[-1.0, 0.5, 0.0][:dimension], temperature=0.4)
     law = ("constant", {"value": 0.6})
-    q64 = evaluate(build("fast_spectral", grid, kernel, law, backend), f)
-    q32 = evaluate(build("fast_spectral", grid, kernel, law, backend, precision="float32"), f)
+    q64 = evaluate_on_host(build("fast_spectral", grid, kernel, law, backend), f)
+    q32 = evaluate_on_host(build("fast_spectral", grid, kernel, law, backend,
+                                 precision="float32"), f)
     assert q32.dtype == numpy.float32
     assert numpy.abs(q32 - q64).max() <= 2e-5 * numpy.abs(q64).max()
     rho = grid.mass(f)

@@ -171,7 +171,7 @@ class FastSpectral(CollisionOperator):
         fixed = complex_ * numpy.prod(half_shape) * (len(rho) + 4 + 2 * pipelines)
         if batch is None:
             batch = _default_batch(complex_ * int(numpy.prod(half_shape)), self.n_pairs,
-                                   -(-len(rho) // pipelines), backend.batch_bytes)
+                                   _ceil_div(len(rho), pipelines), backend.batch_bytes)
         if fixed + pipelines * batch * per_pair > memory_budget:
             batch = int((memory_budget - fixed) // (pipelines * per_pair))
             if batch < 1:
@@ -255,8 +255,13 @@ def _default_batch(spectrum_bytes: int, n_pairs: int, rho_per_pipeline: int,
     batch = max(1, batch_bytes // spectrum_bytes)
     if batch >= n_pairs:
         rhos = min(batch // n_pairs, rho_per_pipeline)
-        return -(-rho_per_pipeline // -(-rho_per_pipeline // rhos)) * n_pairs
-    return -(-n_pairs // -(-n_pairs // batch))
+        return _ceil_div(rho_per_pipeline, _ceil_div(rho_per_pipeline, rhos)) * n_pairs
+    return _ceil_div(n_pairs, _ceil_div(n_pairs, batch))
+
+
+def _ceil_div(a: int, b: int) -> int:
+    """ceil(a / b) for positive integers."""
+    return -(-a // b)
 
 
 def _separable_sum(coef, factors):
