@@ -8,7 +8,8 @@ plugins [--json]
 bench [--json] [--backend NAME] [--threads T] [--repeats R] [--precision P]
       [--config D:N[:N_RHO:M]]
     Time the fast operator against the FFT floor (docs/benchmarks.md).
-run SOURCE --out STORE [--resume] [--overwrite] [--quick] [--only NAMES] [--progress]
+run SOURCE --out STORE [--resume [--rollback]] [--overwrite] [--quick] [--only NAMES]
+    [--progress]
     Run a description (a TOML file or a study module under studies/) into a zarr store;
     a study with several runs writes STORE/<name>.zarr each, then its report.
     Exit status 3 when a health check stopped the run, 130 when interrupted.
@@ -16,6 +17,9 @@ plot STORE --out DIR
     Draw the figures of a run (PNG).
 info STORE
     Say what is in a store.
+check STORE
+    Read every committed chunk of a run (or sweep) store and list the missing or damaged
+    ones; exit status 3 when there is any.
 sweep SWEEP.toml --out STORE [--scheduler ADDRESS] [--workers N] [--progress]
     Run every point of a parameter sweep on Dask into one zarr store (docs/scaling.md);
     running it again skips ended runs and resumes cut ones. Exit status 3 when a run failed.
@@ -71,9 +75,15 @@ def _bench(args) -> int:
 
 
 def _run(args) -> int:
+    from granframe import storage
     from granframe.runner import load_study
-    from granframe.storage import RunStore
 
+    if args.resume and args.overwrite:
+        raise ValueError("run: --resume and --overwrite exclude each other: --resume "
+                         "continues the store, --overwrite replaces it")
+    if args.rollback and not args.resume:
+        raise ValueError("run: --rollback applies to --resume (it continues from the last "
+                         "intact commit of a damaged store)")
     study = load_study(args.source, quick=args.quick)
     out = pathlib.Path(args.out)
     if list(study.runs) == [""]:
@@ -85,6 +95,10 @@ def _run(args) -> int:
     if unknown:
         raise ValueError(f"run: parameter 'only' = {args.only!r} is invalid; the study's runs "
                          f"are {', '.join(study.runs)}")
+    if storage.store_kind(out) in ("run", "sweep", "file"):
+        raise ValueError(f"run: parameter 'out' = '{out}' is invalid; a study with several "
+                         f"runs writes a folder of stores (OUT/<name>.zarr), and '{out}' is a "
+                         f"{storage.store_kind(out).replace('run', 'run store').replace('sweep', 'sweep store')}")
     out.mkdir(parents=True, exist_ok=True)
     status = 0
     for name in names:
@@ -98,13 +112,19 @@ def _run(args) -> int:
     ended = {}
     for name in study.runs:
         store = out / f"{name}.zarr"
-        if RunStore.exists(store) and RunStore.open(store).progress.get("status") in (
-                "finished", "failed"):
+        if storage.store_kind(store) == "run" and storage.RunStore.open(store).progress.get(
+                "status") in ("finished", "failed"):
             ended[name] = store
     if study.report is not None and len(ended) == len(study.runs):
         report = out / "report"
-        summary = study.report(ended, report)
-        (report / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+        try:
+            summary = study.report(ended, report)
+            text = json.dumps(summary, indent=2) + "\n"
+        except Exception as exc:   # the study's own code: say where it failed, keep the runs
+            raise ValueError(f"run: the report of study '{args.source}' failed: "
+                             f"{_where(exc, args.source)}; the runs' stores in '{out}' are "
+                             "kept (fix the report, then run again with --resume)") from None
+        (report / "summary.json").write_text(text)
         print(f"report: {report} (summary.json and figures)")
     elif study.report is not None:
         print(f"report: waiting for {len(study.runs) - len(ended)} of {len(study.runs)} runs "
@@ -112,36 +132,72 @@ def _run(args) -> int:
     return status
 
 
+def _where(exc: BaseException, source) -> str:
+    """``Type: message (at file:line)``, the line being the last one in ``source``."""
+    import traceback
+
+    frames = [frame for frame in traceback.extract_tb(exc.__traceback__)
+              if pathlib.Path(frame.filename).resolve() == pathlib.Path(source).resolve()]
+    at = f" (at {frames[-1].filename}:{frames[-1].lineno})" if frames else ""
+    return f"{type(exc).__name__}: {exc}{at}"
+
+
 def _run_one(description, out, args) -> int:
     from granframe.runner import HealthError, Simulation
     from granframe.storage import RunStore
 
-    if args.resume and RunStore.exists(out):
+    if args.resume and RunStore.exists(out) and not args.rollback:
         # an ended run is reported from its store, without building the operator
-        progress = RunStore.open(out).progress
+        progress = RunStore.open(out, complete=False).progress
         if progress.get("status") == "failed":   # resuming would fail again
             print(f"{out}: stopped earlier by a health check ({progress.get('message')}); "
                   "not resumed", file=sys.stderr)
             return 3
         if progress.get("status") == "finished":
-            RunStore.resume(out, description.to_dict())   # refuses another description
+            RunStore.resume(out, description.to_dict()).close()   # refuses another description
             print(f"{out}: the run is already finished (t = {progress['time']:g}, "
                   f"{progress['step']} steps, {progress.get('wall_seconds', 0.0):.1f} s)")
             return 0
     try:
         result = Simulation(description).run(out, resume=args.resume, overwrite=args.overwrite,
-                                             progress=args.progress)
+                                             progress=args.progress, rollback=args.rollback,
+                                             protect=[args.source])
     except HealthError as exc:
         print(f"granframe: run stopped: {exc}\nThe store '{out}' keeps every snapshot "
               "before it and the moments up to it.", file=sys.stderr)
         return 3
     except KeyboardInterrupt:
-        print(f"\ngranframe: interrupted; the store '{out}' holds every complete snapshot: "
-              "continue with --resume", file=sys.stderr)
+        print("\ngranframe: interrupted; " + _interrupted(out), file=sys.stderr)
         return 130
     print(f"{out}: finished, {result.steps} steps to t = {result.time:g} in "
           f"{result.wall_seconds:.1f} s, {result.snapshots} snapshots")
     return 0
+
+
+def _interrupted(out) -> str:
+    """What a Ctrl-C left at ``out``, in words."""
+    from granframe.storage import RunStore, StoreError
+
+    if not RunStore.exists(out):
+        return f"nothing was written to '{out}'"
+    try:
+        status = RunStore.open(out, complete=False).progress.get("status")
+    except StoreError as exc:
+        return f"the store '{out}' cannot be read: {exc}"
+    if status == "interrupted":
+        return (f"the store '{out}' holds every complete snapshot: continue with "
+                "--resume")
+    return f"the store '{out}' is as it was before this run (status {status})"
+
+
+def _check(args) -> int:
+    from granframe.storage import check
+
+    intact, lines = check(args.store)
+    print("\n".join(lines))
+    print("intact" if intact else "DAMAGED: the chunks above are missing or fail their "
+          "checksum; granframe run --resume --rollback continues from the last intact commit")
+    return 0 if intact else 3
 
 
 def _plot(args) -> int:
@@ -165,8 +221,15 @@ def _sweep(args) -> int:
     path = pathlib.Path(args.sweep)
     if not path.is_file():
         raise ValueError(f"sweep: parameter 'sweep' = '{args.sweep}' is invalid; no such file")
-    result = run_sweep(Sweep.from_toml(path.read_text()), args.out, scheduler=args.scheduler,
-                       workers=args.workers, progress=args.progress)
+    try:
+        result = run_sweep(Sweep.from_toml(path.read_text()), args.out,
+                           scheduler=args.scheduler, workers=args.workers,
+                           progress=args.progress)
+    except KeyboardInterrupt:
+        print(f"\ngranframe: interrupted; the sweep store '{args.out}' keeps every ended run "
+              "and every snapshot of the others: run the same sweep again to continue",
+              file=sys.stderr)
+        return 130
     print(f"{result.store}: {result.finished} finished, {result.failed} failed "
           f"({result.skipped} ended before) in {result.wall_seconds:.1f} s; table: "
           f"xarray.open_zarr('{result.store}', group='table')")
@@ -232,7 +295,11 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--only", metavar="NAMES", help="comma-separated runs of a study to run")
     run.add_argument("--resume", action="store_true",
                      help="continue the run in STORE from its last complete snapshot")
-    run.add_argument("--overwrite", action="store_true", help="replace an existing STORE")
+    run.add_argument("--overwrite", action="store_true",
+                     help="replace an existing granframe store STORE (nothing else)")
+    run.add_argument("--rollback", action="store_true",
+                     help="with --resume: continue a damaged store from its last intact "
+                          "commit")
     run.add_argument("--quick", action="store_true",
                      help="the study's reduced variant (smaller grid or time)")
     run.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
@@ -245,6 +312,10 @@ def build_parser() -> argparse.ArgumentParser:
     info = commands.add_parser("info", help="say what is in a run store")
     info.add_argument("store", metavar="STORE")
     info.set_defaults(handler=_info)
+    check = commands.add_parser("check", help="read every committed chunk of a store and "
+                                "report missing or damaged ones (exit 3 if any)")
+    check.add_argument("store", metavar="STORE")
+    check.set_defaults(handler=_check)
     sweep = commands.add_parser("sweep", help="run a parameter sweep on Dask into one store")
     sweep.add_argument("sweep", metavar="SWEEP.toml",
                        help="a base description ([base]) and axes ([product], [zip])")
@@ -274,6 +345,9 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into e.g. `head`, which stopped reading
         sys.stderr.close()
         return 0
+    except KeyboardInterrupt:   # Ctrl-C outside a run (start-up, a report, a sweep)
+        print("\ngranframe: interrupted", file=sys.stderr)
+        return 130
     except (ValueError, TypeError, OSError) as exc:
         print(f"granframe: error: {exc}", file=sys.stderr)
         return 2

@@ -13,10 +13,12 @@ from __future__ import annotations
 
 import importlib.util
 import math
+import re
 import pathlib
 import platform
 import sys
 import time
+import traceback
 from typing import Callable
 
 import attrs
@@ -28,12 +30,16 @@ from granframe._version import __version__
 from granframe.backends import available_cpus
 from granframe.description import _FAMILIES, RunDescription
 from granframe.equation import HomogeneousBoltzmann
-from granframe.initial import check_fits
+from granframe.initial import check_fits, check_projection
 from granframe.integrators import StepController, StepSizeError
+from granframe.memory import check_run_memory
 from granframe.stability import check_time_step
 from granframe.registry import default_registries
 from granframe.rescaling import RescaledBoltzmann
 from granframe.storage import SCALAR_MOMENTS, RunStore
+from granframe.validators import reject
+
+_RUN_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 
 
 @attrs.frozen
@@ -45,8 +51,17 @@ class Study:
     says which) into the folder ``out`` and returns a JSON-ready summary.
     """
 
-    runs: dict
+    runs: dict = attrs.field()
     report: Callable | None = None
+
+    @runs.validator
+    def _check_names(self, attribute, value):
+        """Each run is written to OUT/<name>.zarr: a name is one plain path component."""
+        for name in value:
+            if name != "" and not (isinstance(name, str) and _RUN_NAME.fullmatch(name)):
+                reject("Study", "runs", name, "must be run names of letters, digits, '.', "
+                       "'_' and '-' that start with a letter or digit (each is written to "
+                       "OUT/<name>.zarr)")
 
 
 def load_study(source, quick: bool = False) -> Study:
@@ -65,16 +80,35 @@ def load_study(source, quick: bool = False) -> Study:
     if path.suffix != ".py":
         raise ValueError(f"run: parameter 'source' = '{source}' is invalid; must be a .toml "
                          "description or a .py study module")
+    def failure(exc, what):
+        """ValueError: the study's own error, with its line in the study file."""
+        if isinstance(exc, SyntaxError):
+            message, line = exc.msg, exc.lineno
+        else:
+            lines = [frame.lineno for frame in traceback.extract_tb(exc.__traceback__)
+                     if pathlib.Path(frame.filename).resolve() == path.resolve()]
+            message, line = str(exc), lines[-1] if lines else None
+        return ValueError(f"run: study '{source}' {what}: {type(exc).__name__}: {message}"
+                          + (f" (line {line})" if line else ""))
+
     spec = importlib.util.spec_from_file_location(f"granframe_study_{path.stem}", path)
     module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    if callable(getattr(module, "runs", None)):
-        runs = module.runs(quick=quick)
-    elif callable(getattr(module, "description", None)):
-        runs = {"": module.description(quick=quick)}
-    else:
-        raise ValueError(f"run: study '{source}' defines neither runs(quick) nor "
-                         "description(quick)")
+    try:
+        spec.loader.exec_module(module)
+    except Exception as exc:   # the study's code: a syntax error, a missing import, ...
+        raise failure(exc, "could not be loaded") from exc
+    try:
+        if callable(getattr(module, "runs", None)):
+            runs = module.runs(quick=quick)
+        elif callable(getattr(module, "description", None)):
+            runs = {"": module.description(quick=quick)}
+        else:
+            raise ValueError(f"run: study '{source}' defines neither runs(quick) nor "
+                             "description(quick)")
+    except (ValueError, TypeError):   # granframe's own messages (an invalid description)
+        raise
+    except Exception as exc:
+        raise failure(exc, "could not make its runs") from exc
     if not isinstance(runs, dict) or not runs or not all(
             isinstance(d, RunDescription) for d in runs.values()):
         raise TypeError(f"run: study '{source}' must give RunDescriptions (runs() returns a "
@@ -182,6 +216,7 @@ class Simulation:
                             "must be a RunDescription")
         self.description = d = description
         self.grid = d.grid
+        check_run_memory(d)   # before anything of the grid's size is allocated
         self.backend = d.build("backend")
         self.operator = d.build("operator", grid=d.grid, kernel=d.build("kernel"),
                                 restitution=d.build("restitution"), backend=self.backend)
@@ -191,6 +226,8 @@ class Simulation:
         check_fits(d.grid, sampled, initial, d.health.edge_tolerance,
                    d.health.initial_mass_tolerance)
         self.f0 = d.grid.project(sampled)
+        check_projection(d.grid, sampled, self.f0, initial, d.health.projection_tolerance,
+                         d.health.projection_kurtosis_tolerance)
         if d.rescaled:
             self.equation = RescaledBoltzmann(self.operator, self.backend.asarray(self.f0),
                                               d.knudsen)
@@ -230,21 +267,27 @@ class Simulation:
 
     # -- running ----------------------------------------------------------------------
     def run(self, out, *, resume: bool = False, overwrite: bool = False,
-            progress: bool | None = None) -> RunResult:
+            progress: bool | None = None, rollback: bool = False, protect=()) -> RunResult:
         """Run to ``final_time`` writing the store ``out`` (see the module notes).
 
-        ``progress`` None shows a progress bar on a terminal only.
+        ``resume`` continues the run in ``out`` (``rollback``: from its last intact
+        commit when the last one is damaged, see :meth:`RunStore.resume`); ``overwrite``
+        replaces a granframe store at ``out`` (never anything else, nor a store holding a
+        path of ``protect``). ``progress`` None shows a progress bar on a terminal only.
+        A Ctrl-C leaves the store with status 'interrupted', ready to resume.
         """
+        if resume and overwrite:
+            raise ValueError("run: --resume and --overwrite exclude each other: --resume "
+                             "continues the store, --overwrite replaces it")
         d, grid, backend = self.description, self.grid, self.backend
         xp = backend.xp
         start_wall = time.perf_counter()
         description = d.to_dict()
-        if resume and RunStore.exists(out) and RunStore.open(out).snapshot_count == 0:
-            overwrite = True   # stopped before its first commit: nothing to resume from
-        if resume and RunStore.exists(out) and not overwrite:
-            store = RunStore.resume(out, description)
+        if resume and RunStore.exists(out):
+            store = RunStore.resume(out, description, rollback=rollback)
             state = store.progress
             if state["status"] == "finished":
+                store.close()
                 return RunResult(str(out), "already finished", state["step"], state["time"],
                                  store.snapshot_count, state.get("wall_seconds", 0.0))
             f_host, t = store.last_snapshot()
@@ -255,18 +298,23 @@ class Simulation:
         else:
             rescaling = getattr(self.equation, "rescaling", None)
             store = RunStore.create(out, description, d.to_toml(), grid, self.provenance(),
-                                    overwrite=overwrite,
+                                    overwrite=overwrite, protect=protect,
                                     rescaling=None if rescaling is None else rescaling.to_dict())
             f, t, step = backend.asarray(self.f0), 0.0, 0
-            record = moments(grid, f, xp)
-            # adaptive schemes without a first trial step start from 1% of the run
-            mass0, dt_next = record["mass"], d.time_step or d.final_time / 100
-            resumes, wall_before = [], 0.0
-            first = _Records()
-            first.add(0, 0.0, 0.0, record)
-            store.commit([(0.0, self.f0)], first.columns,
-                         {"status": "running", "step": 0, "time": 0.0, "mass0": mass0,
-                          "dt_next": dt_next, "resumes": resumes})
+            try:
+                record = moments(grid, f, xp)
+                # adaptive schemes without a first trial step start from 1% of the run
+                mass0, dt_next = record["mass"], d.time_step or d.final_time / 100
+                resumes, wall_before = [], 0.0
+                first = _Records()
+                first.add(0, 0.0, 0.0, record)
+                store.commit([(0.0, self.f0)], first.columns,
+                             {"status": "running", "step": 0, "time": 0.0, "mass0": mass0,
+                              "dt_next": dt_next, "resumes": resumes})
+                store.publish()
+            except BaseException:
+                store.discard()      # never in place: the path holds what it held before
+                raise
 
         def state(status, **extra):
             """The progress entry of a commit made now."""
@@ -309,8 +357,13 @@ class Simulation:
                 done = target == targets[-1]
                 store.commit([(t, backend.to_numpy(f))], records.take(),
                              state("finished" if done else "running"))
+        except KeyboardInterrupt:
+            # the last commit stays what a resume continues from; only its status changes
+            store.mark("interrupted")
+            raise
         finally:
             bar.close()
+            store.close()
         return RunResult(str(out), "finished", step, t, store.snapshot_count,
                          store.progress["wall_seconds"])
 

@@ -8,6 +8,8 @@ array                  dimensions                   contents
 =====================  ===========================  ===================================
 ``f``                  time, v1, ..., vd            snapshots of f, one per chunk
 ``time``               time                         snapshot times
+``snapshot_step``      time                         step index of the snapshot
+``snapshot_dt_next``   time                         step size proposed after it
 ``v1`` ... ``vd``      vi                           grid points
 ``step_time``          step_time                    time after each step (0 first)
 ``step``, ``dt``       step_time                    step index, step size taken
@@ -17,20 +19,52 @@ moments                step_time                    mass, temperature, kinetic_e
 ``momentum``           step_time, axis              int v f dv
 =====================  ===========================  ===================================
 
-Crash safety: zarr (>= 3.1.3) writes every chunk and metadata document to a
-temporary file and renames it into place, so a file is either old or new.
-Records are appended in *commits*: data first, then ``progress`` in the
-root attributes, then the consolidated metadata. ``progress`` names the
-last complete snapshot and the moment records that go with it; anything
-beyond it (a commit cut short by SIGKILL) is truncated on resume.
+What is stored can be trusted:
+
+- **Checksums.** Every chunk ends in a CRC-32C (zarr's ``crc32c`` codec), so a
+  damaged chunk raises on read, in granframe and in xarray alike. Every chunk is
+  written, even one equal to the fill value, so a missing chunk is damage, never a
+  legitimate gap; floating-point arrays are filled with NaN and integer ones with -1,
+  so a reader that does not check (``xarray.open_zarr``) sees a missing chunk as NaN
+  or -1, never as a zero. :meth:`RunStore.verify` reads every committed chunk
+  (``granframe check``).
+- **Commits.** Records are appended in commits: data first, then ``progress`` in the
+  root attributes, then the consolidated metadata. zarr (>= 3.1.3) writes every chunk
+  and metadata document to a temporary file and renames it into place, so a file is
+  either old or new; ``progress`` names the last complete snapshot and the moment
+  records that go with it, and anything beyond it (a commit cut short) is dropped on
+  resume. There is one moment record per step, step 0 included, so the records of
+  snapshot k are ``snapshot_step[k] + 1``.
+- **Atomic creation and replacement.** A store is built beside its path, as
+  ``.NAME.granframe-new-TOKEN``, up to its first commit, then renamed into place; an
+  existing store being replaced is first renamed to ``.NAME.granframe-old-TOKEN`` and
+  deleted only after the new one is in place. A kill at any moment leaves the old
+  store, or the new one with its first commit; the next writer finishes a swap that
+  was cut between the two renames (:func:`recover`).
+- **One writer.** A writer holds an exclusive lock (``flock``) on ``.NAME.granframe.lock``
+  beside the store, which names the holder (pid, host, since). The kernel releases it
+  when the holder dies, however it dies; a second writer is refused with the holder's
+  name (:class:`WriterLock`).
+- **Only granframe's own data is replaced.** ``overwrite`` replaces a granframe run or
+  sweep store (recognised by its metadata) or an empty directory, nothing else
+  (:func:`check_replaceable`).
 """
 
 from __future__ import annotations
 
 import datetime
+import errno
+import fcntl
+import itertools
+import json
+import math
 import os
 import pathlib
+import platform
 import shutil
+import sys
+import time
+import uuid
 import warnings
 
 import numpy
@@ -38,11 +72,17 @@ import zarr
 
 from granframe._version import __version__
 
-SCHEMA = "granframe.run/1"
+SCHEMA = "granframe.run/2"
+SWEEP_SCHEMA_KEY = "granframe_sweep"
 SCALAR_MOMENTS = ("mass", "temperature", "kinetic_energy", "min_f", "negative_mass_fraction",
                   "kurtosis", "sonine_a2")
+#: arrays along the snapshot dimension ``time`` and along ``step_time``
+SNAPSHOT_ARRAYS = ("f", "time", "snapshot_step", "snapshot_dt_next")
+RECORD_ARRAYS = ("step_time", "step", "dt", "momentum") + SCALAR_MOMENTS
 _LONG_NAMES = {
     "f": "distribution function f(t, v)", "time": "time of the snapshot",
+    "snapshot_step": "step index of the snapshot",
+    "snapshot_dt_next": "step size proposed after the snapshot",
     "step_time": "time after the step", "step": "step index", "dt": "step size taken",
     "mass": "mass int f dv", "temperature": "temperature int |v-u|^2 f / (d rho)",
     "kinetic_energy": "kinetic energy int |v|^2/2 f dv", "min_f": "minimum of f on the grid",
@@ -52,107 +92,450 @@ _LONG_NAMES = {
     "momentum": "momentum int v f dv",
 }
 MOMENT_CHUNK = 4096
+SNAPSHOT_CHUNK = 1024
+#: statuses of a run that may be continued
+RESUMABLE = ("running", "interrupted")
+_STAGING, _TRASH = "granframe-new", "granframe-old"
 
 
 class StoreError(ValueError):
     """A store that cannot be used as asked (exists, other description, not a run store)."""
 
 
-def _consolidate(path) -> None:
+class StoreLockedError(StoreError):
+    """The store is being written by another live process (named in the message)."""
+
+
+class StoreDamagedError(StoreError):
+    """Committed data of the store is missing or fails its checksum.
+
+    ``problems`` lists what is wrong; ``intact`` is the index of the last snapshot a
+    run can continue from (None when there is none).
+    """
+
+    def __init__(self, message, problems=(), intact=None):
+        super().__init__(message)
+        self.problems = list(problems)
+        self.intact = intact
+
+
+def codecs() -> dict:
+    """The compressors of every granframe array: zstd, then a CRC-32C of the chunk."""
+    return {"compressors": (zarr.codecs.ZstdCodec(level=0), zarr.codecs.Crc32cCodec()),
+            "config": {"write_empty_chunks": True}}
+
+
+def fill_value(dtype) -> float | int:
+    """NaN for floating-point arrays, -1 for integer ones: a missing chunk is never a zero."""
+    return math.nan if numpy.dtype(dtype).kind == "f" else -1
+
+
+def consolidate(path) -> None:
     with warnings.catch_warnings():  # zarr: consolidated metadata is not in the v3 spec (yet)
         warnings.simplefilter("ignore", category=UserWarning)
         zarr.consolidate_metadata(str(path))
 
 
-class RunStore:
-    """A run's store, opened for writing (:meth:`create`, :meth:`resume`) or reading (:meth:`open`)."""
+def _now() -> str:
+    return datetime.datetime.now(datetime.timezone.utc).isoformat()
 
-    def __init__(self, path, group: zarr.Group):
+
+# -- what a path holds ----------------------------------------------------------------------
+def _root_attributes(path: pathlib.Path) -> dict | None:
+    """The root attributes of the zarr v3 group at ``path``; None when there is none."""
+    try:
+        document = json.loads((path / "zarr.json").read_text())
+    except (OSError, ValueError):
+        return None
+    if not isinstance(document, dict) or document.get("node_type") != "group":
+        return None
+    attributes = document.get("attributes")
+    return attributes if isinstance(attributes, dict) else {}
+
+
+def store_kind(path) -> str:
+    """What ``path`` holds: 'missing', 'file', 'empty', 'run', 'sweep' or 'other'.
+
+    'run' and 'sweep' are recognised by granframe's metadata in the root ``zarr.json``.
+    """
+    path = pathlib.Path(path)
+    if not os.path.lexists(path):
+        return "missing"
+    if not path.is_dir() or path.is_symlink():
+        return "file"
+    if not any(path.iterdir()):
+        return "empty"
+    attributes = _root_attributes(path)
+    if attributes is None:
+        return "other"
+    meta = attributes.get("granframe")
+    if isinstance(meta, dict) and str(meta.get("schema", "")).startswith("granframe.run/"):
+        return "run"
+    if isinstance(attributes.get(SWEEP_SCHEMA_KEY), dict):
+        return "sweep"
+    return "other"
+
+
+def _foreign_entries(path: pathlib.Path, kind: str) -> list[str]:
+    """Entries at the top of a granframe store that granframe did not write."""
+    if kind == "run":
+        own = set(SNAPSHOT_ARRAYS) | set(RECORD_ARRAYS) | {"zarr.json"}
+        own |= {p.name for p in path.iterdir() if p.name[:1] == "v" and p.name[1:].isdigit()}
+    else:
+        own = {"zarr.json", "runs", "table"}
+    return sorted(p.name for p in path.iterdir()
+                  if p.name not in own and not p.name.endswith(".partial"))
+
+
+def _inside(inner: pathlib.Path, outer: pathlib.Path) -> bool:
+    return inner == outer or outer in inner.parents
+
+
+def check_replaceable(path, protect=()) -> None:
+    """Refuse, by name, to replace anything but a granframe store or an empty directory.
+
+    ``path`` may be replaced when it is missing, an empty directory, or a granframe run
+    or sweep store (recognised by its metadata) holding nothing granframe did not write.
+    Refused: a file, any other directory, the current directory, a directory holding the
+    current directory, and a directory holding any path of ``protect`` (the source of
+    the run).
+    """
+    path = pathlib.Path(path)
+    kind = store_kind(path)
+    if kind == "missing":
+        return
+    where = path.resolve()
+    if _inside(pathlib.Path.cwd().resolve(), where):
+        raise StoreError(f"--overwrite refused: '{path}' is the current directory or holds "
+                         "it; choose a store path such as runs/NAME.zarr")
+    for source in protect:
+        if _inside(pathlib.Path(source).resolve(), where):
+            raise StoreError(f"--overwrite refused: '{path}' holds the source '{source}'; "
+                             "choose a store path beside it")
+    if kind == "file":
+        raise StoreError(f"--overwrite refused: '{path}' is a file, not a granframe store; "
+                         "only a granframe run or sweep store, or an empty directory, is "
+                         "replaced")
+    if kind == "other":
+        entries = sorted(p.name for p in path.iterdir())
+        shown = ", ".join(entries[:5]) + (", ..." if len(entries) > 5 else "")
+        raise StoreError(f"--overwrite refused: '{path}' is not a granframe store (it holds "
+                         f"{shown}); only a granframe run or sweep store, or an empty "
+                         "directory, is replaced")
+    if kind in ("run", "sweep"):
+        foreign = _foreign_entries(path, kind)
+        if foreign:
+            raise StoreError(f"--overwrite refused: the granframe store '{path}' also holds "
+                             f"files granframe did not write ({', '.join(foreign[:5])}); "
+                             "move them out first")
+
+
+# -- the writer lock ------------------------------------------------------------------------
+def lock_path(path) -> pathlib.Path:
+    """The lock file of the store ``path``: ``.NAME.granframe.lock`` beside it."""
+    path = pathlib.Path(path)
+    return path.parent / f".{path.name}.granframe.lock"
+
+
+class WriterLock:
+    """An exclusive lock on a store path, held by one writer at a time.
+
+    ``flock`` on the file ``.NAME.granframe.lock`` beside the store; the file records
+    the holder (pid, host, since, command) for the message a second writer gets. The
+    kernel drops the lock when its holder's process ends, however it ends (a kill, a
+    crash), so a dead holder never blocks; the file itself stays (removing it would
+    race with a writer opening it).
+    """
+
+    def __init__(self, path):
+        self.path = pathlib.Path(path)
+        self.file = lock_path(path)
+        self._handle = None
+
+    def acquire(self, wait: float = 0.0, poll: float = 1.0) -> "WriterLock":
+        """Take the lock; if another process holds it, wait up to ``wait`` seconds
+        (``math.inf``: while it lives), then raise :class:`StoreLockedError` naming it."""
+        self.file.parent.mkdir(parents=True, exist_ok=True)
+        handle = open(self.file, "a+")
+        deadline = time.monotonic() + wait
+        while True:
+            try:
+                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except OSError as exc:
+                if exc.errno not in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
+                    handle.close()
+                    raise StoreError(f"cannot lock '{self.file}' for writing: {exc}") from None
+                if time.monotonic() >= deadline:
+                    holder = self.holder()
+                    handle.close()
+                    raise StoreLockedError(
+                        f"store '{self.path}' is being written by {holder}; a second writer "
+                        "is refused (wait for it to end, or stop it)") from None
+                time.sleep(poll)
+        handle.seek(0)
+        handle.truncate()
+        handle.write(json.dumps({"pid": os.getpid(), "host": platform.node(), "since": _now(),
+                                 "command": " ".join(sys.argv)[:300]}) + "\n")
+        handle.flush()
+        self._handle = handle
+        return self
+
+    def holder(self) -> str:
+        """Who holds (or last held) the lock, in words."""
+        try:
+            info = json.loads(self.file.read_text())
+            return (f"pid {info['pid']} on host {info['host']} since {info['since']} "
+                    f"({info.get('command', '')})")
+        except (OSError, ValueError, KeyError, TypeError):
+            return "another process (its record is being written)"
+
+    @property
+    def held(self) -> bool:
+        return self._handle is not None
+
+    def release(self) -> None:
+        if self._handle is not None:
+            fcntl.flock(self._handle, fcntl.LOCK_UN)
+            self._handle.close()
+            self._handle = None
+
+    def __enter__(self):
+        return self if self.held else self.acquire()
+
+    def __exit__(self, *exc):
+        self.release()
+
+
+def _siblings(path: pathlib.Path, role: str) -> list[pathlib.Path]:
+    return sorted(path.parent.glob(f".{path.name}.{role}-*"))
+
+
+def recover(path) -> None:
+    """Finish or clean what a writer of ``path`` left when it was killed.
+
+    Call with the store's :class:`WriterLock` held (no other writer is at work), so
+    every staging or replaced sibling belongs to a writer that has died:
+
+    - ``path`` missing and a replaced store beside it: the kill fell between the two
+      renames of a swap; the new store (complete up to its first commit) is put in
+      place, or the old one when the new is not there;
+    - a replaced store beside ``path``: deleted (the swap was done);
+    - a staging store: a creation cut short, deleted.
+    """
+    path = pathlib.Path(path)
+    for old in _siblings(path, _TRASH):
+        token = old.name.rsplit("-", 1)[-1]
+        new = path.parent / f".{path.name}.{_STAGING}-{token}"
+        if not os.path.lexists(path):
+            os.rename(new if store_kind(new) == "run" and _published(new) else old, path)
+        if old.exists():
+            shutil.rmtree(old)
+    for new in _siblings(path, _STAGING):
+        shutil.rmtree(new)
+
+
+def _published(path: pathlib.Path) -> bool:
+    """True when the staged store at ``path`` holds its first commit (ready to swap in)."""
+    meta = (_root_attributes(path) or {}).get("granframe", {})
+    return int(meta.get("progress", {}).get("snapshots", 0)) >= 1
+
+
+def _chunk_grid(array, extent: int):
+    """Chunk indices of ``array`` covering its first ``extent`` entries along axis 0."""
+    counts = [math.ceil(extent / array.chunks[0])] + [
+        math.ceil(s / c) for s, c in zip(array.shape[1:], array.chunks[1:])]
+    return itertools.product(*(range(n) for n in counts))
+
+
+def _chunk_file(root: pathlib.Path, name: str, index) -> pathlib.Path:
+    return root / name / "c" / pathlib.Path(*map(str, index))
+
+
+class RunStore:
+    """A run's store, opened for writing (:meth:`create`, :meth:`resume`) or reading (:meth:`open`).
+
+    A store opened for writing holds the :class:`WriterLock` until :meth:`close`.
+    """
+
+    def __init__(self, path, group: zarr.Group, lock: WriterLock | None = None):
         self.path = pathlib.Path(path)
         self.group = group
+        self.lock = lock
+        self._target = None      # a staged store: where publish() puts it
+        self._old = False        # ... replacing an existing store
 
     # -- opening ----------------------------------------------------------------------
     @classmethod
     def create(cls, path, description: dict, description_toml: str, grid, provenance: dict,
-               overwrite: bool = False, rescaling: dict | None = None) -> "RunStore":
-        """A new, empty store for ``description``; refuses an existing path unless ``overwrite``.
+               overwrite: bool = False, rescaling: dict | None = None,
+               protect=()) -> "RunStore":
+        """A new store for ``description``, staged beside ``path``; see :meth:`publish`.
 
-        ``rescaling`` (rescaled runs) is the map to physical variables,
-        :meth:`granframe.rescaling.Rescaling.to_dict`, kept in the metadata.
+        Refuses an existing store unless ``overwrite``, and anything but a granframe
+        store or an empty directory even then (:func:`check_replaceable`, ``protect``:
+        paths that must not be inside it). ``rescaling`` (rescaled runs) is the map to
+        physical variables, :meth:`granframe.rescaling.Rescaling.to_dict`, kept in the
+        metadata. The first :meth:`commit` and :meth:`publish` put it in place.
         """
         path = pathlib.Path(path)
-        if path.is_file() or (path.is_dir() and any(path.iterdir())):
-            if not overwrite:
+        lock = WriterLock(path).acquire()
+        try:
+            recover(path)
+            kind = store_kind(path)
+            if kind in ("run", "sweep") and not overwrite:
                 raise StoreError(f"store '{path}' exists; pass --resume to continue the run "
                                  "it holds, or --overwrite to replace it")
-            shutil.rmtree(path) if path.is_dir() else path.unlink()
-        group = zarr.open_group(str(path), mode="w", zarr_format=3)
-        d = grid.dimension
-        axes = [f"v{i + 1}" for i in range(d)]
-        for name, points in zip(axes, [grid.points()] * d):
-            array = group.create_array(name, shape=points.shape, dtype="f8",
-                                       dimension_names=[name])
-            array[:] = points
-            array.attrs["long_name"] = f"velocity component {name}"
-        group.create_array("f", shape=(0,) + grid.shape, chunks=(1,) + grid.shape, dtype="f8",
-                           dimension_names=["time"] + axes)
-        group.create_array("time", shape=(0,), chunks=(1024,), dtype="f8",
-                           dimension_names=["time"])
-        for name, dtype in (("step_time", "f8"), ("step", "i8"), ("dt", "f8")) + tuple(
-                (m, "f8") for m in SCALAR_MOMENTS):
-            group.create_array(name, shape=(0,), chunks=(MOMENT_CHUNK,), dtype=dtype,
-                               dimension_names=["step_time"])
-        group.create_array("momentum", shape=(0, d), chunks=(MOMENT_CHUNK, d), dtype="f8",
-                           dimension_names=["step_time", "axis"])
-        for name, text in _LONG_NAMES.items():
-            group[name].attrs["long_name"] = text
-        group.attrs["granframe"] = {
-            "schema": SCHEMA, "version": __version__, "description": description,
-            "description_toml": description_toml, "provenance": provenance,
-            "created": datetime.datetime.now(datetime.timezone.utc).isoformat(),
-            "progress": {"snapshots": 0, "records": 0, "status": "created"},
-            **({} if rescaling is None else {"rescaling": rescaling}),
-        }
-        _consolidate(path)
-        return cls(path, group)
+            if kind in ("file", "other") and not overwrite:
+                raise StoreError(f"'{path}' exists and is not a granframe store; choose "
+                                 "another --out")
+            check_replaceable(path, protect)
+            staging = path.parent / f".{path.name}.{_STAGING}-{uuid.uuid4().hex[:12]}"
+            group = zarr.create_group(str(staging), zarr_format=3)
+            d = grid.dimension
+            axes = [f"v{i + 1}" for i in range(d)]
+            points = grid.points()
+            for name in axes:
+                _create(group, name, points.shape, points.shape, "f8", [name])[:] = points
+                group[name].attrs["long_name"] = f"velocity component {name}"
+            _create(group, "f", (0,) + grid.shape, (1,) + grid.shape, "f8", ["time"] + axes)
+            for name, dtype in (("time", "f8"), ("snapshot_step", "i8"),
+                                ("snapshot_dt_next", "f8")):
+                _create(group, name, (0,), (SNAPSHOT_CHUNK,), dtype, ["time"])
+            for name, dtype in (("step_time", "f8"), ("step", "i8"), ("dt", "f8")) + tuple(
+                    (m, "f8") for m in SCALAR_MOMENTS):
+                _create(group, name, (0,), (MOMENT_CHUNK,), dtype, ["step_time"])
+            _create(group, "momentum", (0, d), (MOMENT_CHUNK, d), "f8", ["step_time", "axis"])
+            for name, text in _LONG_NAMES.items():
+                group[name].attrs["long_name"] = text
+            group.attrs["granframe"] = {
+                "schema": SCHEMA, "version": __version__, "description": description,
+                "description_toml": description_toml, "provenance": provenance,
+                "created": _now(),
+                "progress": {"snapshots": 0, "records": 0, "status": "created"},
+                **({} if rescaling is None else {"rescaling": rescaling}),
+            }
+        except BaseException:
+            lock.release()
+            raise
+        store = cls(staging, group, lock)
+        store._target = path
+        store._old = kind in ("run", "sweep")
+        return store
+
+    def discard(self) -> None:
+        """Remove a staged store that was never put in place, and release the lock."""
+        if self._target is not None:
+            shutil.rmtree(self.path, ignore_errors=True)
+        self.close()
+
+    def publish(self) -> None:
+        """Put a staged store in place: one rename, or two when it replaces a store.
+
+        The replaced store is deleted after the new one is in place.
+        """
+        target, staging = self._target, self.path
+        if target is None:
+            return
+        trash = staging.parent / staging.name.replace(_STAGING, _TRASH)
+        if self._old:
+            os.rename(target, trash)
+        try:
+            os.rename(staging, target)
+        except OSError as exc:      # a store appeared at an empty or missing path meanwhile
+            if self._old:
+                os.rename(trash, target)
+            shutil.rmtree(staging)
+            raise StoreError(f"store '{target}' could not be put in place ({exc}); another "
+                             "process wrote it meanwhile") from None
+        self.path, self._target = target, None
+        self.group = zarr.open_group(str(target), mode="r+", use_consolidated=False)
+        if self._old:
+            shutil.rmtree(trash)
 
     @staticmethod
     def exists(path) -> bool:
-        """True when ``path`` holds a zarr group (a store to resume or refuse)."""
-        return (pathlib.Path(path) / "zarr.json").is_file()
+        """True when ``path`` holds a zarr group (a store to resume or refuse), or held one
+        whose replacement was cut between its two renames (:func:`recover` completes it)."""
+        path = pathlib.Path(path)
+        return (path / "zarr.json").is_file() or (
+            not os.path.lexists(path) and bool(_siblings(path, _TRASH)))
 
     @classmethod
-    def open(cls, path, mode: str = "r") -> "RunStore":
-        """An existing run store (``mode`` 'r' or 'r+')."""
+    def open(cls, path, mode: str = "r", complete: bool = True) -> "RunStore":
+        """An existing run store (``mode`` 'r' or 'r+').
+
+        ``complete``: refuse a store with a committed chunk missing
+        (:class:`StoreDamagedError`).
+        """
         path = pathlib.Path(path)
         if not path.exists():
+            if _siblings(path, _TRASH):
+                raise StoreError(f"store '{path}' is being replaced, or its replacement was "
+                                 "cut short: run it again with --resume to complete it")
             raise StoreError(f"store '{path}' does not exist")
         try:
             group = zarr.open_group(str(path), mode=mode, use_consolidated=False)
         except (FileNotFoundError, ValueError, zarr.errors.GroupNotFoundError) as exc:
             raise StoreError(f"'{path}' is not a zarr group: {exc}") from None
         meta = group.attrs.get("granframe")
+        if isinstance(meta, dict) and str(meta.get("schema", "")).startswith("granframe.run/") \
+                and meta.get("schema") != SCHEMA:
+            raise StoreError(f"'{path}' is a granframe store of schema '{meta.get('schema')}' "
+                             f"(granframe {meta.get('version')}); this granframe reads "
+                             f"'{SCHEMA}' (with checksums): run it again to a new store")
         if not isinstance(meta, dict) or meta.get("schema") != SCHEMA:
             raise StoreError(f"'{path}' is not a granframe run store (no '{SCHEMA}' metadata)")
-        return cls(path, group)
+        store = cls(path, group)
+        missing = store._missing() if complete else []
+        if missing:
+            raise StoreDamagedError(f"store '{path}' is damaged: {_summarise(missing)} "
+                                    "(granframe check lists every problem)", missing)
+        return store
 
     @classmethod
-    def resume(cls, path, description: dict) -> "RunStore":
-        """The store of an interrupted run of ``description``, cut back to its last commit."""
-        store = cls.open(path, mode="r+")
-        stored = store.metadata["description"]
-        if stored != description:
-            differences = sorted(_differences(stored, description))
-            raise StoreError(f"store '{path}' holds a run of another description (differs in: "
-                             f"{', '.join(differences)}); it is never appended to: choose "
-                             "another --out, or --overwrite to replace it")
-        status = store.progress.get("status")
-        if status == "failed":
-            raise StoreError(f"store '{path}' holds a run stopped by a health check "
-                             f"({store.progress.get('message')}); resuming would fail again: "
-                             "change the description and start afresh")
-        store._truncate()
+    def resume(cls, path, description: dict, rollback: bool = False) -> "RunStore":
+        """The store of an interrupted run of ``description``, cut back to its last commit.
+
+        Takes the writer lock, finishes a replacement cut short, and checks what the run
+        continues from: the committed moment records and the last snapshot must be
+        present and pass their checksums. When they do not, :class:`StoreDamagedError`
+        names the damage and the last intact commit; ``rollback`` continues from that
+        commit instead (the snapshots and records after it are dropped).
+        """
+        lock = WriterLock(path).acquire()
+        try:
+            recover(path)
+            store = cls.open(path, mode="r+", complete=False)
+            store.lock = lock
+            stored = store.metadata["description"]
+            if stored != description:
+                differences = sorted(_differences(stored, description))
+                raise StoreError(f"store '{path}' holds a run of another description (differs "
+                                 f"in: {', '.join(differences)}); it is never appended to: "
+                                 "choose another --out, or --overwrite to replace it")
+            status = store.progress.get("status")
+            if status == "failed":
+                raise StoreError(f"store '{path}' holds a run stopped by a health check "
+                                 f"({store.progress.get('message')}); resuming would fail "
+                                 "again: change the description and start afresh")
+            if status not in RESUMABLE + ("finished",):
+                raise StoreError(f"store '{path}' has status '{status}', which cannot be "
+                                 f"resumed (resumable: {', '.join(RESUMABLE)})")
+            for partial in pathlib.Path(path).rglob("*.partial"):   # writes cut by a kill
+                partial.unlink()
+            store._truncate()
+            if status != "finished":
+                store._continue_from_intact(rollback)
+        except BaseException:
+            lock.release()
+            raise
         return store
+
+    def close(self) -> None:
+        """Release the writer lock (a store opened for writing)."""
+        if self.lock is not None:
+            self.lock.release()
 
     # -- state ------------------------------------------------------------------------
     @property
@@ -174,35 +557,128 @@ class RunStore:
             raise StoreError(f"store '{self.path}' has no complete snapshot to resume from")
         return self.group["f"][k - 1], float(self.group["time"][k - 1])
 
+    def _extent(self, name: str) -> int:
+        """Committed entries of an array along its first axis."""
+        if name in SNAPSHOT_ARRAYS:
+            return self.snapshot_count
+        if name in RECORD_ARRAYS:
+            return int(self.progress["records"])
+        return self.group[name].shape[0]
+
+    def _names(self) -> list[str]:
+        return sorted(self.group.array_keys())
+
+    def _missing(self) -> list[dict]:
+        """Committed chunks that are not on disk."""
+        missing = []
+        for name in self._names():
+            array = self.group[name]
+            for index in _chunk_grid(array, self._extent(name)):
+                if not _chunk_file(self.path, name, index).is_file():
+                    missing.append(_problem(name, array, index, "missing"))
+        return missing
+
+    def verify(self, names=None, snapshots=None) -> list[dict]:
+        """Every committed chunk of ``names`` (default: all arrays) read and checked.
+
+        Returns the problems, each a dict: array, chunk (index), first (first entry along
+        the first axis), kind ('missing' or 'damaged') and detail. ``snapshots`` limits
+        the chunks of ``f`` read to those indices.
+        """
+        problems = []
+        for name in names or self._names():
+            array = self.group[name]
+            for index in _chunk_grid(array, self._extent(name)):
+                if name == "f" and snapshots is not None and index[0] not in snapshots:
+                    continue
+                if not _chunk_file(self.path, name, index).is_file():
+                    problems.append(_problem(name, array, index, "missing"))
+                    continue
+                try:
+                    array.get_block_selection(index)
+                except Exception as exc:   # any decoding failure is damage
+                    problems.append(_problem(name, array, index, "damaged", str(exc)))
+        return problems
+
+    def _continue_from_intact(self, rollback: bool) -> None:
+        """Check what a resumed run reads; roll back to the last intact commit if asked."""
+        k = self.snapshot_count
+        small = [n for n in self._names() if n != "f" and not n.startswith("v")]
+        problems = self.verify(small)
+        bad_snapshot = min((p["first"] for p in problems if p["array"] in SNAPSHOT_ARRAYS),
+                           default=k)
+        bad_record = min((p["first"] for p in problems if p["array"] in RECORD_ARRAYS),
+                         default=math.inf)
+        intact = None
+        for j in range(min(k, bad_snapshot) - 1, -1, -1):
+            if int(self.group["snapshot_step"][j]) + 1 > bad_record:
+                continue
+            damage = self.verify(["f"], snapshots={j})
+            if not damage:
+                intact = j
+                break
+            problems += damage
+        if not problems:
+            return
+        where = _summarise(problems)
+        if intact is None:
+            raise StoreDamagedError(f"store '{self.path}' is damaged ({where}) and holds no "
+                                    "intact commit to continue from; start afresh with "
+                                    "--overwrite", problems)
+        t = float(self.group["time"][intact])
+        if not rollback:
+            raise StoreDamagedError(
+                f"store '{self.path}' is damaged ({where}); the last intact commit is "
+                f"snapshot {intact} at t = {t:.6g} (step {int(self.group['snapshot_step'][intact])}"
+                f"): run again with --resume --rollback to continue from it (the "
+                f"{k - 1 - intact} snapshots after it are dropped)", problems, intact)
+        step = int(self.group["snapshot_step"][intact])
+        meta = self.metadata
+        meta["progress"] = dict(meta["progress"], snapshots=intact + 1, records=step + 1,
+                                step=step, time=t, status="running",
+                                dt_next=float(self.group["snapshot_dt_next"][intact]),
+                                rollbacks=meta["progress"].get("rollbacks", []) + [k - 1])
+        self.group.attrs["granframe"] = meta
+        self._truncate()
+        consolidate(self.path)
+
     def _truncate(self) -> None:
-        """Drop whatever lies beyond the last commit (a commit cut short)."""
-        k, n = self.snapshot_count, int(self.progress["records"])
-        for name in ("f", "time"):
+        """Drop whatever lies beyond the last commit (a commit cut short).
+
+        Chunk files wholly beyond it are deleted too, so that no stale chunk is ever
+        merged into a later write.
+        """
+        for name in SNAPSHOT_ARRAYS + RECORD_ARRAYS:
             array = self.group[name]
-            if array.shape[0] != k:
-                array.resize((k,) + array.shape[1:])
-        for name in ("step_time", "step", "dt", "momentum") + SCALAR_MOMENTS:
-            array = self.group[name]
-            if array.shape[0] != n:
-                array.resize((n,) + array.shape[1:])
+            extent = self._extent(name)
+            if array.shape[0] != extent:
+                first_gone = math.ceil(extent / array.chunks[0])
+                for index in _chunk_grid(array, array.shape[0]):
+                    if index[0] >= first_gone:
+                        _chunk_file(self.path, name, index).unlink(missing_ok=True)
+                array.resize((extent,) + array.shape[1:])
 
     # -- writing ----------------------------------------------------------------------
     def commit(self, snapshots, records: dict, progress: dict) -> None:
         """Append snapshots [(t, f)] and moment records (name -> 1-D/2-D arrays), then mark them.
 
         ``progress`` (JSON-ready) is stored together with the new counts; the
-        store is consistent before and after, whatever happens in between.
+        store is consistent before and after, whatever happens in between. Each
+        snapshot is stored with the step and the proposed next step size of
+        ``progress`` (the state a run continues from).
         """
         group = self.group
         k = self.snapshot_count
         if snapshots:
-            times = numpy.array([t for t, _ in snapshots], dtype=float)
-            group["f"].resize((k + len(snapshots),) + group["f"].shape[1:])
+            count = len(snapshots)
+            for name in SNAPSHOT_ARRAYS:
+                group[name].resize((k + count,) + group[name].shape[1:])
             for i, (_, f) in enumerate(snapshots):
                 group["f"][k + i] = f
-            group["time"].resize((k + len(times),))
-            group["time"][k:] = times
-            k += len(times)
+            group["time"][k:] = numpy.array([t for t, _ in snapshots], dtype=float)
+            group["snapshot_step"][k:] = int(progress["step"])
+            group["snapshot_dt_next"][k:] = float(progress["dt_next"])
+            k += count
         n = int(self.progress["records"])
         count = len(records["step_time"]) if records else 0
         if count:
@@ -211,11 +687,35 @@ class RunStore:
                 array.resize((n + count,) + array.shape[1:])
                 array[n:] = numpy.asarray(values)
             n += count
+        self._write_progress(dict(progress, snapshots=k, records=n))
+
+    def mark(self, status: str, **extra) -> None:
+        """Set the status of the last commit (e.g. 'interrupted'), adding no data."""
+        self._write_progress(dict(self.progress, status=status, **extra))
+
+    def _write_progress(self, progress: dict) -> None:
         meta = self.metadata
-        meta["progress"] = dict(progress, snapshots=k, records=n)
-        meta["updated"] = datetime.datetime.now(datetime.timezone.utc).isoformat()
-        group.attrs["granframe"] = meta
-        _consolidate(self.path)
+        meta["progress"] = progress
+        meta["updated"] = _now()
+        self.group.attrs["granframe"] = meta
+        consolidate(self.path)
+
+
+def _create(group, name, shape, chunks, dtype, dimension_names):
+    return group.create_array(name, shape=shape, chunks=chunks, dtype=dtype,
+                              fill_value=fill_value(dtype), dimension_names=dimension_names,
+                              **codecs())
+
+
+def _problem(name, array, index, kind, detail="") -> dict:
+    return {"array": name, "chunk": list(index), "first": index[0] * array.chunks[0],
+            "kind": kind, "detail": detail}
+
+
+def _summarise(problems) -> str:
+    shown = [f"{p['kind']} chunk {p['array']}/c/{'/'.join(map(str, p['chunk']))}"
+             for p in problems[:3]]
+    return ", ".join(shown) + (f" and {len(problems) - 3} more" if len(problems) > 3 else "")
 
 
 def _differences(a, b, prefix=""):
@@ -227,9 +727,50 @@ def _differences(a, b, prefix=""):
         yield prefix.rstrip(".") or "(root)"
 
 
+def check(path) -> tuple[bool, list[str]]:
+    """Read every committed chunk of a run store, or of every run of a sweep store.
+
+    Returns (intact, report lines); ``granframe check`` prints the lines and exits 3
+    when the store is damaged.
+    """
+    path = pathlib.Path(path)
+    kind = store_kind(path)
+    if kind == "sweep":
+        runs = sorted(p for p in (path / "runs").iterdir() if store_kind(p) == "run") \
+            if (path / "runs").is_dir() else []
+        lines, intact = [f"sweep store {path}: {len(runs)} run stores"], True
+        for run in runs:
+            ok, more = check(run)
+            intact &= ok
+            lines += ["  " + line for line in more]
+        return intact, lines
+    try:
+        store = RunStore.open(path)
+    except StoreDamagedError:
+        store = RunStore(path, zarr.open_group(str(path), mode="r", use_consolidated=False))
+    problems = store.verify()
+    progress = store.progress
+    chunks = sum(sum(1 for _ in _chunk_grid(store.group[n], store._extent(n)))
+                 for n in store._names())
+    lines = [f"{path}: status {progress.get('status')}, {store.snapshot_count} snapshots, "
+             f"{progress.get('records')} records; {chunks} committed chunks read, "
+             f"{len(problems)} problems"]
+    lines += [f"  {p['kind']}: {p['array']}/c/{'/'.join(map(str, p['chunk']))} (from entry "
+              f"{p['first']}){': ' + p['detail'] if p['detail'] else ''}" for p in problems]
+    partial = sorted(str(p.relative_to(path)) for p in path.rglob("*.partial"))
+    if partial:
+        lines.append(f"  {len(partial)} file(s) of a write cut short (removed on --resume): "
+                     + ", ".join(partial[:3]))
+    return not problems, lines
+
+
 def describe(path) -> str:
     """Human-readable summary of a store (``granframe info``)."""
     store = RunStore.open(path)
+    problems = store.verify([n for n in store._names() if n != "f"])
+    if problems:
+        raise StoreDamagedError(f"store '{path}' is damaged: {_summarise(problems)} "
+                                "(granframe check lists every problem)", problems)
     meta, progress = store.metadata, store.progress
     group = store.group
     lines = [f"store       {os.fspath(store.path)}",

@@ -29,7 +29,6 @@ import json
 import math
 import pathlib
 import re
-import shutil
 import time
 import warnings
 
@@ -40,6 +39,7 @@ import zarr
 
 from granframe import validators as check
 from granframe.description import RunDescription
+from granframe.storage import WriterLock, codecs, store_kind
 
 SCHEMA = "granframe.sweep/1"
 #: the final moments of a run the table keeps
@@ -164,8 +164,8 @@ def _summary(path) -> dict:
 
 
 def _status(path) -> str | None:
-    """The status of the run store at ``path``; None when there is none, ``broken`` when
-    its creation was cut short (a group without the run metadata)."""
+    """The status of the run store at ``path``; None when there is none (a store is put
+    in place whole, see granframe.storage), ``damaged`` when it cannot be read."""
     from granframe.storage import RunStore, StoreError
 
     if not RunStore.exists(path):
@@ -173,31 +173,44 @@ def _status(path) -> str | None:
     try:
         return RunStore.open(path).progress.get("status", "created")
     except StoreError:
-        return "broken"
+        return "damaged"
 
 
-def run_point(description: dict, path: str) -> dict:
+def _failed(message: str) -> dict:
+    return {"status": "failed", "message": message, "wall_seconds": 0.0, "steps": 0,
+            "time": 0.0, **{name: math.nan for name in TABLE_MOMENTS}}
+
+
+def run_point(description: dict, path: str, poll: float = 1.0) -> dict:
     """Run (or resume, or skip) one point into ``path``; the task a worker executes.
 
-    Returns its table row. Parameters the description refuses, and health stops, are
-    returned as ``failed`` with the message; nothing is raised.
+    Returns its table row. Parameters the description refuses, health stops and a damaged
+    store are returned as ``failed`` with the message; nothing is raised. When another
+    process holds the store's writer lock (Dask gave the task again to a new worker while
+    the first, presumed dead, still runs it), this one waits for it, polling every
+    ``poll`` seconds, and then takes the store as that process left it: finished, or cut
+    short and resumed from there. Two processes never write one store.
     """
     from granframe.runner import HealthError, Simulation
+    from granframe.storage import StoreError, StoreLockedError
 
     status = _status(path)
     if status in ("finished", "failed"):
         return _summary(path)
-    if status == "broken":     # killed while creating its store: nothing to resume
-        shutil.rmtree(path)
     try:
         simulation = Simulation(RunDescription.from_dict(description))
     except (ValueError, TypeError) as exc:
-        return {"status": "failed", "message": f"refused: {exc}", "wall_seconds": 0.0,
-                "steps": 0, "time": 0.0, **{name: math.nan for name in TABLE_MOMENTS}}
-    try:
-        simulation.run(path, resume=True, progress=False)
-    except HealthError:
-        pass                                   # the store says failed, with the message
+        return _failed(f"refused: {exc}")
+    while True:
+        try:
+            simulation.run(path, resume=True, progress=False)
+            break
+        except StoreLockedError:
+            time.sleep(poll)
+        except HealthError:
+            break                              # the store says failed, with the message
+        except StoreError as exc:
+            return _failed(f"store: {exc}")
     return _summary(path)
 
 
@@ -216,14 +229,11 @@ def _write_table(root: zarr.Group, names, points, rows) -> None:
         columns[field] = numpy.array(values, dtype=str if isinstance(default, str) else float)
     group = root.require_group("table")
     for key, values in columns.items():
-        if values.dtype.kind == "U":
-            values = values.astype(object)
-            array = group.create_array(key, shape=values.shape, dtype=str,
-                                       dimension_names=["run"], overwrite=True)
-        else:
-            array = group.create_array(key, shape=values.shape, dtype="f8",
-                                       dimension_names=["run"], overwrite=True)
-        array[:] = values
+        text = values.dtype.kind == "U"
+        array = group.create_array(key, shape=values.shape, dtype=str if text else "f8",
+                                   dimension_names=["run"], overwrite=True,
+                                   fill_value="" if text else math.nan, **codecs())
+        array[:] = values.astype(object) if text else values
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", category=UserWarning)
         zarr.consolidate_metadata(root.store)
@@ -259,12 +269,31 @@ def run_sweep(sweep: Sweep, out, *, client=None, scheduler: str | None = None,
 
     if not isinstance(sweep, Sweep):
         check.reject("run_sweep", "sweep", sweep, "must be a Sweep", error=TypeError)
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
+                                or workers < 1):
+        check.reject("run_sweep", "workers", workers, "must be a whole number >= 1 (worker "
+                     "processes of the LocalCluster), or None for one per core")
     start = time.perf_counter()
     out = pathlib.Path(out)
+    kind = store_kind(out)
+    if kind == "other" and {p.name for p in out.iterdir()} == {"runs"}:
+        kind = "sweep"             # run stores written before the sweep's own metadata
+    if kind not in ("missing", "empty", "sweep"):
+        what = {"run": "a granframe run store", "file": "a file"}.get(kind, "not a sweep store")
+        check.reject("run_sweep", "out", str(out), f"must be a new path, an empty directory or "
+                     f"a sweep store; it is {what}")
     points = sweep.points()
     names = [run_name(p) for p in points]
     if len(set(names)) != len(names):
         check.reject("run_sweep", "sweep", sweep.to_dict(), "gives two points the same name")
+    with WriterLock(out):
+        return _drive(sweep, out, points, names, client, scheduler, workers, progress, start)
+
+
+def _drive(sweep, out, points, names, client, scheduler, workers, progress, start):
+    """run_sweep with the sweep store's writer lock held (one driver, one table writer)."""
+    import distributed
+
     root = zarr.open_group(str(out), mode="a", zarr_format=3)
     previous = root.attrs.get("granframe_sweep")
     if previous is not None and previous.get("sweep") != json.loads(json.dumps(sweep.to_dict())):
