@@ -144,9 +144,11 @@ def _where(exc: BaseException, source) -> str:
 
 def _run_one(description, out, args) -> int:
     from granframe.runner import HealthError, Simulation
-    from granframe.storage import RunStore
+    from granframe.storage import RunStore, check_replaceable, store_kind
 
-    if args.resume and RunStore.exists(out) and not args.rollback:
+    if args.overwrite:          # refused before the operator is built
+        check_replaceable(out, protect=[args.source])
+    if args.resume and store_kind(out) == "run" and not args.rollback:
         # an ended run is reported from its store, without building the operator
         progress = RunStore.open(out, complete=False).progress
         if progress.get("status") == "failed":   # resuming would fail again

@@ -23,7 +23,7 @@ from granframe.analysis import relative_entropy  # noqa: E402
 from granframe.description import RunDescription  # noqa: E402
 from granframe.exact import heated_maxwell_law  # noqa: E402
 from granframe.rescaling import Rescaling  # noqa: E402
-from granframe.storage import RunStore  # noqa: E402
+from granframe.storage import RunStore, StoreDamagedError, summarise  # noqa: E402
 
 #: Largest max|f(t_end) - f(t_end - interval)| / max f for which f(t_end) is taken as f_infinity.
 STATIONARY = 1e-6
@@ -37,6 +37,10 @@ class _Run:
 
     def __init__(self, path):
         store = RunStore.open(path)
+        problems = store.verify()     # every committed chunk present and passing its checksum
+        if problems:
+            raise StoreDamagedError(f"plot: store '{path}' is damaged: {summarise(problems)} "
+                                    "(granframe check lists every problem)", problems)
         group, progress = store.group, store.progress
         n, k = int(progress["records"]), store.snapshot_count
         if k == 0:

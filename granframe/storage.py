@@ -489,7 +489,7 @@ class RunStore:
         store = cls(path, group)
         missing = store._missing() if complete else []
         if missing:
-            raise StoreDamagedError(f"store '{path}' is damaged: {_summarise(missing)} "
+            raise StoreDamagedError(f"store '{path}' is damaged: {summarise(missing)} "
                                     "(granframe check lists every problem)", missing)
         return store
 
@@ -620,7 +620,7 @@ class RunStore:
             problems += damage
         if not problems:
             return
-        where = _summarise(problems)
+        where = summarise(problems)
         if intact is None:
             raise StoreDamagedError(f"store '{self.path}' is damaged ({where}) and holds no "
                                     "intact commit to continue from; start afresh with "
@@ -712,7 +712,8 @@ def _problem(name, array, index, kind, detail="") -> dict:
             "kind": kind, "detail": detail}
 
 
-def _summarise(problems) -> str:
+def summarise(problems) -> str:
+    """The first few problems of :meth:`RunStore.verify`, in words."""
     shown = [f"{p['kind']} chunk {p['array']}/c/{'/'.join(map(str, p['chunk']))}"
              for p in problems[:3]]
     return ", ".join(shown) + (f" and {len(problems) - 3} more" if len(problems) > 3 else "")
@@ -769,7 +770,7 @@ def describe(path) -> str:
     store = RunStore.open(path)
     problems = store.verify([n for n in store._names() if n != "f"])
     if problems:
-        raise StoreDamagedError(f"store '{path}' is damaged: {_summarise(problems)} "
+        raise StoreDamagedError(f"store '{path}' is damaged: {summarise(problems)} "
                                 "(granframe check lists every problem)", problems)
     meta, progress = store.metadata, store.progress
     group = store.group
