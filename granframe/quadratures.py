@@ -22,6 +22,17 @@ import scipy.special
 
 from granframe import validators as check
 
+#: Largest Gauss-Legendre rule: numpy's ``leggauss`` solves a dense n x n eigenproblem
+#: (4096: 128 MiB, a few seconds), and 4096 nodes resolve radial oscillations far beyond
+#: any grid of 65536 modes' needs (the operators' defaults are 30-32 points, and 2N + 16).
+MAX_GAUSS_POINTS = 4096
+
+#: Largest rule on S^1 (and on S^2, 2 n_polar^2 points): pairing the antipodal nodes
+#: (:func:`antipodal_pairs`) costs O(M^2), 2048 points about 15 s, and 2048 directions
+#: integrate angular degree 2047, more than the fast method resolves on any grid it fits
+#: in memory (the review takes 16 in 2D and 32 in 3D).
+MAX_SURFACE_POINTS = 2048
+
 #: Orders accepted by :func:`scipy.integrate.lebedev_rule` (= exact degree).
 LEBEDEV_ORDERS = (3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31, 35, 41, 47, 53,
                   59, 65, 71, 77, 83, 89, 95, 101, 107, 113, 119, 125, 131)
@@ -75,9 +86,13 @@ class SurfaceQuadrature(Quadrature):
 
 @attrs.frozen
 class GaussLegendre(Quadrature):
-    """Gauss-Legendre rule for rho in [0, R]; exact for polynomials of degree 2n - 1."""
+    """Gauss-Legendre rule for rho in [0, R]; exact for polynomials of degree 2n - 1.
 
-    n_points: int = attrs.field(converter=check.to_int, validator=check.integer(lower=1))
+    1 <= n <= :data:`MAX_GAUSS_POINTS`.
+    """
+
+    n_points: int = attrs.field(converter=check.to_int,
+                                validator=check.integer(lower=1, upper=MAX_GAUSS_POINTS))
     kind: ClassVar[str] = "radial"
 
     @property
@@ -107,9 +122,11 @@ class CircleTrapezoid(SurfaceQuadrature):
     All weights are 2 pi / M. It integrates trigonometric polynomials of degree
     <= M - 1 exactly, hence polynomials of total degree M - 1 (spectral
     accuracy for smooth periodic integrands; review section 2.2).
+    1 <= M <= :data:`MAX_SURFACE_POINTS`.
     """
 
-    n_points: int = attrs.field(converter=check.to_int, validator=check.integer(lower=1))
+    n_points: int = attrs.field(converter=check.to_int,
+                                validator=check.integer(lower=1, upper=MAX_SURFACE_POINTS))
     phase: float = attrs.field(default=0.0, converter=check.to_float, validator=check.real())
     kind: ClassVar[str] = "circle"
     dimension: ClassVar[int] = 2
@@ -166,9 +183,12 @@ class SphereProduct(SurfaceQuadrature):
     sqrt(1-z_i^2) sin phi_j, z_i) with weights w_i^GL pi / n; M = 2 n^2 points,
     exact for degree 2n - 1 [Atkinson & Han, Spherical Harmonics, sec. 5.2].
     The rule is antipodal (z -> -z and phi -> phi + pi are symmetries).
+    1 <= n <= 32, so that M <= :data:`MAX_SURFACE_POINTS`.
     """
 
-    n_polar: int = attrs.field(converter=check.to_int, validator=check.integer(lower=1))
+    n_polar: int = attrs.field(  # 2 n^2 <= MAX_SURFACE_POINTS
+        converter=check.to_int,
+        validator=check.integer(lower=1, upper=math.isqrt(MAX_SURFACE_POINTS // 2)))
     kind: ClassVar[str] = "sphere"
     dimension: ClassVar[int] = 3
 

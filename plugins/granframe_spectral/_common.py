@@ -35,17 +35,27 @@ def energy_factor(kernel, grid, f, xp) -> float:
 
 
 def check_operands(owner: str, grid, f, backend):
-    """Refuse an f that is not a real array of the grid's shape on this backend."""
+    """Refuse an f that is not a finite real array of the grid's shape on this backend.
+
+    Finiteness costs one reduction, the sum of f (NaN or Inf anywhere makes it
+    non-finite), in the backend's namespace, so that every backend refuses alike; a NaN
+    or Inf in f would otherwise spread through the transforms to every point of Q.
+    """
     xp = backend.xp
-    shape = tuple(getattr(f, "shape", ()))
-    if shape != grid.shape:
-        check.reject(owner, "f.shape", shape, f"must equal the grid shape {grid.shape}")
     if not isinstance(f, xp.ndarray):
         check.reject(owner, "f", type(f).__name__,
                      f"must be a {xp.__name__} array (backend '{backend.name}')", error=TypeError)
+    shape = tuple(f.shape)
+    if shape != grid.shape:
+        check.reject(owner, "f.shape", shape, f"must equal the grid shape {grid.shape}")
     if f.dtype.kind != "f":
         check.reject(owner, "f.dtype", str(f.dtype), "must be a real floating-point type",
                      error=TypeError)
+    if not math.isfinite(float(xp.sum(f))):
+        bad = int(xp.sum(~xp.isfinite(f)))
+        check.reject(owner, "f", f"{bad} non-finite values" if bad else "values summing to "
+                     "infinity", "must be finite everywhere on the grid (NaN or Inf in f, "
+                     "e.g. from a blown-up step, would fill Q with NaN)")
 
 
 def radial_rule(grid, n_radial: int):

@@ -12,15 +12,21 @@ import math
 import numpy
 import scipy.special
 
+from granframe import memory
 from granframe import validators as check
-from granframe.operators import CollisionOperator
-from granframe.quadratures import sphere_area
+from granframe.operators import CollisionOperator, check_arguments
+from granframe.quadratures import MAX_GAUSS_POINTS, sphere_area
 
 from granframe_spectral._common import (check_operands, energy_factor, isotropic_sphere_average,
                                         radial_rule)
 
 #: Bytes per (k, m) entry: weight (complex), gather index, triple key, gathered f-hat.
 BYTES_PER_ENTRY = 16 + 8 + 8 + 16
+
+#: Largest ``angular_degree``: its coefficients take a Gauss rule of 2 degree + 64 points,
+#: which must stay within the radial rule's bound; degree 1024 resolves b(cos theta) far
+#: beyond what any grid of this method's size (N <= about 100 under the default budget) sees.
+MAX_ANGULAR_DEGREE = 1024
 
 
 def angular_coefficients(kernel, dimension: int, max_degree: int):
@@ -55,11 +61,16 @@ class DirectSpectral(CollisionOperator):
         See :class:`granframe.CollisionOperator`.
     radial_points : int or None
         Gauss-Legendre points for the rho-integral of the weights (default 2N + 16,
-        enough to resolve the Bessel oscillations to round-off).
+        enough to resolve the Bessel oscillations to round-off; at most
+        :data:`~granframe.quadratures.MAX_GAUSS_POINTS`).
     angular_degree : int
-        Highest degree of the zonal expansion of b(cos theta) (anisotropic kernels).
-    memory_budget : int
-        Bytes the weights may use; a larger problem is refused with the memory it needs.
+        Highest degree of the zonal expansion of b(cos theta) (anisotropic kernels), at
+        most :data:`MAX_ANGULAR_DEGREE`.
+    memory_budget : int or None
+        Bytes the weights may use; a larger problem is refused, before anything is
+        allocated, with the memory it needs (:meth:`estimate_memory`). The default is
+        ``GRANFRAME_MEMORY_BUDGET`` when that environment variable is set, else 4 GiB
+        (:mod:`granframe.memory`).
 
     Notes
     -----
@@ -86,27 +97,47 @@ class DirectSpectral(CollisionOperator):
     distinct triple.
     """
 
+    name = "direct_spectral"
+    #: Default of ``memory_budget`` when GRANFRAME_MEMORY_BUDGET is not set.
+    DEFAULT_MEMORY_BUDGET = 4 * 2 ** 30
+
     def __init__(self, grid, kernel, restitution, backend, *, radial_points=None,
-                 angular_degree=48, memory_budget=4 * 2 ** 30):
+                 angular_degree=48, memory_budget=None):
         super().__init__(grid, kernel, restitution, backend)
         owner = "direct_spectral"
         d, n = grid.dimension, grid.n_modes
-        radial_points = 2 * n + 16 if radial_points is None else radial_points
-        if not check.is_integer(radial_points) or radial_points < 1:
-            check.reject(owner, "radial_points", radial_points, "must be an integer >= 1")
-        if not check.is_integer(angular_degree) or angular_degree < 0:
-            check.reject(owner, "angular_degree", angular_degree, "must be an integer >= 0")
+        self.memory_bytes = self.estimate_memory(grid, kernel, restitution, backend,
+                                                 radial_points=radial_points,
+                                                 angular_degree=angular_degree)
+        if memory_budget is None:
+            memory_budget = memory.budget(self.DEFAULT_MEMORY_BUDGET)
         if not check.is_real(memory_budget) or memory_budget <= 0:
             check.reject(owner, "memory_budget", memory_budget, "must be a positive number of bytes")
-        modes = (n - 1) ** d
-        self.memory_bytes = BYTES_PER_ENTRY * modes ** 2
         if self.memory_bytes > memory_budget:
             check.reject(owner, "memory_budget", memory_budget,
-                         f"is too small: the direct method needs {self.memory_bytes / 2 ** 30:.3g} "
-                         f"GiB for its {modes}^2 weights (d = {d}, N = {n}); use fast_spectral "
-                         "or a smaller N")
-        self.radial_points, self.angular_degree = int(radial_points), int(angular_degree)
+                         f"is too small: the direct method needs {memory.gib(self.memory_bytes)} "
+                         f"GiB for its {(n - 1) ** d}^2 weights (d = {d}, N = {n}); use "
+                         "fast_spectral or a smaller N")
+        self.radial_points = 2 * n + 16 if radial_points is None else int(radial_points)
+        self.angular_degree = int(angular_degree)
         self._build()
+
+    @classmethod
+    def estimate_memory(cls, grid, kernel, restitution, backend, *, radial_points=None,
+                        angular_degree=48, memory_budget=None) -> int:
+        """Bytes of the weights, :data:`BYTES_PER_ENTRY` per pair of Nyquist-free modes
+        (nothing is allocated); invalid options raise the operator's own errors.
+        ``memory_budget`` does not change the estimate (it is what it is compared with)."""
+        owner = "direct_spectral"
+        check_arguments(owner, grid, kernel, restitution, backend)
+        radial_points = 2 * grid.n_modes + 16 if radial_points is None else radial_points
+        if not check.is_integer(radial_points) or not 1 <= radial_points <= MAX_GAUSS_POINTS:
+            check.reject(owner, "radial_points", radial_points,
+                         f"must be an integer >= 1 and <= {MAX_GAUSS_POINTS}")
+        if not check.is_integer(angular_degree) or not 0 <= angular_degree <= MAX_ANGULAR_DEGREE:
+            check.reject(owner, "angular_degree", angular_degree,
+                         f"must be an integer >= 0 and <= {MAX_ANGULAR_DEGREE}")
+        return BYTES_PER_ENTRY * ((grid.n_modes - 1) ** grid.dimension) ** 2
 
     def _build(self):
         grid, xp = self.grid, self.backend.xp

@@ -10,14 +10,16 @@ from __future__ import annotations
 import concurrent.futures
 import math
 
+import attrs
 import numpy
 import threadpoolctl
 
 from granframe import validators as check
 from granframe.backends import PRECISIONS
-from granframe.operators import CollisionOperator
-from granframe.quadratures import (CircleTrapezoid, SphereProduct, SurfaceQuadrature,
-                                   antipodal_pairs, sphere_area)
+from granframe import memory
+from granframe.operators import CollisionOperator, check_arguments
+from granframe.quadratures import (MAX_GAUSS_POINTS, CircleTrapezoid, SphereProduct,
+                                   SurfaceQuadrature, antipodal_pairs, sphere_area)
 
 from granframe_spectral._common import (check_operands, energy_factor, isotropic_sphere_average,
                                         radial_rule)
@@ -47,9 +49,13 @@ class FastSpectral(CollisionOperator):
     batch : int or None
         Pairs (rho, ghat) transformed together; ``None`` chooses from the grid size and
         the backend's ``batch_bytes`` (a few MiB on a CPU, hundreds on a GPU).
-    memory_budget : int
-        Bytes the operator's work buffers may use; precomputation refuses to
-        exceed it.
+    memory_budget : int or None
+        Bytes the operator may hold: its tables, work buffers and the transients of
+        its precomputation. The default is ``GRANFRAME_MEMORY_BUDGET`` when that
+        environment variable is set, else 2 GiB (:mod:`granframe.memory`). The batch
+        shrinks to fit it; a problem that does not fit with one pair per pipeline is
+        refused before anything large is allocated, with the memory it needs
+        (:meth:`estimate_memory`).
     precision : {"float64", "float32"}
         Arithmetic of the evaluation: transforms, phase tables, weights and
         accumulators. The tables are computed in float64 and rounded once. In
@@ -80,34 +86,37 @@ class FastSpectral(CollisionOperator):
     so that Qhat_0 = 0 to round-off.
     """
 
+    name = "fast_spectral"
+    #: Default of ``memory_budget`` when GRANFRAME_MEMORY_BUDGET is not set.
+    DEFAULT_MEMORY_BUDGET = 2 ** 31
+
     def __init__(self, grid, kernel, restitution, backend, *, radial_points=None, sphere=None,
-                 sigma=None, batch=None, memory_budget=2 ** 31, precision="float64"):
+                 sigma=None, batch=None, memory_budget=None, precision="float64"):
         super().__init__(grid, kernel, restitution, backend)
-        d = grid.dimension
-        owner = "fast_spectral"
-        radial_points = DEFAULT_RADIAL[d] if radial_points is None else radial_points
-        if not check.is_integer(radial_points) or radial_points < 1:
-            check.reject(owner, "radial_points", radial_points, "must be an integer >= 1")
-        sphere = DEFAULT_SPHERE[d] if sphere is None else sphere
-        sigma = DEFAULT_SIGMA[d] if sigma is None else sigma
-        for name, rule in (("sphere", sphere), ("sigma", sigma)):
-            if not isinstance(rule, SurfaceQuadrature) or rule.dimension != d:
-                check.reject(owner, name, rule, f"must be a quadrature on S^{d - 1} "
-                             f"({'circle' if d == 2 else 'sphere'} rule)", error=TypeError)
-        if batch is not None and (not check.is_integer(batch) or batch < 1):
-            check.reject(owner, "batch", batch, "must be None or an integer >= 1")
-        if not check.is_integer(memory_budget) or memory_budget <= 0:
-            check.reject(owner, "memory_budget", memory_budget, "must be a positive number of bytes")
-        if precision not in PRECISIONS:
-            check.reject(owner, "precision", precision, f"must be one of {list(PRECISIONS)}")
+        plan = _plan(grid, kernel, backend, radial_points, sphere, sigma, batch, memory_budget,
+                     precision)
         self.precision = precision
         self._real_dtype, self._complex_dtype = PRECISIONS[precision]
         self._itemsize = numpy.dtype(self._real_dtype).itemsize
-        self.radial_points, self.sphere, self.sigma = int(radial_points), sphere, sigma
-        self._build(batch, int(memory_budget))
+        self.radial_points, self.sphere, self.sigma = plan.radial_points, plan.sphere, plan.sigma
+        self.memory_bytes = plan.memory_bytes
+        self._build(plan)
+
+    @classmethod
+    def estimate_memory(cls, grid, kernel, restitution, backend, *, radial_points=None,
+                        sphere=None, sigma=None, batch=None, memory_budget=None,
+                        precision="float64") -> int:
+        """Bytes the operator would hold for these arguments, found without allocating.
+
+        Raises the operator's own errors: invalid options, and a ``memory_budget``
+        too small for one pair per pipeline.
+        """
+        check_arguments(cls.name, grid, kernel, restitution, backend)
+        return _plan(grid, kernel, backend, radial_points, sphere, sigma, batch, memory_budget,
+                     precision).memory_bytes
 
     # -- precomputation -------------------------------------------------------------------
-    def _build(self, batch, memory_budget):
+    def _build(self, plan):
         grid, kernel, backend = self.grid, self.kernel, self.backend
         xp = backend.xp
         d, n, L = grid.dimension, grid.n_modes, grid.half_width
@@ -119,7 +128,7 @@ class FastSpectral(CollisionOperator):
         self._a, self._b = a_rho, math.pi * rho / L - a_rho
         radial = w_rho * rho ** (d - 1) * kernel.prefactor(d) * kernel.speed_part(rho)
 
-        reps, w_plus, w_minus = antipodal_pairs(self.sphere.nodes(), self.sphere.weights())
+        reps, w_plus, w_minus = plan.reps, plan.w_plus, plan.w_minus
         self.n_pairs = len(reps)
         # Angular terms of each pair: coefficient and (ghat, sigma) parts of the phase vector
         # eta = alpha ghat - a sigma, with alpha = a (term of +ghat) or b (reused term of -ghat).
@@ -143,14 +152,13 @@ class FastSpectral(CollisionOperator):
         kk = numpy.sqrt(grid.half_wavenumber_squared())
         self._keep = xp.asarray(~grid.nyquist_mask())
 
-        # Radial weights W_rho(k).
-        if kernel.is_isotropic:
-            j = numpy.stack([isotropic_sphere_average(a * kk, d) for a in a_rho])
-            weights = (radial * sphere_area(d))[:, None] * j.reshape(len(rho), -1)
-        else:
-            weights = numpy.repeat(radial[:, None], kk.size, axis=1)
-        self._radial_weights = xp.asarray(weights.reshape((len(rho),) + half_shape),
-                                          dtype=self._complex_dtype)
+        # Radial weights W_rho(k), one rho at a time into the table (no float64 copy of it).
+        weights = numpy.empty((len(rho),) + half_shape, dtype=self._complex_dtype)
+        for i, (a, w) in enumerate(zip(a_rho, radial)):
+            weights[i] = ((w * sphere_area(d)) * isotropic_sphere_average(a * kk, d)
+                          if kernel.is_isotropic else w)
+        self._radial_weights = xp.asarray(weights)
+        del kk, weights
 
         # Loss multiplier G_loss(m) on the half layout (same rho, ghat rule as the gain).
         g_loss = numpy.zeros(half_shape, dtype=complex)
@@ -162,24 +170,9 @@ class FastSpectral(CollisionOperator):
         self._g_loss = xp.asarray(g_loss / total, dtype=self._complex_dtype)
 
         # Work split: contiguous ranges of rho values over pipelines; pairs in batches.
-        pipelines = max(1, min(backend.concurrency, len(rho)))
-        # per pair in a batch: real buffer, spectrum buffer, and the weighted spectrum that
-        # the generic ArrayBackend.lowrank_accumulate allocates (fused kernels need none)
-        real, complex_ = self._itemsize, 2 * self._itemsize
-        per_pair = real * total + 2 * complex_ * numpy.prod(half_shape)
-        # radial weights, loss multiplier, accumulators and the operator's own transform
-        fixed = complex_ * numpy.prod(half_shape) * (len(rho) + 4 + 2 * pipelines)
-        if batch is None:
-            batch = _default_batch(complex_ * int(numpy.prod(half_shape)), self.n_pairs,
-                                   _ceil_div(len(rho), pipelines), backend.batch_bytes)
-        if fixed + pipelines * batch * per_pair > memory_budget:
-            batch = int((memory_budget - fixed) // (pipelines * per_pair))
-            if batch < 1:
-                check.reject("fast_spectral", "memory_budget", memory_budget,
-                             f"is too small: one pair per pipeline needs "
-                             f"{(fixed + pipelines * per_pair) / 2 ** 30:.3g} GiB")
-        self.batch = batch
-        self._tables = _PhaseTables(self, memory_budget)
+        pipelines = plan.pipelines
+        self.batch = plan.batch
+        self._tables = _PhaseTables(self, plan.precompute_tables)
         bounds = numpy.linspace(0, len(rho), pipelines + 1).round().astype(int)
         self._pipelines = [_Pipeline(self, (int(bounds[p]), int(bounds[p + 1])))
                            for p in range(pipelines)]
@@ -239,6 +232,93 @@ class FastSpectral(CollisionOperator):
     __del__ = close
 
 
+@attrs.frozen
+class _Plan:
+    """The validated options of a fast operator, its work split and its memory."""
+
+    radial_points: int
+    sphere: SurfaceQuadrature
+    sigma: SurfaceQuadrature
+    reps: numpy.ndarray = attrs.field(eq=False)
+    w_plus: numpy.ndarray = attrs.field(eq=False)
+    w_minus: numpy.ndarray = attrs.field(eq=False)
+    pipelines: int
+    batch: int
+    precompute_tables: bool
+    memory_bytes: int
+
+
+def _plan(grid, kernel, backend, radial_points, sphere, sigma, batch, memory_budget,
+          precision) -> _Plan:
+    """Validate the options and size everything the operator will allocate.
+
+    Counted, in bytes (r and c the real and complex item sizes, h the points of the half
+    spectrum, N_rho radial points, P pairs): the radial weights, loss multiplier,
+    accumulators and the operator's own transform, c h (N_rho + 4 + 2 pipelines); per pair
+    of a batch, a real grid, its spectrum and the weighted spectrum of the generic
+    ``lowrank_accumulate``, r N^d + 2 c h; the phase tables, precomputed when they fit in a
+    quarter of the budget, else one block per pipeline; and the transients of the
+    precomputation (|k|, the loss multiplier and its terms), 56 h. The batch shrinks until
+    the tables and buffers fit ``memory_budget``; what still does not fit is refused here,
+    before anything of the grid's size is allocated.
+    """
+    owner, d = "fast_spectral", grid.dimension
+    radial_points = DEFAULT_RADIAL[d] if radial_points is None else radial_points
+    if not check.is_integer(radial_points) or not 1 <= radial_points <= MAX_GAUSS_POINTS:
+        check.reject(owner, "radial_points", radial_points,
+                     f"must be an integer >= 1 and <= {MAX_GAUSS_POINTS}")
+    sphere = DEFAULT_SPHERE[d] if sphere is None else sphere
+    sigma = DEFAULT_SIGMA[d] if sigma is None else sigma
+    for name, rule in (("sphere", sphere), ("sigma", sigma)):
+        if not isinstance(rule, SurfaceQuadrature) or rule.dimension != d:
+            check.reject(owner, name, rule, f"must be a quadrature on S^{d - 1} "
+                         f"({'circle' if d == 2 else 'sphere'} rule)", error=TypeError)
+    if batch is not None and (not check.is_integer(batch) or batch < 1):
+        check.reject(owner, "batch", batch, "must be None or an integer >= 1")
+    if memory_budget is None:
+        memory_budget = memory.budget(FastSpectral.DEFAULT_MEMORY_BUDGET)
+    if not check.is_integer(memory_budget) or memory_budget <= 0:
+        check.reject(owner, "memory_budget", memory_budget, "must be a positive number of bytes")
+    if precision not in PRECISIONS:
+        check.reject(owner, "precision", precision, f"must be one of {list(PRECISIONS)}")
+    real = numpy.dtype(PRECISIONS[precision][0]).itemsize
+    complex_ = 2 * real
+    radial_points, budget = int(radial_points), int(memory_budget)
+    reps, w_plus, w_minus = antipodal_pairs(sphere.nodes(), sphere.weights())
+    n_pairs = len(reps)
+    terms = 2 if kernel.is_isotropic else 2 * sigma.n_points
+    half_shape = grid.half_shape
+    half, total = math.prod(half_shape), grid.n_modes ** d
+    pipelines = max(1, min(backend.concurrency, radial_points))
+    fixed = complex_ * half * (radial_points + 4 + 2 * pipelines)
+    per_pair = real * total + 2 * complex_ * half
+    table_per_pair = complex_ * (half_shape[0] + half // half_shape[0]) * (1 + terms)
+    tables = table_per_pair * radial_points * n_pairs
+    precompute = tables <= budget // 4
+    if not precompute:      # each pipeline forms the tables of its block of pairs
+        tables, per_pair = 0, per_pair + table_per_pair
+    if batch is None:
+        batch = _default_batch(complex_ * half, n_pairs, _ceil_div(radial_points, pipelines),
+                               backend.batch_bytes)
+    if fixed + tables + pipelines * batch * per_pair > budget:
+        batch = (budget - fixed - tables) // (pipelines * per_pair)
+        if batch < 1:
+            check.reject(owner, "memory_budget", memory_budget,
+                         f"is too small: one pair per pipeline needs "
+                         f"{memory.gib(fixed + tables + pipelines * per_pair)} GiB (d = {d}, "
+                         f"N = {grid.n_modes}); use a smaller N, or raise memory_budget")
+    steady = fixed + tables + pipelines * batch * per_pair
+    if not precompute:      # a block holds the pairs of whole rho values
+        steady += pipelines * max(0, n_pairs - batch) * table_per_pair
+    memory_bytes = steady + 56 * half
+    if memory_bytes > budget:
+        check.reject(owner, "memory_budget", memory_budget,
+                     f"is too small: the operator needs {memory.gib(memory_bytes)} GiB (d = {d}, "
+                     f"N = {grid.n_modes}); use a smaller N, or raise memory_budget")
+    return _Plan(radial_points, sphere, sigma, reps, w_plus, w_minus, pipelines, int(batch),
+                 precompute, int(memory_bytes))
+
+
 _BLAS = threadpoolctl.ThreadpoolController()
 
 
@@ -286,7 +366,7 @@ class _PhaseTables:
     quarter of the memory budget and otherwise formed once per rho block.
     """
 
-    def __init__(self, op: FastSpectral, memory_budget: int):
+    def __init__(self, op: FastSpectral, precompute: bool):
         xp = op.backend.xp
         self.op, self.xp = op, xp
         self.k = [xp.asarray(k) for k in op._k_axes]
@@ -294,11 +374,7 @@ class _PhaseTables:
         self.coef = xp.asarray(op._coef)
         self.sig = xp.asarray(op._sig)
         self.rho, self.a, self.b = (xp.asarray(v) for v in (op._rho, op._a, op._b))
-        n0, rest = op._half_shape[0], int(numpy.prod(op._half_shape[1:]))
-        terms = self.coef.shape[1]
-        size = 2 * op._itemsize * len(op._rho) * op.n_pairs * (n0 + rest) * (1 + terms)
-        self.nbytes = size if size <= memory_budget // 4 else 0
-        self._all = self.compute(slice(0, len(op._rho))) if self.nbytes else None
+        self._all = self.compute(slice(0, len(op._rho))) if precompute else None
 
     def __call__(self, rhos: slice):
         if self._all is not None:

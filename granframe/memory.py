@@ -1,0 +1,103 @@
+"""Memory budgets: what a run and its collision operator may allocate, checked beforehand.
+
+A 3D grid of N = 1024 holds 8 GiB per copy of f, and the operators' tables are tens
+of such copies; allocating first would end in the out-of-memory killer. So the
+operators estimate their bytes before allocating
+(:meth:`granframe.CollisionOperator.estimate_memory`) and refuse past their
+``memory_budget``, and :func:`check_run_memory` refuses a run whose estimate
+(:func:`run_memory`) exceeds :func:`budget` before anything is built.
+
+The budget is the environment variable ``GRANFRAME_MEMORY_BUDGET`` (bytes) when it is
+set, else :data:`DEFAULT_BUDGET` for a run and each operator's own default for its
+``memory_budget``. A fixed default, not a share of this machine's memory, keeps a
+description valid or not alike on every machine (a run refused on a laptop is refused
+on the cluster too, until the variable says otherwise).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+from granframe import validators as check
+
+#: Environment variable that overrides every default budget (a number of bytes).
+ENVIRONMENT_VARIABLE = "GRANFRAME_MEMORY_BUDGET"
+
+#: Bytes a run may use when GRANFRAME_MEMORY_BUDGET is not set: 4 GiB, what a laptop or a
+#: CI runner can give one run; every study and test of granframe needs far less.
+DEFAULT_BUDGET = 4 * 2 ** 30
+
+
+def gib(nbytes: float) -> str:
+    """``nbytes`` in GiB, three significant digits."""
+    return f"{nbytes / 2 ** 30:.3g}"
+
+
+def budget(default: int = DEFAULT_BUDGET) -> int:
+    """GRANFRAME_MEMORY_BUDGET in bytes when set (a positive number, e.g. 8e9), else ``default``."""
+    text = os.environ.get(ENVIRONMENT_VARIABLE)
+    if text is None:
+        return default
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value >= 1):
+        check.reject("environment", ENVIRONMENT_VARIABLE, text,
+                     "must be a positive number of bytes, e.g. 8e9")
+    return int(value)
+
+
+def integrator_copies(integrator) -> int:
+    """Copies of f a time integrator holds in one step: 2 per stage (the stage value and the
+    combination in progress, or the explicit and implicit terms of an IMEX stage) and 4 more
+    (f, the result, and what an embedded error estimate or an integrating factor keeps)."""
+    tableau = getattr(integrator, "tableau", None) or getattr(integrator, "explicit", None)
+    stages = len(tableau.b) if tableau is not None else 4
+    return 2 * stages + 4
+
+
+#: Copies of f a run holds besides the integrator's: the sampled and projected f0, the
+#: equation's right-hand side (Q, the heat bath term and their sum), the host copy of a
+#: snapshot, and the moment computations (|v|^2, |v - u|^2 and a product).
+RUN_COPIES = 2 + 3 + 1 + 3
+
+
+def run_memory(description) -> dict:
+    """Estimated bytes of a run of ``description``, found without allocating anything large.
+
+    Returns ``f`` (bytes of one float64 copy of f), ``copies`` (:func:`integrator_copies`
+    + :data:`RUN_COPIES`), ``operator`` (the operator's
+    :meth:`~granframe.CollisionOperator.estimate_memory`, 0 when it gives none) and
+    ``total``. The operator's estimate raises the operator's own errors, among them a
+    ``memory_budget`` too small for it.
+    """
+    from granframe.registry import default_registries
+
+    d = description
+    need = {"f": 8 * d.grid.n_modes ** d.grid.dimension,
+            "copies": integrator_copies(d.build("integrator")) + RUN_COPIES, "operator": 0}
+    need["total"] = need["f"] * need["copies"]
+    if need["total"] <= budget():   # else too much already, whatever the operator needs
+        factory = default_registries().get("collision_operators", d.operator.name).factory
+        estimate = getattr(factory, "estimate_memory", None)
+        if estimate is not None:
+            need["operator"] = estimate(d.grid, d.build("kernel"), d.build("restitution"),
+                                        d.build("backend"), **d._operator_options()) or 0
+            need["total"] += need["operator"]
+    return need
+
+
+def check_run_memory(description) -> None:
+    """Refuse a run whose :func:`run_memory` exceeds :func:`budget`, with the estimate."""
+    need, limit = run_memory(description), budget()
+    if need["total"] > limit:
+        grid = description.grid
+        operator = (f"operator {gib(need['operator'])} GiB + " if need["operator"] else "")
+        check.reject("Simulation", "grid.n_modes", grid.n_modes,
+                     f"needs about {gib(need['total'])} GiB for this run ({operator}"
+                     f"{need['copies']} copies of f at {gib(need['f'])} GiB, "
+                     f"d = {grid.dimension}), more than the memory budget of {gib(limit)} "
+                     f"GiB; use a smaller n_modes, or set {ENVIRONMENT_VARIABLE} (bytes) to "
+                     "allow more")
