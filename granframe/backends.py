@@ -175,9 +175,17 @@ class RealFFT:
         return int(numpy.prod(self._sizes))
 
 
+#: Largest ``threads`` of a CPU backend. Not this machine's CPU count: a description or
+#: store written on a large machine must still be read on a small one, and tests run two
+#: pipelines on one core. 1024 is above the hardware threads of current single machines
+#: (two 192-core sockets with SMT: 768); each thread runs an operator pipeline with its own
+#: buffers, so a larger count only costs memory and thread start-up.
+MAX_THREADS = 1024
+
+
 def _optional_threads(instance, attribute, value):
     if value is not None:
-        check.integer(lower=1)(instance, attribute, value)
+        check.integer(lower=1, upper=MAX_THREADS)(instance, attribute, value)
 
 
 @attrs.frozen
@@ -187,10 +195,10 @@ class CPUBackend(ArrayBackend):
     Parameters
     ----------
     threads : int or None
-        Threads in all; ``None`` uses every CPU available. Operators run
-        ``threads`` independent single-threaded pipelines (at the sizes of this
-        field the transforms scale better over independent pipelines than
-        inside one), while one-off transforms use all threads.
+        Threads in all, 1 to :data:`MAX_THREADS`; ``None`` uses every CPU
+        available. Operators run ``threads`` independent single-threaded pipelines
+        (at the sizes of this field the transforms scale better over independent
+        pipelines than inside one), while one-off transforms use all threads.
     """
 
     threads: int | None = attrs.field(default=None, converter=check.to_int,

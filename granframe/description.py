@@ -45,9 +45,11 @@ import tomllib
 from typing import Any
 
 import attrs
+import numpy
 import tomli_w
 
 from granframe import validators as check
+from granframe.backends import PRECISIONS
 from granframe.grid import VelocityGrid
 from granframe.initial import callable_reference, resolve_callable
 from granframe.registry import default_registries
@@ -55,6 +57,23 @@ from granframe.rescaling import check_rescalable
 
 #: Tolerance on "final_time and snapshot_interval are whole multiples of time_step".
 _MULTIPLE_TOLERANCE = 1e-9
+
+#: Most fixed steps of a run. Every step writes a moment record (about 100 bytes) to the
+#: store and takes at least a few operator evaluations (0.1 ms each on the smallest grids),
+#: so 1e9 steps are 100 GB of records and days of computing: more is a mistake in
+#: final_time or time_step (and it keeps the step counts exact in float64).
+MAX_STEPS = 10 ** 9
+
+#: Most snapshots of a run: each stores f (N^d values, 32 KiB at 2D N = 64), and the
+#: schedule is a list of output points, so 1e6 snapshots are already 32 GB at that size.
+MAX_SNAPSHOTS = 10 ** 6
+
+#: Smallest tolerance of an adaptive integrator, in machine epsilons of the operator's
+#: precision: the error estimate is the difference of two solutions of the same
+#: precision, each carrying the round-off of the stages and the transforms (tens of
+#: epsilons), so a tolerance below 100 eps (2.2e-14 in float64, 1.2e-5 in float32) is
+#: met only by accident: steps shrink to round-off or are accepted on noise.
+TOLERANCE_FLOOR_EPSILONS = 100
 
 
 def _is_json_scalar(value) -> bool:
@@ -154,6 +173,17 @@ class Health:
         Largest f0 on the faces of the box, relative to max f0.
     initial_mass_tolerance : float
         Largest relative error of the grid mass of f0 against its intended mass.
+    projection_tolerance : float
+        Largest relative change of the mass and temperature of f0 when its Nyquist modes
+        are removed (:meth:`VelocityGrid.project`, which the operators need): a larger
+        change means f0 is not resolved by the grid. The default 2e-2 lets every shipped
+        study run; the largest change among them is 1.4e-2, the discontinuous box of
+        review_test1's quick variant at N = 32 (the review's heated Maxwell problem: 3e-14).
+    projection_kurtosis_tolerance : float
+        The same for the kurtosis. The fourth moment weighs the corners of the box, where
+        the Nyquist checkerboard is as large as anywhere, and moves 30 to 100 times more
+        than T: 0.55 for that box, 0.32 for review_test3's 3D Maxwellian on the review's
+        grid (S = 4); the default 1 lets them run.
     step_limit : bool
         Refuse, before the first step, a fixed time step above the integrator's
         explicit stability limit (:mod:`granframe.stability`). Set it false only to
@@ -168,6 +198,11 @@ class Health:
                                         validator=check.real(0.0, 1.0))
     initial_mass_tolerance: float = attrs.field(default=1e-6, converter=check.to_float,
                                                 validator=check.real(0.0, 1.0, lower_open=True))
+    projection_tolerance: float = attrs.field(default=2e-2, converter=check.to_float,
+                                              validator=check.real(0.0, math.inf, lower_open=True))
+    projection_kurtosis_tolerance: float = attrs.field(
+        default=1.0, converter=check.to_float,
+        validator=check.real(0.0, math.inf, lower_open=True))
     step_limit: bool = attrs.field(default=True, validator=check.boolean)
 
 
@@ -289,10 +324,24 @@ class RunDescription:
         if adaptive and self.tolerance is None:
             check.reject(owner, "tolerance", None,
                          f"is required by the adaptive integrator '{name}' (a positive number)")
+        if adaptive:
+            precision = self.operator.params.get("precision", "float64")
+            epsilon = float(numpy.finfo(precision if precision in PRECISIONS else "float64").eps)
+            floor = TOLERANCE_FLOOR_EPSILONS * epsilon
+            if self.tolerance < floor:
+                check.reject(owner, "tolerance", self.tolerance,
+                             f"must be >= {floor:.3g} ({TOLERANCE_FLOOR_EPSILONS} machine "
+                             f"epsilons of the operator's {precision}): a smaller error is "
+                             "below round-off and cannot be controlled")
         if not adaptive:
             if self.time_step is None:
                 check.reject(owner, "time_step", None,
                              f"is required by the fixed-step integrator '{name}'")
+            if not self.final_time / self.time_step <= MAX_STEPS:
+                check.reject(owner, "final_time", self.final_time,
+                             f"must be at most {MAX_STEPS:.0e} steps of time_step = "
+                             f"{self.time_step!r} (it is {self.final_time / self.time_step:.3g} "
+                             "steps); check final_time and time_step")
             if self.tolerance is not None:
                 check.reject(owner, "tolerance", self.tolerance,
                              f"applies to adaptive integrators only, not to '{name}'")
@@ -310,6 +359,10 @@ class RunDescription:
         if interval is not None and interval > self.final_time:
             check.reject(owner, "output.snapshot_interval", interval,
                          f"must be <= final_time = {self.final_time!r}")
+        if interval is not None and not self.final_time / interval <= MAX_SNAPSHOTS:
+            check.reject(owner, "output.snapshot_interval", interval,
+                         f"must give at most {MAX_SNAPSHOTS:.0e} snapshots up to final_time = "
+                         f"{self.final_time!r} (it gives {self.final_time / interval:.3g})")
 
     # -- building ---------------------------------------------------------------------
     def build(self, field: str, **extra):

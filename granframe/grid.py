@@ -201,9 +201,17 @@ class VelocityGrid:
         self.check_shape(f)
         return numpy.array([float(xp.sum(c * f)) for c in self.mesh(xp)]) * self.cell_volume
 
+    def _nonzero_mass(self, f, xp) -> float:
+        """rho, refused when it is zero (the moments below divide by it)."""
+        rho = self.mass(f, xp)
+        if rho == 0.0:
+            check.reject("VelocityGrid", "mass of f", rho, "must be nonzero: the mass is zero, "
+                         "and the bulk velocity, temperature, kurtosis and Sonine a2 divide by it")
+        return rho
+
     def bulk_velocity(self, f, xp=numpy):
-        """u = (int v f dv) / rho."""
-        return self.momentum(f, xp) / self.mass(f, xp)
+        """u = (int v f dv) / rho (refused for a zero mass)."""
+        return self.momentum(f, xp) / self._nonzero_mass(f, xp)
 
     def kinetic_energy(self, f, xp=numpy) -> float:
         """E = int |v|^2/2 f dv (the review's E(f), section 1)."""
@@ -217,12 +225,18 @@ class VelocityGrid:
         return float(xp.sum(c2 ** (power // 2) * f)) * self.cell_volume
 
     def temperature(self, f, xp=numpy) -> float:
-        """T = int |v - u|^2 f dv / (d rho)."""
-        return self._central_moment(f, 2, xp) / (self.dimension * self.mass(f, xp))
+        """T = int |v - u|^2 f dv / (d rho) (refused for a zero mass)."""
+        return self._central_moment(f, 2, xp) / (self.dimension * self._nonzero_mass(f, xp))
 
     def kurtosis(self, f, xp=numpy) -> float:
-        """kappa = rho int |v-u|^4 f / (int |v-u|^2 f)^2; (d+2)/d for a Maxwellian."""
+        """kappa = rho int |v-u|^4 f / (int |v-u|^2 f)^2; (d+2)/d for a Maxwellian.
+
+        Refused for a zero mass, and for a zero second moment (all mass at v = u).
+        """
         m2 = self._central_moment(f, 2, xp)
+        if m2 == 0.0:
+            check.reject("VelocityGrid", "int |v - u|^2 f dv", m2, "must be nonzero: the "
+                         "kurtosis divides by its square (all of f sits at v = u)")
         return self.mass(f, xp) * self._central_moment(f, 4, xp) / m2 ** 2
 
     def sonine_a2(self, f, xp=numpy) -> float:

@@ -204,6 +204,11 @@ def callable_reference(function) -> str | None:
         return None
 
 
+#: Largest imaginary part, relative to max |f0|, of a complex f0 accepted as real: round-off
+#: of transforms or complex exponentials (about 4500 machine epsilons), far below any data.
+IMAGINARY_TOLERANCE = 1e-12
+
+
 def _function(instance, attribute, value):
     resolve_callable("FromCallable", attribute.name, value)
 
@@ -223,13 +228,26 @@ class FromCallable(InitialCondition):
         validator=check.optional_positive)
 
     def sample(self, grid):
+        """f0 on the grid; refused when the function fails, or returns complex values
+        whose imaginary part exceeds :data:`IMAGINARY_TOLERANCE` times max |f0| (a
+        complex result with a round-off imaginary part, e.g. from transforms, is real data
+        and keeps its real part)."""
         function = resolve_callable("FromCallable", "function", self.function)
         try:
-            values = numpy.asarray(function(*grid.mesh()), dtype=float)
+            raw = numpy.asarray(function(*grid.mesh()))
+            values = numpy.asarray(raw.real if raw.dtype.kind == "c" else raw, dtype=float)
         except Exception as exc:  # the user's function: report it with what it was given
             check.reject("FromCallable", "function", self.function,
                          f"must map the {grid.dimension} velocity components (broadcastable "
                          f"arrays) to f0; calling it raised {type(exc).__name__}: {exc}")
+        if raw.dtype.kind == "c":
+            imaginary = float(numpy.abs(raw.imag).max(initial=0.0))
+            scale = float(numpy.abs(values).max(initial=0.0))
+            if not imaginary <= IMAGINARY_TOLERANCE * scale:
+                check.reject("FromCallable", "function", self.function,
+                             f"must return real values; it returned complex values with "
+                             f"max |imaginary part| = {imaginary:.3g} against max |real part| "
+                             f"= {scale:.3g} (more than round-off: f0 is a real density)")
         try:
             return numpy.broadcast_to(values, grid.shape).copy()
         except ValueError:
@@ -282,3 +300,29 @@ def check_fits(grid, f, condition: InitialCondition, edge_tolerance: float,
                          f"{grid.mass(f):.10g}, intended {intended:.10g}): mass lies outside the "
                          "box, or the data is too narrow for the grid spacing "
                          f"h = {grid.spacing:.4g}")
+
+
+def check_projection(grid, f, projected, condition: InitialCondition, tolerance: float,
+                     kurtosis_tolerance: float) -> None:
+    """Refuse f0 that its Nyquist projection (:meth:`VelocityGrid.project`) changes.
+
+    The operators evolve f0 without its modes |k_i| = N/2, so a run starts from
+    ``projected``, not from ``f``. Refused: a relative change of the mass or the
+    temperature above ``tolerance``, or of the kurtosis above ``kurtosis_tolerance``
+    (:class:`granframe.description.Health`): the grid does not resolve f0, and the run
+    would silently start from other data.
+    """
+    owner = f"initial condition {type(condition).__name__}"
+    for name, moment, limit, field in (
+            ("mass", grid.mass, tolerance, "projection_tolerance"),
+            ("temperature", grid.temperature, tolerance, "projection_tolerance"),
+            ("kurtosis", grid.kurtosis, kurtosis_tolerance, "projection_kurtosis_tolerance")):
+        before, after = moment(f), moment(projected)
+        change = abs(after / before - 1.0)
+        if not change <= limit:
+            check.reject(owner, f"relative change of the {name} of f0 by the Nyquist projection",
+                         change, f"must be <= health.{field} = {limit:g} ({name} {before:.6g} "
+                         f"-> {after:.6g}): N = {grid.n_modes} modes do not resolve f0; use a "
+                         f"larger n_modes (spacing h = {grid.spacing:.4g}), or a larger "
+                         "support_radius if f0 is not negligible near the faces of the box, or "
+                         f"raise health.{field} to accept it")
