@@ -15,12 +15,15 @@ from __future__ import annotations
 
 import inspect
 import json
+import math
 import resource
 import subprocess
 import sys
 import time
 
 import numpy
+
+from granframe import validators as check
 
 #: The review's configurations (section 3): (dimension, N, N_rho, M).
 DEFAULT_CONFIGS = ((2, 64, 32, 16), (2, 128, 32, 16), (3, 16, 30, 32), (3, 32, 30, 32),
@@ -121,9 +124,35 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
     }
 
 
+def check_options(backend: str, threads: int, repeats: int) -> None:
+    """Refuse a backend that is not registered, ``threads`` outside 1..MAX_THREADS and
+    ``repeats`` < 1 (a median of no timings is NaN), before any subprocess starts."""
+    from granframe.backends import MAX_THREADS
+    from granframe.registry import default_registries
+
+    names = default_registries().names("array_backends")
+    if backend not in names:
+        raise ValueError(f"bench: parameter 'backend' = {backend!r} is invalid; must be a "
+                         f"registered array backend: {', '.join(names)}")
+    if not check.is_integer(threads) or not 1 <= threads <= MAX_THREADS:
+        raise ValueError(f"bench: parameter 'threads' = {threads!r} is invalid; must be an "
+                         f"integer >= 1 and <= {MAX_THREADS}")
+    if not check.is_integer(repeats) or repeats < 1:
+        raise ValueError(f"bench: parameter 'repeats' = {repeats!r} is invalid; must be an "
+                         "integer >= 1 (the time is the median of that many evaluations)")
+
+
 def run(configs, backend: str, threads: int, repeats: int,
         precision: str = "float64", options: dict | None = None) -> list[dict]:
-    """Measure each configuration in its own subprocess (``options``: see :func:`measure`)."""
+    """Measure each configuration in its own subprocess (``options``: see :func:`measure`).
+
+    The options and every configuration are checked first (:func:`check_options`,
+    :func:`check_config`); a configuration that fails in its subprocess is reported by
+    its last line, the error, not by the subprocess's traceback.
+    """
+    check_options(backend, threads, repeats)
+    for config in configs:
+        check_config(config)
     records = []
     for dimension, n_modes, radial, sphere in configs:
         command = [sys.executable, "-c",
@@ -133,8 +162,9 @@ def run(configs, backend: str, threads: int, repeats: int,
                    f"options={options!r})))"]
         done = subprocess.run(command, capture_output=True, text=True)
         if done.returncode != 0:
-            raise ValueError(f"bench: configuration d={dimension} N={n_modes} failed:\n"
-                             f"{done.stderr.strip()}")
+            lines = done.stderr.strip().splitlines() or [f"exit status {done.returncode}"]
+            raise ValueError(f"bench: configuration d={dimension} N={n_modes} failed: "
+                             f"{lines[-1]}")
         records.append(json.loads(done.stdout.strip().splitlines()[-1]))
     return records
 
@@ -160,8 +190,32 @@ def _ms(seconds: float) -> str:
     return f"{seconds * 1e3:.1f} ms" if seconds < 1 else f"{seconds:.2f} s"
 
 
+def check_config(config) -> tuple:
+    """Refuse a configuration (d, N, N_rho, M) the operator would refuse, naming the
+    parameter: d in {2, 3}, N an even integer in [4, 65536] (the grid's rule), N_rho in
+    [1, MAX_GAUSS_POINTS], M in [1, MAX_SURFACE_POINTS] (in 3D 2 n^2, a Gauss product
+    rule)."""
+    from granframe.quadratures import MAX_GAUSS_POINTS, MAX_SURFACE_POINTS
+
+    dimension, n_modes, radial, sphere = config
+    rules = (("config", dimension, dimension in (2, 3), "D must be 2 or 3"),
+             ("n_modes", n_modes, n_modes >= 4 and n_modes % 2 == 0 and n_modes <= 2 ** 16,
+              "must be an even integer >= 4 and <= 65536"),
+             ("radial_points", radial, 1 <= radial <= MAX_GAUSS_POINTS,
+              f"must be an integer >= 1 and <= {MAX_GAUSS_POINTS}"),
+             ("sphere_points", sphere, 1 <= sphere <= MAX_SURFACE_POINTS
+              and (dimension == 2 or 2 * math.isqrt(sphere // 2) ** 2 == sphere),
+              f"must be an integer >= 1 and <= {MAX_SURFACE_POINTS}, in 3D 2 n^2 (Gauss "
+              "product rule), e.g. 32"))
+    for name, value, good, allowed in rules:
+        if not good:
+            raise ValueError(f"bench: parameter '{name}' = {value} is invalid; {allowed}")
+    return config
+
+
 def parse_config(text: str):
-    """'D:N' or 'D:N:NRHO:M' -> (d, N, N_rho, M) with the review's quadrature by default."""
+    """'D:N' or 'D:N:NRHO:M' -> (d, N, N_rho, M) with the review's quadrature by default,
+    checked by :func:`check_config`."""
     parts = text.split(":")
     try:
         values = [int(p) for p in parts]
@@ -172,4 +226,4 @@ def parse_config(text: str):
                          "D:N:N_RHO:M with D in {2, 3}, e.g. 3:32 or 3:32:30:32")
     if len(values) == 2:
         values += [32, 16] if values[0] == 2 else [30, 32]
-    return tuple(values)
+    return check_config(tuple(values))
