@@ -10,52 +10,78 @@ implementations by name::
 See docs/architecture.md for which module owns what.
 """
 
+import importlib
+
 from granframe._version import __version__
-from granframe.backends import ArrayBackend, NumpyBackend
-from granframe.errors import AliasingWarning, PluginError, UnknownNameError
-from granframe.grid import VelocityGrid
-from granframe.hookspecs import hookimpl
-from granframe.integrators import TimeIntegrator
-from granframe.kernels import VariableHardSpheres
-from granframe.operators import CollisionOperator
-from granframe.quadratures import CircleTrapezoid, GaussLegendre, Lebedev, Quadrature, SphereProduct
-from granframe.registry import FAMILIES, default_registries
-from granframe.restitution import RestitutionLaw
+
+#: public name -> the module that defines it; imported on first use (PEP 562), so that
+#: ``granframe`` and its command line start fast and a Ctrl-C during start-up meets the
+#: command line's handler rather than an import
+_EXPORTS = {
+    "ArrayBackend": "granframe.backends", "NumpyBackend": "granframe.backends",
+    "AliasingWarning": "granframe.errors", "PluginError": "granframe.errors",
+    "UnknownNameError": "granframe.errors", "VelocityGrid": "granframe.grid",
+    "hookimpl": "granframe.hookspecs", "TimeIntegrator": "granframe.integrators",
+    "VariableHardSpheres": "granframe.kernels", "CollisionOperator": "granframe.operators",
+    "CircleTrapezoid": "granframe.quadratures", "GaussLegendre": "granframe.quadratures",
+    "Lebedev": "granframe.quadratures", "Quadrature": "granframe.quadratures",
+    "SphereProduct": "granframe.quadratures", "FAMILIES": "granframe.registry",
+    "default_registries": "granframe.registry", "RestitutionLaw": "granframe.restitution",
+}
+
+
+def __getattr__(name):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'granframe' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_EXPORTS))
+
+
+def _registries():
+    from granframe.registry import default_registries
+
+    return default_registries()
 
 
 def collision_kernel(name: str, **params):
     """Build the collision kernel registered as ``name``."""
-    return default_registries().create("collision_kernels", name, **params)
+    return _registries().create("collision_kernels", name, **params)
 
 
 def restitution_law(name: str, **params):
     """Build the restitution law registered as ``name``."""
-    return default_registries().create("restitution_laws", name, **params)
+    return _registries().create("restitution_laws", name, **params)
 
 
 def quadrature(name: str, **params):
     """Build the quadrature rule registered as ``name``."""
-    return default_registries().create("quadratures", name, **params)
+    return _registries().create("quadratures", name, **params)
 
 
 def array_backend(name: str = "numpy", **params):
     """Build the array backend registered as ``name``."""
-    return default_registries().create("array_backends", name, **params)
+    return _registries().create("array_backends", name, **params)
 
 
 def time_integrator(name: str, **params):
     """Build the time integrator registered as ``name``."""
-    return default_registries().create("time_integrators", name, **params)
+    return _registries().create("time_integrators", name, **params)
 
 
 def initial_condition(name: str, **params):
     """Build the initial condition registered as ``name``."""
-    return default_registries().create("initial_conditions", name, **params)
+    return _registries().create("initial_conditions", name, **params)
 
 
 def collision_operator(name: str, grid, kernel, restitution, backend=None, **options):
     """Build the collision operator registered as ``name`` (precomputation happens here)."""
-    return default_registries().create(
+    return _registries().create(
         "collision_operators", name, grid=grid, kernel=kernel, restitution=restitution,
         backend=array_backend() if backend is None else backend, **options)
 

@@ -36,10 +36,11 @@ import pathlib
 import sys
 
 from granframe._version import __version__
-from granframe.registry import FAMILIES, default_registries
 
 
 def _plugins(args) -> int:
+    from granframe.registry import FAMILIES, default_registries
+
     registries = default_registries()
     if args.json:
         json.dump(registries.to_json(), sys.stdout, indent=2)

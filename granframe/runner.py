@@ -57,6 +57,9 @@ class Study:
     @runs.validator
     def _check_names(self, attribute, value):
         """Each run is written to OUT/<name>.zarr: a name is one plain path component."""
+        if "" in value and len(value) > 1:
+            reject("Study", "runs", list(value), "must name every run when there are several "
+                   "(the unnamed run '' is a study's only run)")
         for name in value:
             if name != "" and not (isinstance(name, str) and _RUN_NAME.fullmatch(name)):
                 reject("Study", "runs", name, "must be run names of letters, digits, '.', "
@@ -294,6 +297,7 @@ class Simulation:
             f, step, mass0 = backend.asarray(f_host), int(state["step"]), float(state["mass0"])
             dt_next = state.get("dt_next")
             resumes = state.get("resumes", []) + [step]
+            rollbacks = state.get("rollbacks", [])
             wall_before = float(state.get("wall_seconds", 0.0))
         else:
             rescaling = getattr(self.equation, "rescaling", None)
@@ -305,7 +309,7 @@ class Simulation:
                 record = moments(grid, f, xp)
                 # adaptive schemes without a first trial step start from 1% of the run
                 mass0, dt_next = record["mass"], d.time_step or d.final_time / 100
-                resumes, wall_before = [], 0.0
+                resumes, rollbacks, wall_before = [], [], 0.0
                 first = _Records()
                 first.add(0, 0.0, 0.0, record)
                 store.commit([(0.0, self.f0)], first.columns,
@@ -320,6 +324,7 @@ class Simulation:
             """The progress entry of a commit made now."""
             return {"status": status, "step": step, "time": t, "mass0": mass0,
                     "dt_next": dt_next, "resumes": resumes,
+                    **({"rollbacks": rollbacks} if rollbacks else {}),
                     "wall_seconds": wall_before + time.perf_counter() - start_wall, **extra}
 
         adaptive = self.integrator.adaptive

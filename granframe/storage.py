@@ -379,7 +379,7 @@ class RunStore:
         metadata. The first :meth:`commit` and :meth:`publish` put it in place.
         """
         path = pathlib.Path(path)
-        lock = WriterLock(path).acquire()
+        lock, staging = WriterLock(path).acquire(), None
         try:
             recover(path)
             kind = store_kind(path)
@@ -416,6 +416,8 @@ class RunStore:
                 **({} if rescaling is None else {"rescaling": rescaling}),
             }
         except BaseException:
+            if staging is not None:
+                shutil.rmtree(staging, ignore_errors=True)
             lock.release()
             raise
         store = cls(staging, group, lock)

@@ -1,0 +1,377 @@
+"""Stores that never lose or fake data: what --overwrite may replace, a kill inside a swap,
+checksums and missing chunks, the writer lock, atomic creation, interruption, and the
+smaller cases around them (run names, --resume with --overwrite, sweep --out, partial
+files, a study's report that raises)."""
+
+import errno
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import numpy
+import pytest
+import xarray
+import zarr
+
+from granframe.cli import main
+from granframe.runner import Simulation, Study
+from granframe.storage import (RunStore, StoreDamagedError, StoreLockedError, WriterLock,
+                               check, lock_path)
+from granframe.sweep import run_point
+from test_fault_injection import HARNESS, NEW, OLD, assert_same, contents, writes
+from test_runner import heated
+
+
+def tree(root) -> dict:
+    """Every file under ``root`` and its bytes (the writer locks beside stores excepted)."""
+    return {str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*"))
+            if p.is_file() and not p.name.endswith(".granframe.lock")}
+
+
+@pytest.fixture
+def workdir(tmp_path, monkeypatch):
+    """A directory of user files with a run description in it, the current directory."""
+    d = tmp_path / "d"
+    d.mkdir()
+    (d / "base.toml").write_text(NEW.to_toml())
+    (d / "notes.txt").write_text("my notes\n")
+    monkeypatch.chdir(d)
+    return d
+
+
+def finished(path, description=NEW):
+    Simulation(description).run(path, progress=False)
+    return path
+
+
+def flip(path: pathlib.Path, count: int = 16) -> None:
+    """Flip ``count`` bytes in the middle of a file."""
+    data = bytearray(path.read_bytes())
+    middle = len(data) // 2
+    for i in range(middle, middle + count):
+        data[i] ^= 0xFF
+    path.write_bytes(bytes(data))
+
+
+# -- 1. --overwrite replaces only a granframe store or an empty directory ----------------
+def test_overwrite_refuses_the_current_directory(workdir, capsys):
+    before = tree(workdir)
+    assert main(["run", "base.toml", "--out", ".", "--overwrite", "--no-progress"]) == 2
+    assert "is the current directory" in capsys.readouterr().err
+    assert tree(workdir) == before
+
+
+def test_overwrite_refuses_a_directory_that_holds_the_source(workdir, tmp_path, capsys,
+                                                            monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    before = tree(workdir)
+    assert main(["run", str(workdir / "base.toml"), "--out", str(workdir), "--overwrite",
+                 "--no-progress"]) == 2
+    assert "holds the source" in capsys.readouterr().err
+    assert tree(workdir) == before
+
+
+@pytest.mark.parametrize("kind", ["user files", "a file", "a foreign zarr group",
+                                  "the source"])
+def test_overwrite_refuses_anything_that_is_not_a_granframe_store(workdir, kind, capsys):
+    target = {"user files": "mine", "a file": "data.csv", "a foreign zarr group": "x.zarr",
+              "the source": "base.toml"}[kind]
+    if kind == "user files":
+        (workdir / "mine").mkdir()
+        (workdir / "mine" / "results.txt").write_text("precious\n")
+    elif kind == "a file":
+        (workdir / "data.csv").write_text("1,2,3\n")
+    elif kind == "a foreign zarr group":
+        zarr.open_group("x.zarr", mode="w").create_array("a", shape=(3,), dtype="f8")[:] = 1.0
+    before = tree(workdir)
+    assert main(["run", "base.toml", "--out", target, "--overwrite", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert f"'{target}'" in err and "refused" in err and "Traceback" not in err
+    assert tree(workdir) == before
+
+
+def test_overwrite_refuses_a_run_store_that_also_holds_a_user_file(workdir, capsys):
+    finished(workdir / "s.zarr")
+    (workdir / "s.zarr" / "README").write_text("what this run is\n")
+    before = tree(workdir)
+    assert main(["run", "base.toml", "--out", "s.zarr", "--overwrite", "--no-progress"]) == 2
+    assert "files granframe did not write (README)" in capsys.readouterr().err
+    assert tree(workdir) == before
+
+
+def test_overwrite_replaces_a_run_store_and_an_empty_directory(workdir):
+    finished(workdir / "s.zarr", OLD)
+    (workdir / "empty").mkdir()
+    for target in ("s.zarr", "empty"):
+        assert main(["run", "base.toml", "--out", target, "--overwrite", "--no-progress"]) == 0
+        assert RunStore.open(target).metadata["description"] == NEW.to_dict()
+    assert (workdir / "notes.txt").read_text() == "my notes\n"
+
+
+# -- 2. a kill inside --overwrite never leaves a hybrid ------------------------------------
+def test_a_kill_between_the_two_renames_of_a_swap_is_completed_by_the_next_writer(workdir,
+                                                                                 capsys):
+    finished(workdir / "s.zarr", OLD)
+    arguments = ["run", "base.toml", "--out", "s.zarr", "--overwrite", "--no-progress"]
+    (workdir / "count").mkdir()
+    (workdir / "count" / "base.toml").write_text(NEW.to_toml())
+    finished(workdir / "count" / "s.zarr", OLD)
+    renames = [int(line.split()[0]) for line in writes(workdir / "count", arguments)
+               if line.split()[1] == "rename"]
+    killed = subprocess.run([sys.executable, str(HARNESS), str(renames[1]), "log", *arguments],
+                            capture_output=True, text=True, timeout=120)
+    assert killed.returncode == -signal.SIGKILL
+    # the old store was moved aside and the new one not yet in place: nothing reads as data
+    assert not (workdir / "s.zarr").exists() and RunStore.exists(workdir / "s.zarr")
+    with pytest.raises(FileNotFoundError):
+        xarray.open_zarr(workdir / "s.zarr")
+    assert main(["info", "s.zarr"]) == 2
+    assert "replacement was cut short: run it again with --resume" in capsys.readouterr().err
+    assert main(["run", "base.toml", "--out", "s.zarr", "--resume", "--no-progress"]) == 0
+    reference = contents(finished(workdir / "reference.zarr"))
+    assert_same(contents(workdir / "s.zarr"), reference, "completed swap")
+    assert sorted(p.name for p in workdir.iterdir() if p.name.startswith(".s.zarr")) == [
+        ".s.zarr.granframe.lock"]
+
+
+# -- 3. checksums; a missing chunk is never a zero ------------------------------------------
+def test_a_damaged_chunk_raises_on_every_read(workdir, capsys):
+    store = finished(workdir / "s.zarr")
+    flip(store / "f" / "c" / "2" / "0" / "0")
+    with pytest.raises(ValueError, match="checksum"):
+        xarray.open_zarr(store).f.values
+    assert main(["check", "s.zarr"]) == 3
+    out = capsys.readouterr().out
+    assert "damaged: f/c/2/0/0 (from entry 2)" in out and "DAMAGED" in out
+    assert main(["plot", "s.zarr", "--out", "figures"]) == 2
+    assert "is damaged: damaged chunk f/c/2/0/0" in capsys.readouterr().err
+    assert not (workdir / "figures").exists() or not list((workdir / "figures").iterdir())
+    flip(store / "mass" / "c" / "0")
+    assert main(["info", "s.zarr"]) == 2
+    assert "damaged chunk mass/c/0" in capsys.readouterr().err
+
+
+def test_a_missing_chunk_is_never_read_as_a_zero(workdir, capsys):
+    store = finished(workdir / "s.zarr")
+    (store / "f" / "c" / "1" / "0" / "0").unlink()
+    (store / "step" / "c" / "0").unlink()
+    ds = xarray.open_zarr(store)
+    assert numpy.isnan(ds.f.isel(time=1).values).all()          # NaN, not zeros
+    assert (ds.step.values == -1).all()
+    with pytest.raises(StoreDamagedError, match="missing chunk f/c/1/0/0"):
+        RunStore.open(store)
+    assert main(["info", "s.zarr"]) == 2
+    assert main(["check", "s.zarr"]) == 3
+    out = capsys.readouterr().out
+    assert "missing: f/c/1/0/0" in out and "missing: step/c/0" in out
+    assert main(["check", str(finished(workdir / "intact.zarr"))]) == 0
+
+
+def test_resume_from_a_damaged_last_snapshot_says_so_and_rolls_back_on_request(workdir,
+                                                                              capsys):
+    reference = contents(finished(workdir / "reference.zarr"))
+    store = finished(workdir / "s.zarr")
+    # the run as a kill after its third commit (t = 0.2) leaves it, and that commit damaged
+    cut = RunStore.open(store, mode="r+")
+    meta = cut.metadata
+    meta["progress"] = dict(meta["progress"], snapshots=3, records=5, step=4, time=0.2,
+                            status="running")
+    cut.group.attrs["granframe"] = meta
+    flip(store / "f" / "c" / "2" / "0" / "0")
+    assert main(["run", "base.toml", "--out", "s.zarr", "--resume", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "is damaged (damaged chunk f/c/2/0/0)" in err
+    assert "last intact commit is snapshot 1 at t = 0.1 (step 2)" in err
+    assert "--resume --rollback" in err
+    assert RunStore.open(store).progress["status"] == "running"     # not blamed on physics
+    assert main(["run", "base.toml", "--out", "s.zarr", "--resume", "--rollback",
+                 "--no-progress"]) == 0
+    resumed = contents(store)
+    assert resumed["meta"]["progress"]["rollbacks"] == [2]
+    assert_same(resumed, reference, "rolled back and resumed")
+    assert check(store)[0]
+
+
+# -- 4. one writer at a time -----------------------------------------------------------------
+SLOW = heated(grid={"dimension": 2, "n_modes": 32, "support_radius": 10.0}, time_step=0.002,
+              final_time=4.0, output={"snapshot_interval": 0.1})
+
+
+def wait_for(condition, what, timeout=60):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            if condition():
+                return
+        except (StoreDamagedError, ValueError, KeyError, OSError):
+            pass                 # a store or its metadata being written this instant
+        time.sleep(0.03)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+def test_a_second_writer_is_refused_by_name_and_the_first_run_is_intact(workdir, capsys):
+    (workdir / "slow.toml").write_text(SLOW.to_toml())
+    writer = subprocess.Popen([sys.executable, "-m", "granframe.cli", "run", "slow.toml",
+                               "--out", "s.zarr", "--no-progress"], stderr=subprocess.PIPE,
+                              text=True)
+    wait_for(lambda: RunStore.open("s.zarr").snapshot_count >= 2, "the first snapshots")
+    for extra in (["--overwrite"], ["--resume"]):
+        assert main(["run", "base.toml", "--out", "s.zarr", "--no-progress", *extra]) == 2
+        err = capsys.readouterr().err
+        assert f"is being written by pid {writer.pid} on host " in err and " since " in err
+    writer.send_signal(signal.SIGINT)                       # Ctrl-C
+    assert writer.wait(timeout=60) == 130
+    assert "continue with --resume" in writer.stderr.read()
+    assert RunStore.open("s.zarr").progress["status"] == "interrupted"
+    group = RunStore.open("s.zarr").group
+    n = RunStore.open("s.zarr").progress["records"]
+    assert list(group["step"][:n]) == list(range(n))      # the first run, untouched
+
+
+def test_a_lock_of_a_dead_process_does_not_block(workdir):
+    holder = subprocess.Popen([sys.executable, "-c", textwrap.dedent("""
+        import sys, time
+        from granframe.storage import WriterLock
+        lock = WriterLock("s.zarr").acquire()
+        print("held", flush=True)
+        time.sleep(600)
+    """)], stdout=subprocess.PIPE, text=True)
+    assert holder.stdout.readline() == "held\n"
+    with pytest.raises(StoreLockedError, match=f"pid {holder.pid} on host"):
+        WriterLock("s.zarr").acquire()
+    holder.kill()
+    holder.wait()
+    assert f'"pid": {holder.pid}' in lock_path("s.zarr").read_text()   # its record stays
+    start = time.monotonic()
+    with WriterLock("s.zarr") as lock:
+        assert lock.held and time.monotonic() - start < 1.0
+
+
+def test_a_sweep_task_given_again_waits_for_the_live_worker_and_never_writes_twice(workdir):
+    """Dask gives a task presumed dead to another worker while the first still runs it:
+    the second waits for the first's writer lock, then returns the finished run's row."""
+    path = workdir / "runs" / "point"
+    first = subprocess.Popen([sys.executable, "-c", "import json, sys; from granframe.sweep "
+                              "import run_point; run_point(json.loads(sys.argv[1]), "
+                              "sys.argv[2])", __import__("json").dumps(SLOW.to_dict()),
+                              str(path)])
+    wait_for(lambda: RunStore.open(path).snapshot_count >= 2, "the first worker's snapshots")
+    row = run_point(SLOW.to_dict(), str(path), poll=0.05)   # the second worker
+    assert first.wait(timeout=120) == 0
+    assert row["status"] == "finished" and row["steps"] == 2000
+    store = RunStore.open(path)
+    assert store.progress["resumes"] == []                  # written by the first alone
+    assert list(store.group["step"][:]) == list(range(2001))
+
+
+# -- 5. creation is atomic ------------------------------------------------------------------
+def test_ctrl_c_during_creation_leaves_nothing_and_says_so(workdir, capsys, monkeypatch):
+    def interrupted(self, *args, **kwargs):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(RunStore, "publish", interrupted)
+    assert main(["run", "base.toml", "--out", "s.zarr", "--no-progress"]) == 130
+    err = capsys.readouterr().err
+    assert "nothing was written to 's.zarr'" in err and "--resume" not in err
+    assert sorted(p.name for p in workdir.iterdir()) == [".s.zarr.granframe.lock",
+                                                         "base.toml", "notes.txt"]
+
+
+def test_a_full_disk_during_creation_leaves_nothing(workdir, capsys, monkeypatch):
+    store_set, calls = zarr.storage.LocalStore.set, []
+
+    async def full_after_twenty(self, key, value):
+        calls.append(key)
+        if len(calls) > 20:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return await store_set(self, key, value)
+    monkeypatch.setattr(zarr.storage.LocalStore, "set", full_after_twenty)
+    assert main(["run", "base.toml", "--out", "s.zarr", "--no-progress"]) == 2
+    assert "No space left on device" in capsys.readouterr().err
+    assert sorted(p.name for p in workdir.iterdir()) == [".s.zarr.granframe.lock",
+                                                         "base.toml", "notes.txt"]
+
+
+# -- smaller cases ----------------------------------------------------------------------
+@pytest.mark.parametrize("name", ["../x", "/tmp/x", "a/b", ".hidden", ""])
+def test_study_run_names_stay_inside_out(name):
+    runs = {name: NEW, "other": NEW} if name else {"": NEW, "other": NEW}
+    with pytest.raises(ValueError, match="parameter 'runs'"):
+        Study(runs)
+
+
+def test_resume_and_overwrite_together_are_refused(workdir, capsys):
+    assert main(["run", "base.toml", "--out", "s.zarr", "--resume", "--overwrite"]) == 2
+    assert "--resume and --overwrite exclude each other" in capsys.readouterr().err
+    assert main(["run", "base.toml", "--out", "s.zarr", "--rollback"]) == 2
+    assert not (workdir / "s.zarr").exists()
+
+
+def test_sweep_out_refuses_a_run_store_and_workers_must_be_positive(workdir, capsys):
+    store = finished(workdir / "s.zarr")
+    before = tree(workdir)
+    (workdir / "sweep.toml").write_text(textwrap.dedent("""
+        [base]
+        final_time = 0.1
+        [base.grid]
+        dimension = 2
+        n_modes = 16
+        support_radius = 10.0
+        [product]
+        "restitution.value" = [0.5]
+    """))
+    before["sweep.toml"] = (workdir / "sweep.toml").read_bytes()
+    assert main(["sweep", "sweep.toml", "--out", str(store)]) == 2
+    assert "it is a granframe run store" in capsys.readouterr().err
+    for workers in ("0", "-1"):
+        assert main(["sweep", "sweep.toml", "--out", "new.zarr", "--workers", workers]) == 2
+        assert "parameter 'workers'" in capsys.readouterr().err
+    assert tree(workdir) == before
+
+
+def test_partial_files_of_a_killed_write_are_reported_and_removed_on_resume(workdir, capsys):
+    store = finished(workdir / "s.zarr")
+    progress = dict(RunStore.open(store).progress, status="running")
+    cut = RunStore.open(store, mode="r+")
+    cut.group.attrs["granframe"] = dict(cut.metadata, progress=progress)
+    partial = store / "f" / "c" / "9.0123abcd.partial"
+    partial.write_bytes(b"half a chunk")
+    assert main(["check", "s.zarr"]) == 0
+    assert "1 file(s) of a write cut short" in capsys.readouterr().out
+    assert main(["run", "base.toml", "--out", "s.zarr", "--resume", "--no-progress"]) == 0
+    assert not partial.exists()
+
+
+def test_a_study_report_that_raises_is_a_clear_error_and_keeps_the_runs(workdir, capsys):
+    (workdir / "study.py").write_text(textwrap.dedent(f"""
+        from granframe.description import RunDescription
+
+        def runs(quick=False):
+            d = RunDescription.from_toml({NEW.to_toml()!r})
+            return {{"a": d, "b": d}}
+
+        def report(stores, out):
+            return 1 / 0
+    """))
+    assert main(["run", "study.py", "--out", "out", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "the report of study 'study.py' failed: ZeroDivisionError: division by zero" in err
+    assert "study.py:9)" in err and "Traceback" not in err
+    assert all(RunStore.open(workdir / "out" / f"{n}.zarr").progress["status"] == "finished"
+               for n in "ab")
+
+
+def test_ctrl_c_during_start_up_exits_130_without_a_traceback(workdir):
+    process = subprocess.Popen([sys.executable, "-m", "granframe.cli", "run", "base.toml",
+                                "--out", "s.zarr", "--no-progress"], stderr=subprocess.PIPE,
+                               text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    time.sleep(0.4)                         # importing, building the operator
+    process.send_signal(signal.SIGINT)
+    err = process.communicate(timeout=60)[1]
+    assert process.returncode == 130 and "Traceback" not in err, err
+    assert "interrupted" in err
+    assert not (workdir / "s.zarr").exists() or RunStore.open("s.zarr").progress[
+        "status"] in ("interrupted", "finished")
