@@ -42,9 +42,9 @@ What is stored can be trusted:
   store, or the new one with its first commit; the next writer finishes a swap that
   was cut between the two renames (:func:`recover`).
 - **One writer.** A writer holds an exclusive lock (``flock``) on ``.NAME.granframe.lock``
-  beside the store, which names the holder (pid, host, since). The kernel releases it
-  when the holder dies, however it dies; a second writer is refused with the holder's
-  name (:class:`WriterLock`).
+  beside the store, which names the holder (pid, host, since) and is removed when the
+  writer ends. The kernel releases the lock when the holder dies, however it dies; a
+  second writer is refused with the holder's name (:class:`WriterLock`).
 - **Only granframe's own data is replaced.** ``overwrite`` replaces a granframe run or
   sweep store (recognised by its metadata) or an empty directory, nothing else
   (:func:`check_replaceable`).
@@ -240,11 +240,13 @@ def lock_path(path) -> pathlib.Path:
 class WriterLock:
     """An exclusive lock on a store path, held by one writer at a time.
 
-    ``flock`` on the file ``.NAME.granframe.lock`` beside the store; the file records
-    the holder (pid, host, since, command) for the message a second writer gets. The
-    kernel drops the lock when its holder's process ends, however it ends (a kill, a
-    crash), so a dead holder never blocks; the file itself stays (removing it would
-    race with a writer opening it).
+    ``flock`` on the file ``.NAME.granframe.lock`` beside the store, which records the
+    holder (pid, host, since, command) for the message a second writer gets. The
+    holder removes the file when it releases the lock, so a store leaves nothing beside
+    it; the kernel drops the lock when its holder's process ends, however it ends (a
+    kill, a crash), so a dead holder never blocks, and its file is taken over. A lock
+    taken on a file that its holder removed meanwhile is dropped and taken again on
+    the file now at the path (the inode is compared), so two writers never both hold it.
     """
 
     def __init__(self, path):
@@ -256,23 +258,28 @@ class WriterLock:
         """Take the lock; if another process holds it, wait up to ``wait`` seconds
         (``math.inf``: while it lives), then raise :class:`StoreLockedError` naming it."""
         self.file.parent.mkdir(parents=True, exist_ok=True)
-        handle = open(self.file, "a+")
         deadline = time.monotonic() + wait
         while True:
+            handle = open(self.file, "a+")
             try:
                 fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-                break
             except OSError as exc:
+                handle.close()
                 if exc.errno not in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
-                    handle.close()
                     raise StoreError(f"cannot lock '{self.file}' for writing: {exc}") from None
                 if time.monotonic() >= deadline:
-                    holder = self.holder()
-                    handle.close()
                     raise StoreLockedError(
-                        f"store '{self.path}' is being written by {holder}; a second writer "
-                        "is refused (wait for it to end, or stop it)") from None
+                        f"store '{self.path}' is being written by {self.holder()}; a second "
+                        "writer is refused (wait for it to end, or stop it)") from None
                 time.sleep(poll)
+                continue
+            try:
+                current = os.stat(self.file).st_ino == os.fstat(handle.fileno()).st_ino
+            except FileNotFoundError:
+                current = False
+            if current:
+                break
+            handle.close()      # its holder removed this file meanwhile: take the new one
         handle.seek(0)
         handle.truncate()
         handle.write(json.dumps({"pid": os.getpid(), "host": platform.node(), "since": _now(),
@@ -295,7 +302,9 @@ class WriterLock:
         return self._handle is not None
 
     def release(self) -> None:
+        """Remove the lock file, then drop the lock (in this order: see the class notes)."""
         if self._handle is not None:
+            self.file.unlink(missing_ok=True)
             fcntl.flock(self._handle, fcntl.LOCK_UN)
             self._handle.close()
             self._handle = None

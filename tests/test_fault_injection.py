@@ -79,8 +79,7 @@ def assert_resumes_to(store, reference, toml) -> None:
     assert got["meta"]["description"] == reference["meta"]["description"]
     assert_same(got, reference, f"resumed {store}")
     assert check(store)[0]
-    leftovers = [p.name for p in store.parent.iterdir()
-                 if p.name.startswith(f".{store.name}.") and not p.name.endswith(".lock")]
+    leftovers = [p.name for p in store.parent.iterdir() if p.name.startswith(f".{store.name}.")]
     assert not leftovers, leftovers
     assert not list(store.rglob("*.partial"))
 

@@ -27,9 +27,9 @@ from test_runner import heated
 
 
 def tree(root) -> dict:
-    """Every file under ``root`` and its bytes (the writer locks beside stores excepted)."""
+    """Every file under ``root`` and its bytes."""
     return {str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*"))
-            if p.is_file() and not p.name.endswith(".granframe.lock")}
+            if p.is_file()}
 
 
 @pytest.fixture
@@ -134,8 +134,7 @@ def test_a_kill_between_the_two_renames_of_a_swap_is_completed_by_the_next_write
     assert main(["run", "base.toml", "--out", "s.zarr", "--resume", "--no-progress"]) == 0
     reference = contents(finished(workdir / "reference.zarr"))
     assert_same(contents(workdir / "s.zarr"), reference, "completed swap")
-    assert sorted(p.name for p in workdir.iterdir() if p.name.startswith(".s.zarr")) == [
-        ".s.zarr.granframe.lock"]
+    assert not [p.name for p in workdir.iterdir() if p.name.startswith(".s.zarr")]
 
 
 # -- 3. checksums; a missing chunk is never a zero ------------------------------------------
@@ -276,8 +275,7 @@ def test_ctrl_c_during_creation_leaves_nothing_and_says_so(workdir, capsys, monk
     assert main(["run", "base.toml", "--out", "s.zarr", "--no-progress"]) == 130
     err = capsys.readouterr().err
     assert "nothing was written to 's.zarr'" in err and "--resume" not in err
-    assert sorted(p.name for p in workdir.iterdir()) == [".s.zarr.granframe.lock",
-                                                         "base.toml", "notes.txt"]
+    assert sorted(p.name for p in workdir.iterdir()) == ["base.toml", "notes.txt"]
 
 
 def test_a_full_disk_during_creation_leaves_nothing(workdir, capsys, monkeypatch):
@@ -291,8 +289,7 @@ def test_a_full_disk_during_creation_leaves_nothing(workdir, capsys, monkeypatch
     monkeypatch.setattr(zarr.storage.LocalStore, "set", full_after_twenty)
     assert main(["run", "base.toml", "--out", "s.zarr", "--no-progress"]) == 2
     assert "No space left on device" in capsys.readouterr().err
-    assert sorted(p.name for p in workdir.iterdir()) == [".s.zarr.granframe.lock",
-                                                         "base.toml", "notes.txt"]
+    assert sorted(p.name for p in workdir.iterdir()) == ["base.toml", "notes.txt"]
 
 
 # -- smaller cases ----------------------------------------------------------------------
