@@ -388,17 +388,12 @@ class RunStore:
         metadata. The first :meth:`commit` and :meth:`publish` put it in place.
         """
         path = pathlib.Path(path)
+        _check_creatable(path, overwrite, protect)   # refused before anything is written
         lock, staging = WriterLock(path).acquire(), None
         try:
             recover(path)
             kind = store_kind(path)
-            if kind in ("run", "sweep") and not overwrite:
-                raise StoreError(f"store '{path}' exists; pass --resume to continue the run "
-                                 "it holds, or --overwrite to replace it")
-            if kind in ("file", "other") and not overwrite:
-                raise StoreError(f"'{path}' exists and is not a granframe store; choose "
-                                 "another --out")
-            check_replaceable(path, protect)
+            _check_creatable(path, overwrite, protect)
             staging = path.parent / f".{path.name}.{_STAGING}-{uuid.uuid4().hex[:12]}"
             group = zarr.create_group(str(staging), zarr_format=3)
             d = grid.dimension
@@ -710,6 +705,16 @@ class RunStore:
         meta["updated"] = _now()
         self.group.attrs["granframe"] = meta
         consolidate(self.path)
+
+
+def _check_creatable(path: pathlib.Path, overwrite: bool, protect) -> None:
+    kind = store_kind(path)
+    if kind in ("run", "sweep") and not overwrite:
+        raise StoreError(f"store '{path}' exists; pass --resume to continue the run it holds, "
+                         "or --overwrite to replace it")
+    if kind in ("file", "other") and not overwrite:
+        raise StoreError(f"'{path}' exists and is not a granframe store; choose another --out")
+    check_replaceable(path, protect)
 
 
 def _create(group, name, shape, chunks, dtype, dimension_names):
