@@ -372,3 +372,23 @@ def test_ctrl_c_during_start_up_exits_130_without_a_traceback(workdir):
     assert "interrupted" in err
     assert not (workdir / "s.zarr").exists() or RunStore.open("s.zarr").progress[
         "status"] in ("interrupted", "finished")
+
+
+def test_ctrl_c_to_a_sweep_exits_130_and_leaves_its_runs_resumable(workdir):
+    import tomli_w
+
+    (workdir / "sweep.toml").write_text(tomli_w.dumps(
+        {"base": SLOW.to_dict(), "product": {"restitution.value": [0.5, 0.6]}}))
+    process = subprocess.Popen([sys.executable, "-m", "granframe.cli", "sweep", "sweep.toml",
+                                "--out", "s.zarr", "--workers", "1", "--no-progress"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    wait_for(lambda: any(RunStore.open(p).snapshot_count >= 2
+                         for p in (workdir / "s.zarr" / "runs").iterdir()
+                         if RunStore.exists(p)), "a run of the sweep")
+    process.send_signal(signal.SIGINT)
+    err = process.communicate(timeout=120)[1]
+    assert process.returncode == 130 and "Traceback" not in err, err
+    assert "run the same sweep again to continue" in err
+    for path in (workdir / "s.zarr" / "runs").iterdir():
+        if RunStore.exists(path):
+            assert RunStore.open(path).progress["status"] in ("running", "interrupted")
