@@ -756,6 +756,14 @@ def check(path) -> tuple[bool, list[str]]:
         runs = sorted(p for p in (path / "runs").iterdir() if store_kind(p) == "run") \
             if (path / "runs").is_dir() else []
         lines, intact = [f"sweep store {path}: {len(runs)} run stores"], True
+        if (path / "table" / "zarr.json").is_file():
+            table = zarr.open_group(str(path / "table"), mode="r", use_consolidated=False)
+            for name in sorted(table.array_keys()):
+                try:
+                    table[name][:]
+                except Exception as exc:   # any decoding failure is damage
+                    intact = False
+                    lines.append(f"  damaged: table/{name}: {exc}")
         for run in runs:
             ok, more = check(run)
             intact &= ok
