@@ -392,3 +392,16 @@ def test_ctrl_c_to_a_sweep_exits_130_and_leaves_its_runs_resumable(workdir):
     for path in (workdir / "s.zarr" / "runs").iterdir():
         if RunStore.exists(path):
             assert RunStore.open(path).progress["status"] in ("running", "interrupted")
+
+
+def test_check_reads_every_run_and_the_table_of_a_sweep_store(workdir, capsys):
+    from granframe.sweep import _summary, _write_table
+
+    root = zarr.open_group("s.zarr", mode="w", zarr_format=3)
+    root.attrs["granframe_sweep"] = {"schema": "granframe.sweep/1", "runs": ["a"]}
+    finished(workdir / "s.zarr" / "runs" / "a")
+    _write_table(root, ["a"], [{"restitution.value": 0.5}], {"a": _summary("s.zarr/runs/a")})
+    assert main(["check", "s.zarr"]) == 0
+    flip(workdir / "s.zarr" / "table" / "temperature" / "c" / "0", count=4)
+    assert main(["check", "s.zarr"]) == 3
+    assert "damaged: table/temperature" in capsys.readouterr().out
