@@ -14,5 +14,9 @@ class UnknownNameError(ValueError):
     """A registry was asked for a name nobody registered."""
 
 
+class NonFiniteError(ValueError):
+    """An operator was given an f with NaN or Inf (in a run: a step that blew up)."""
+
+
 class AliasingWarning(UserWarning):
     """A velocity grid was built below the anti-aliasing bound on explicit request."""

@@ -30,6 +30,7 @@ from granframe._version import __version__
 from granframe.backends import available_cpus
 from granframe.description import _FAMILIES, RunDescription
 from granframe.equation import HomogeneousBoltzmann
+from granframe.errors import NonFiniteError
 from granframe.initial import check_fits, check_projection
 from granframe.integrators import StepController, StepSizeError
 from granframe.memory import check_run_memory
@@ -342,12 +343,21 @@ class Simulation:
                         try:
                             f, t, dt, dt_next = controller.advance(
                                 self.integrator, self.equation, t, f, dt_next, target, xp)
+                        except NonFiniteError:     # a trial stage blew up
+                            self._fail(store, records, state, f"health check failed at step "
+                                       f"{step + 1}, t = {t:.6g}: f is not finite (NaN or "
+                                       "Inf) within the step")
                         except StepSizeError as exc:
                             self._fail(store, records, state, f"health check failed at step "
                                        f"{step + 1}, t = {t:.6g}: {exc}")
                         step += 1
                     else:
-                        f = self.integrator.step(self.equation, t, f, d.time_step)
+                        try:
+                            f = self.integrator.step(self.equation, t, f, d.time_step)
+                        except NonFiniteError:     # a stage of the step blew up
+                            self._fail(store, records, state, f"health check failed at step "
+                                       f"{step + 1}, t = {t:.6g}: f is not finite (NaN or "
+                                       "Inf) within the step")
                         step, dt = step + 1, d.time_step
                         t = step * d.time_step
                     record = moments(grid, f, xp)

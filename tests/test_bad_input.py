@@ -313,3 +313,17 @@ def test_nyquist_projection_changing_f0_is_refused():
     with pytest.raises(ValueError, match=r"kurtosis of f0 .* health.projection_kurtosis_tolerance"
                                          r" = 0.1 \(kurtosis 2 -> 1.6878"):
         Simulation(small.replace(health={"projection_kurtosis_tolerance": 0.1}))
+
+
+def test_a_step_that_blows_up_within_its_stages_is_a_health_stop(tmp_path):
+    """A heat bath far beyond the step limit (the check switched off): Q meets an infinite
+    stage inside an RK4 step; the run is stopped and marked failed like any blow-up."""
+    from granframe.runner import HealthError
+    from granframe.storage import RunStore
+    from test_runner import heated
+
+    d = heated(heat_bath=1e300, health={"step_limit": False}, final_time=0.5)
+    with pytest.raises(HealthError, match=r"step 1, t = 0: f is not finite \(NaN or Inf\) "
+                                          "within the step"):
+        Simulation(d).run(tmp_path / "s.zarr", progress=False)
+    assert RunStore.open(tmp_path / "s.zarr").progress["status"] == "failed"

@@ -365,7 +365,10 @@ def test_ctrl_c_during_start_up_exits_130_without_a_traceback(workdir):
     process = subprocess.Popen([sys.executable, "-m", "granframe.cli", "run", "base.toml",
                                 "--out", "s.zarr", "--no-progress"], stderr=subprocess.PIPE,
                                text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
-    time.sleep(0.4)                         # importing, building the operator
+    # start-up: main() has begun the run (NumPy, which the command line itself does not
+    # import, is loaded) and the run has not started writing
+    wait_for(lambda: "numpy" in pathlib.Path(f"/proc/{process.pid}/maps").read_text(),
+             "the command to import NumPy", timeout=30)
     process.send_signal(signal.SIGINT)
     err = process.communicate(timeout=60)[1]
     assert process.returncode == 130 and "Traceback" not in err, err

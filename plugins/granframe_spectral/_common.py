@@ -14,6 +14,7 @@ import numpy
 import scipy.special
 
 from granframe import validators as check
+from granframe.errors import NonFiniteError
 from granframe.quadratures import GaussLegendre
 
 
@@ -55,7 +56,8 @@ def check_operands(owner: str, grid, f, backend):
         bad = int(xp.sum(~xp.isfinite(f)))
         check.reject(owner, "f", f"{bad} non-finite values" if bad else "values summing to "
                      "infinity", "must be finite everywhere on the grid (NaN or Inf in f, "
-                     "e.g. from a blown-up step, would fill Q with NaN)")
+                     "e.g. from a blown-up step, would fill Q with NaN)",
+                     error=NonFiniteError)
 
 
 def radial_rule(grid, n_radial: int):
