@@ -144,6 +144,7 @@ def _where(exc: BaseException, source) -> str:
 
 
 def _run_one(description, out, args) -> int:
+    from granframe.initial import projection_note
     from granframe.runner import HealthError, Simulation
     from granframe.storage import RunStore, check_replaceable, store_kind
 
@@ -162,9 +163,13 @@ def _run_one(description, out, args) -> int:
                   f"{progress['step']} steps, {progress.get('wall_seconds', 0.0):.1f} s)")
             return 0
     try:
-        result = Simulation(description).run(out, resume=args.resume, overwrite=args.overwrite,
-                                             progress=args.progress, rollback=args.rollback,
-                                             protect=[args.source])
+        simulation = Simulation(description)
+        note = projection_note(simulation.projection)
+        if note:
+            print(f"granframe: {note}", file=sys.stderr)
+        result = simulation.run(out, resume=args.resume, overwrite=args.overwrite,
+                                progress=args.progress, rollback=args.rollback,
+                                protect=[args.source])
     except HealthError as exc:
         print(f"granframe: run stopped: {exc}\nThe store '{out}' keeps every snapshot "
               "before it and the moments up to it.", file=sys.stderr)

@@ -303,21 +303,25 @@ def check_fits(grid, f, condition: InitialCondition, edge_tolerance: float,
 
 
 def check_projection(grid, f, projected, condition: InitialCondition, tolerance: float,
-                     kurtosis_tolerance: float) -> None:
+                     kurtosis_tolerance: float) -> dict:
     """Refuse f0 that its Nyquist projection (:meth:`VelocityGrid.project`) changes.
 
     The operators evolve f0 without its modes |k_i| = N/2, so a run starts from
     ``projected``, not from ``f``. Refused: a relative change of the mass or the
     temperature above ``tolerance``, or of the kurtosis above ``kurtosis_tolerance``
     (:class:`granframe.description.Health`): the grid does not resolve f0, and the run
-    would silently start from other data.
+    would silently start from other data. Returns the moments before and after,
+    name -> {"before", "after"}, which the run stores and reports
+    (:func:`projection_note`).
     """
     owner = f"initial condition {type(condition).__name__}"
+    moments = {}
     for name, moment, limit, field in (
             ("mass", grid.mass, tolerance, "projection_tolerance"),
             ("temperature", grid.temperature, tolerance, "projection_tolerance"),
             ("kurtosis", grid.kurtosis, kurtosis_tolerance, "projection_kurtosis_tolerance")):
         before, after = moment(f), moment(projected)
+        moments[name] = {"before": before, "after": after}
         change = abs(after / before - 1.0)
         if not change <= limit:
             check.reject(owner, f"relative change of the {name} of f0 by the Nyquist projection",
@@ -326,3 +330,21 @@ def check_projection(grid, f, projected, condition: InitialCondition, tolerance:
                          f"larger n_modes (spacing h = {grid.spacing:.4g}), or a larger "
                          "support_radius if f0 is not negligible near the faces of the box, or "
                          f"raise health.{field} to accept it")
+    return moments
+
+
+#: relative change of a moment of f0 by the Nyquist projection that a run reports
+NOTED_CHANGE = 1e-6
+
+
+def projection_note(moments: dict) -> str | None:
+    """A line on the moments of f0 that the projection changed by more than
+    :data:`NOTED_CHANGE` (relative), or None."""
+    changed = [f"{name} {m['before']:.6g} -> {m['after']:.6g} "
+               f"({m['after'] / m['before'] - 1:+.2%})" for name, m in moments.items()
+               if abs(m["after"] / m["before"] - 1) > NOTED_CHANGE]
+    if not changed:
+        return None
+    return ("note: the run starts from f0 without its Nyquist modes (|k_i| = N/2, which the "
+            "operators do not evolve), which changes " + ", ".join(changed)
+            + "; a larger n_modes resolves f0 better")

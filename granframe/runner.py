@@ -230,8 +230,10 @@ class Simulation:
         check_fits(d.grid, sampled, initial, d.health.edge_tolerance,
                    d.health.initial_mass_tolerance)
         self.f0 = d.grid.project(sampled)
-        check_projection(d.grid, sampled, self.f0, initial, d.health.projection_tolerance,
-                         d.health.projection_kurtosis_tolerance)
+        #: moments of f0 before and after the projection (stored with the run)
+        self.projection = check_projection(d.grid, sampled, self.f0, initial,
+                                           d.health.projection_tolerance,
+                                           d.health.projection_kurtosis_tolerance)
         if d.rescaled:
             self.equation = RescaledBoltzmann(self.operator, self.backend.asarray(self.f0),
                                               d.knudsen)
@@ -304,7 +306,8 @@ class Simulation:
             rescaling = getattr(self.equation, "rescaling", None)
             store = RunStore.create(out, description, d.to_toml(), grid, self.provenance(),
                                     overwrite=overwrite, protect=protect,
-                                    rescaling=None if rescaling is None else rescaling.to_dict())
+                                    rescaling=None if rescaling is None else rescaling.to_dict(),
+                                    projection=self.projection)
             f, t, step = backend.asarray(self.f0), 0.0, 0
             try:
                 record = moments(grid, f, xp)

@@ -378,14 +378,15 @@ class RunStore:
     @classmethod
     def create(cls, path, description: dict, description_toml: str, grid, provenance: dict,
                overwrite: bool = False, rescaling: dict | None = None,
-               protect=()) -> "RunStore":
+               protect=(), projection: dict | None = None) -> "RunStore":
         """A new store for ``description``, staged beside ``path``; see :meth:`publish`.
 
         Refuses an existing store unless ``overwrite``, and anything but a granframe
         store or an empty directory even then (:func:`check_replaceable`, ``protect``:
         paths that must not be inside it). ``rescaling`` (rescaled runs) is the map to
-        physical variables, :meth:`granframe.rescaling.Rescaling.to_dict`, kept in the
-        metadata. The first :meth:`commit` and :meth:`publish` put it in place.
+        physical variables, :meth:`granframe.rescaling.Rescaling.to_dict`, and
+        ``projection`` the moments of f0 before and after its Nyquist projection
+        (:func:`granframe.initial.check_projection`), both kept in the metadata. The first :meth:`commit` and :meth:`publish` put it in place.
         """
         path = pathlib.Path(path)
         _check_creatable(path, overwrite, protect)   # refused before anything is written
@@ -418,6 +419,7 @@ class RunStore:
                 "created": _now(),
                 "progress": {"snapshots": 0, "records": 0, "status": "created"},
                 **({} if rescaling is None else {"rescaling": rescaling}),
+                **({} if projection is None else {"f0_projection": projection}),
             }
         except BaseException:
             if staging is not None:
@@ -814,6 +816,10 @@ def describe(path) -> str:
         for name in ("mass", "temperature", "kurtosis", "min_f"):
             values = group[name][[0, n - 1]]
             lines.append(f"  {name:<12s}{values[0]:.10g} -> {values[1]:.10g}")
+    if meta.get("f0_projection"):
+        lines.append("f0 projection (moments before -> after; the run starts after)")
+        for name, m in meta["f0_projection"].items():
+            lines.append(f"  {name:<12s}{m['before']:.10g} -> {m['after']:.10g}")
     provenance = meta.get("provenance", {})
     if provenance:
         lines.append("provenance")

@@ -327,3 +327,29 @@ def test_a_step_that_blows_up_within_its_stages_is_a_health_stop(tmp_path):
                                           "within the step"):
         Simulation(d).run(tmp_path / "s.zarr", progress=False)
     assert RunStore.open(tmp_path / "s.zarr").progress["status"] == "failed"
+
+
+def test_the_nyquist_projection_of_f0_is_reported_and_stored(tmp_path, capsys):
+    """The case of 2D N = 16, S = 10, T0 = 8: within the default tolerance, so the run goes
+    on, but the change of T0 is said and kept with the run."""
+    from granframe.cli import main
+    from granframe.storage import RunStore, describe
+    from test_runner import heated
+
+    d = heated(grid={"dimension": 2, "n_modes": 16, "support_radius": 10.0}, final_time=0.1,
+               output={"snapshot_interval": 0.1})
+    (tmp_path / "d.toml").write_text(d.to_toml())
+    assert main(["run", str(tmp_path / "d.toml"), "--out", str(tmp_path / "s.zarr"),
+                 "--no-progress"]) == 0
+    err = capsys.readouterr().err
+    assert "without its Nyquist modes" in err and "temperature 8 -> 7.957" in err
+    stored = RunStore.open(tmp_path / "s.zarr").metadata["f0_projection"]
+    assert stored["temperature"]["before"] == pytest.approx(8.0, rel=1e-6)
+    assert stored["temperature"]["after"] == pytest.approx(7.957, rel=1e-4)
+    assert "f0 projection" in describe(tmp_path / "s.zarr")
+    # a resolved f0 runs without the note
+    (tmp_path / "e.toml").write_text(heated(final_time=0.1,
+                                             output={"snapshot_interval": 0.1}).to_toml())
+    assert main(["run", str(tmp_path / "e.toml"), "--out", str(tmp_path / "e.zarr"),
+                 "--no-progress"]) == 0
+    assert "Nyquist" not in capsys.readouterr().err
