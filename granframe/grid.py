@@ -28,6 +28,11 @@ from granframe.errors import AliasingWarning
 ANTI_ALIASING_FACTOR = (3.0 + math.sqrt(2.0)) / 2.0
 
 
+#: Range of the velocity scales S, L and R: |v|^4 (the kurtosis), h^d and 1/h^d must stay
+#: finite in float64 for every grid of up to 2^16 points per axis.
+SCALE_RANGE = (1e-50, 1e50)
+
+
 @attrs.frozen
 class VelocityGrid:
     """Uniform periodic velocity grid of ``n_modes**dimension`` points.
@@ -39,7 +44,9 @@ class VelocityGrid:
     n_modes : int
         Number N of Fourier modes (and grid points) per axis; even, 4 <= N <= 65536.
     support_radius : float
-        Radius S of the ball that (approximately) contains the support of f.
+        Radius S of the ball that (approximately) contains the support of f;
+        1e-50 <= S <= 1e50, and so must L and R be, so that h^d, the temperature and
+        the fourth moments stay within floating-point range.
     half_width : float, optional
         Half width L of the periodic box [-L, L]^d. Defaults to the
         anti-aliasing bound (3 + sqrt 2) S / 2 of [FPT05].
@@ -70,7 +77,7 @@ class VelocityGrid:
     n_modes: int = attrs.field(converter=check.to_int,
                                validator=check.integer(lower=4, upper=2 ** 16, even=True))
     support_radius: float = attrs.field(
-        converter=check.to_float, validator=check.real(0.0, math.inf, lower_open=True))
+        converter=check.to_float, validator=check.real(SCALE_RANGE[0], SCALE_RANGE[1]))
     half_width: float = attrs.field(default=None, converter=check.to_float,
                                     validator=check.optional_positive)
     truncation_radius: float = attrs.field(default=None, converter=check.to_float,
@@ -84,6 +91,11 @@ class VelocityGrid:
             object.__setattr__(self, "half_width", bound)
         if self.truncation_radius is None:
             object.__setattr__(self, "truncation_radius", 2.0 * S)
+        for name in ("half_width", "truncation_radius"):
+            value = getattr(self, name)
+            if not SCALE_RANGE[0] <= value <= SCALE_RANGE[1]:
+                check.reject("VelocityGrid", name, value, f"must be within [{SCALE_RANGE[0]:g}, "
+                             f"{SCALE_RANGE[1]:g}] (velocities outside it overflow the moments)")
         override = "pass allow_aliasing=True to accept it knowingly"
         problems = []
         if self.half_width < bound * (1.0 - 1e-12):

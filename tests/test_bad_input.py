@@ -353,3 +353,12 @@ def test_the_nyquist_projection_of_f0_is_reported_and_stored(tmp_path, capsys):
     assert main(["run", str(tmp_path / "e.toml"), "--out", str(tmp_path / "e.zarr"),
                  "--no-progress"]) == 0
     assert "Nyquist" not in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("changes,parameter", [
+    ({"support_radius": 1e308}, "support_radius"), ({"support_radius": 1e-320}, "support_radius"),
+    ({"support_radius": 10.0, "half_width": 1e308}, "half_width"),
+    ({"support_radius": 10.0, "truncation_radius": 1e300}, "truncation_radius")])
+def test_velocity_scales_beyond_floating_point_range_are_refused(changes, parameter):
+    with pytest.raises(ValueError, match=f"parameter '{parameter}'"):
+        gf.VelocityGrid(dimension=2, n_modes=16, **changes)
