@@ -150,7 +150,7 @@ def _run_one(description, out, args) -> int:
 
     if args.overwrite:          # refused before the operator is built
         check_replaceable(out, protect=[args.source])
-    if args.resume and store_kind(out) == "run" and not args.rollback:
+    if args.resume and store_kind(out) == "run":
         # an ended run is reported from its store, without building the operator
         progress = RunStore.open(out, complete=False).progress
         if progress.get("status") == "failed":   # resuming would fail again

@@ -37,7 +37,7 @@ from granframe.memory import check_run_memory
 from granframe.stability import check_time_step
 from granframe.registry import default_registries
 from granframe.rescaling import RescaledBoltzmann
-from granframe.storage import SCALAR_MOMENTS, RunStore
+from granframe.storage import SCALAR_MOMENTS, RunStore, StoreExistsError
 from granframe.validators import reject
 
 _RUN_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
@@ -289,7 +289,18 @@ class Simulation:
         xp = backend.xp
         start_wall = time.perf_counter()
         description = d.to_dict()
-        if resume and RunStore.exists(out):
+        store = None
+        if not (resume and RunStore.exists(out)):
+            rescaling = getattr(self.equation, "rescaling", None)
+            try:
+                store = RunStore.create(
+                    out, description, d.to_toml(), grid, self.provenance(), overwrite=overwrite,
+                    protect=protect, projection=self.projection,
+                    rescaling=None if rescaling is None else rescaling.to_dict())
+            except StoreExistsError:
+                if not resume:
+                    raise         # else: another writer made it meanwhile; continue it
+        if store is None:
             store = RunStore.resume(out, description, rollback=rollback)
             state = store.progress
             if state["status"] == "finished":
@@ -303,11 +314,6 @@ class Simulation:
             rollbacks = state.get("rollbacks", [])
             wall_before = float(state.get("wall_seconds", 0.0))
         else:
-            rescaling = getattr(self.equation, "rescaling", None)
-            store = RunStore.create(out, description, d.to_toml(), grid, self.provenance(),
-                                    overwrite=overwrite, protect=protect,
-                                    rescaling=None if rescaling is None else rescaling.to_dict(),
-                                    projection=self.projection)
             f, t, step = backend.asarray(self.f0), 0.0, 0
             try:
                 record = moments(grid, f, xp)
@@ -377,7 +383,9 @@ class Simulation:
                              state("finished" if done else "running"))
         except KeyboardInterrupt:
             # the last commit stays what a resume continues from; only its status changes
-            store.mark("interrupted")
+            # (a commit that already said finished or failed stays so)
+            if store.progress.get("status") == "running":
+                store.mark("interrupted")
             raise
         finally:
             bar.close()

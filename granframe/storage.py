@@ -106,17 +106,19 @@ class StoreLockedError(StoreError):
     """The store is being written by another live process (named in the message)."""
 
 
+class StoreExistsError(StoreError):
+    """A granframe store is at the path (a run given ``resume`` continues it instead)."""
+
+
 class StoreDamagedError(StoreError):
     """Committed data of the store is missing or fails its checksum.
 
-    ``problems`` lists what is wrong; ``intact`` is the index of the last snapshot a
-    run can continue from (None when there is none).
+    ``problems`` lists what is wrong, as :meth:`RunStore.verify` gives it.
     """
 
-    def __init__(self, message, problems=(), intact=None):
+    def __init__(self, message, problems=()):
         super().__init__(message)
         self.problems = list(problems)
-        self.intact = intact
 
 
 def codecs() -> dict:
@@ -197,8 +199,8 @@ def check_replaceable(path, protect=()) -> None:
     ``path`` may be replaced when it is missing, an empty directory, or a granframe run
     or sweep store (recognised by its metadata) holding nothing granframe did not write.
     Refused: a file, any other directory, the current directory, a directory holding the
-    current directory, and a directory holding any path of ``protect`` (the source of
-    the run).
+    current directory, a directory holding any path of ``protect`` (the source of the
+    run), and a sweep store with a run still written by a live process.
     """
     path = pathlib.Path(path)
     kind = store_kind(path)
@@ -222,6 +224,9 @@ def check_replaceable(path, protect=()) -> None:
         raise StoreError(f"--overwrite refused: '{path}' is not a granframe store (it holds "
                          f"{shown}); only a granframe run or sweep store, or an empty "
                          "directory, is replaced")
+    if kind == "sweep" and (path / "runs").is_dir():
+        for run in sorted((path / "runs").iterdir()):   # workers may outlive their driver
+            WriterLock.check_free(run)
     if kind in ("run", "sweep"):
         foreign = _foreign_entries(path, kind)
         if foreign:
@@ -254,11 +259,9 @@ class WriterLock:
         self.file = lock_path(path)
         self._handle = None
 
-    def acquire(self, wait: float = 0.0, poll: float = 1.0) -> "WriterLock":
-        """Take the lock; if another process holds it, wait up to ``wait`` seconds
-        (``math.inf``: while it lives), then raise :class:`StoreLockedError` naming it."""
+    def acquire(self) -> "WriterLock":
+        """Take the lock, or raise :class:`StoreLockedError` naming its live holder."""
         self.file.parent.mkdir(parents=True, exist_ok=True)
-        deadline = time.monotonic() + wait
         while True:
             handle = open(self.file, "a+")
             try:
@@ -267,12 +270,9 @@ class WriterLock:
                 handle.close()
                 if exc.errno not in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
                     raise StoreError(f"cannot lock '{self.file}' for writing: {exc}") from None
-                if time.monotonic() >= deadline:
-                    raise StoreLockedError(
-                        f"store '{self.path}' is being written by {self.holder()}; a second "
-                        "writer is refused (wait for it to end, or stop it)") from None
-                time.sleep(poll)
-                continue
+                raise StoreLockedError(
+                    f"store '{self.path}' is being written by {self.holder()}; a second "
+                    "writer is refused (wait for it to end, or stop it)") from None
             try:
                 current = os.stat(self.file).st_ino == os.fstat(handle.fileno()).st_ino
             except FileNotFoundError:
@@ -301,6 +301,22 @@ class WriterLock:
     def held(self) -> bool:
         return self._handle is not None
 
+    @classmethod
+    def check_free(cls, path) -> None:
+        """Raise :class:`StoreLockedError` when a live process holds the lock of ``path``
+        (a lock file left by a dead holder is free); takes nothing."""
+        lock = cls(path)
+        try:
+            handle = open(lock.file)
+        except FileNotFoundError:
+            return
+        with handle:
+            try:
+                fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
+            except OSError:
+                raise StoreLockedError(f"store '{lock.path}' is being written by "
+                                       f"{lock.holder()}") from None
+
     def release(self) -> None:
         """Remove the lock file, then drop the lock (in this order: see the class notes)."""
         if self._handle is not None:
@@ -316,8 +332,23 @@ class WriterLock:
         self.release()
 
 
+def _sibling(path: pathlib.Path, role: str, token: str) -> pathlib.Path:
+    """``.NAME.ROLE-TOKEN`` beside ``path``: a staged (role 'granframe-new') or a replaced
+    ('granframe-old') store."""
+    return path.parent / f".{path.name}.{role}-{token}"
+
+
 def _siblings(path: pathlib.Path, role: str) -> list[pathlib.Path]:
-    return sorted(path.parent.glob(f".{path.name}.{role}-*"))
+    """The staged or replaced stores of ``path`` (names compared as text: a store's name
+    may hold any character, glob patterns included)."""
+    prefix = f".{path.name}.{role}-"
+    try:
+        entries = os.scandir(path.parent)
+    except FileNotFoundError:
+        return []
+    with entries:
+        return sorted(path.parent / e.name for e in entries
+                      if e.name.startswith(prefix) and e.name[len(prefix):].isalnum())
 
 
 def recover(path) -> None:
@@ -334,8 +365,7 @@ def recover(path) -> None:
     """
     path = pathlib.Path(path)
     for old in _siblings(path, _TRASH):
-        token = old.name.rsplit("-", 1)[-1]
-        new = path.parent / f".{path.name}.{_STAGING}-{token}"
+        new = _sibling(path, _STAGING, old.name.rsplit("-", 1)[-1])
         if not os.path.lexists(path):
             os.rename(new if store_kind(new) == "run" and _published(new) else old, path)
         if old.exists():
@@ -372,6 +402,7 @@ class RunStore:
         self.group = group
         self.lock = lock
         self._target = None      # a staged store: where publish() puts it
+        self._token = None       # ... and the token of its staged and replaced names
         self._old = False        # ... replacing an existing store
 
     # -- opening ----------------------------------------------------------------------
@@ -395,7 +426,8 @@ class RunStore:
             recover(path)
             kind = store_kind(path)
             _check_creatable(path, overwrite, protect)
-            staging = path.parent / f".{path.name}.{_STAGING}-{uuid.uuid4().hex[:12]}"
+            token = uuid.uuid4().hex[:12]
+            staging = _sibling(path, _STAGING, token)
             group = zarr.create_group(str(staging), zarr_format=3)
             d = grid.dimension
             axes = [f"v{i + 1}" for i in range(d)]
@@ -427,7 +459,7 @@ class RunStore:
             lock.release()
             raise
         store = cls(staging, group, lock)
-        store._target = path
+        store._target, store._token = path, token
         store._old = kind in ("run", "sweep")
         return store
 
@@ -445,7 +477,7 @@ class RunStore:
         target, staging = self._target, self.path
         if target is None:
             return
-        trash = staging.parent / staging.name.replace(_STAGING, _TRASH)
+        trash = _sibling(target, _TRASH, self._token)
         if self._old:
             os.rename(target, trash)
         try:
@@ -495,7 +527,7 @@ class RunStore:
         if not isinstance(meta, dict) or meta.get("schema") != SCHEMA:
             raise StoreError(f"'{path}' is not a granframe run store (no '{SCHEMA}' metadata)")
         store = cls(path, group)
-        missing = store._missing() if complete else []
+        missing = store._absent_arrays() + (store._missing() if complete else [])
         if missing:
             raise StoreDamagedError(f"store '{path}' is damaged: {summarise(missing)} "
                                     "(granframe check lists every problem)", missing)
@@ -576,6 +608,14 @@ class RunStore:
     def _names(self) -> list[str]:
         return sorted(self.group.array_keys())
 
+    def _absent_arrays(self) -> list[dict]:
+        """Arrays of the layout that are not in the store at all."""
+        d = len(self.group["f"].shape) - 1 if "f" in self._names() else \
+            int(self.metadata["description"]["grid"]["dimension"])
+        expected = set(SNAPSHOT_ARRAYS + RECORD_ARRAYS) | {f"v{i + 1}" for i in range(d)}
+        return [{"array": name, "chunk": [], "first": 0, "kind": "missing array",
+                 "detail": ""} for name in sorted(expected - set(self._names()))]
+
     def _missing(self) -> list[dict]:
         """Committed chunks that are not on disk."""
         missing = []
@@ -593,7 +633,7 @@ class RunStore:
         the first axis), kind ('missing' or 'damaged') and detail. ``snapshots`` limits
         the chunks of ``f`` read to those indices.
         """
-        problems = []
+        problems = self._absent_arrays() if names is None else []
         for name in names or self._names():
             array = self.group[name]
             for index in _chunk_grid(array, self._extent(name)):
@@ -639,16 +679,14 @@ class RunStore:
                 f"store '{self.path}' is damaged ({where}); the last intact commit is "
                 f"snapshot {intact} at t = {t:.6g} (step {int(self.group['snapshot_step'][intact])}"
                 f"): run again with --resume --rollback to continue from it (the "
-                f"{k - 1 - intact} snapshots after it are dropped)", problems, intact)
+                f"{k - 1 - intact} snapshots after it are dropped)", problems)
         step = int(self.group["snapshot_step"][intact])
-        meta = self.metadata
-        meta["progress"] = dict(meta["progress"], snapshots=intact + 1, records=step + 1,
-                                step=step, time=t, status="running",
-                                dt_next=float(self.group["snapshot_dt_next"][intact]),
-                                rollbacks=meta["progress"].get("rollbacks", []) + [k - 1])
-        self.group.attrs["granframe"] = meta
+        progress = self.progress
+        self._write_progress(dict(progress, snapshots=intact + 1, records=step + 1, step=step,
+                                  time=t, status="running",
+                                  dt_next=float(self.group["snapshot_dt_next"][intact]),
+                                  rollbacks=progress.get("rollbacks", []) + [k - 1]))
         self._truncate()
-        consolidate(self.path)
 
     def _truncate(self) -> None:
         """Drop whatever lies beyond the last commit (a commit cut short).
@@ -712,8 +750,8 @@ class RunStore:
 def _check_creatable(path: pathlib.Path, overwrite: bool, protect) -> None:
     kind = store_kind(path)
     if kind in ("run", "sweep") and not overwrite:
-        raise StoreError(f"store '{path}' exists; pass --resume to continue the run it holds, "
-                         "or --overwrite to replace it")
+        raise StoreExistsError(f"store '{path}' exists; pass --resume to continue the run it "
+                               "holds, or --overwrite to replace it")
     if kind in ("file", "other") and not overwrite:
         raise StoreError(f"'{path}' exists and is not a granframe store; choose another --out")
     check_replaceable(path, protect)
@@ -733,7 +771,7 @@ def _problem(name, array, index, kind, detail="") -> dict:
 def summarise(problems) -> str:
     """The first few problems of :meth:`RunStore.verify`, in words."""
     shown = [f"{p['kind']} chunk {p['array']}/c/{'/'.join(map(str, p['chunk']))}"
-             for p in problems[:3]]
+             if p["chunk"] else f"{p['kind']} {p['array']}" for p in problems[:3]]
     return ", ".join(shown) + (f" and {len(problems) - 3} more" if len(problems) > 3 else "")
 
 
@@ -755,9 +793,13 @@ def check(path) -> tuple[bool, list[str]]:
     path = pathlib.Path(path)
     kind = store_kind(path)
     if kind == "sweep":
-        runs = sorted(p for p in (path / "runs").iterdir() if store_kind(p) == "run") \
+        runs = sorted(p for p in (path / "runs").iterdir() if not p.name.startswith(".")) \
             if (path / "runs").is_dir() else []
         lines, intact = [f"sweep store {path}: {len(runs)} run stores"], True
+        for run in [r for r in runs if store_kind(r) != "run"]:
+            intact = False
+            lines.append(f"  damaged: runs/{run.name} is not a readable run store")
+        runs = [r for r in runs if store_kind(r) == "run"]
         if (path / "table" / "zarr.json").is_file():
             table = zarr.open_group(str(path / "table"), mode="r", use_consolidated=False)
             for name in sorted(table.array_keys()):
@@ -782,8 +824,9 @@ def check(path) -> tuple[bool, list[str]]:
     lines = [f"{path}: status {progress.get('status')}, {store.snapshot_count} snapshots, "
              f"{progress.get('records')} records; {chunks} committed chunks read, "
              f"{len(problems)} problems"]
-    lines += [f"  {p['kind']}: {p['array']}/c/{'/'.join(map(str, p['chunk']))} (from entry "
-              f"{p['first']}){': ' + p['detail'] if p['detail'] else ''}" for p in problems]
+    lines += [f"  {p['kind']}: {p['array']}" + (
+        f"/c/{'/'.join(map(str, p['chunk']))} (from entry {p['first']})" if p["chunk"] else "")
+        + (f": {p['detail']}" if p["detail"] else "") for p in problems]
     partial = sorted(str(p.relative_to(path)) for p in path.rglob("*.partial"))
     if partial:
         lines.append(f"  {len(partial)} file(s) of a write cut short (removed on --resume): "

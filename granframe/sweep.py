@@ -196,7 +196,10 @@ def run_point(description: dict, path: str, poll: float = 1.0) -> dict:
 
     status = _status(path)
     if status in ("finished", "failed"):
-        return _summary(path)
+        return _row(path)
+    if status == "damaged":
+        return _failed(f"store: the run store '{path}' cannot be read (granframe check "
+                       "lists the damage)")
     try:
         simulation = Simulation(RunDescription.from_dict(description))
     except (ValueError, TypeError) as exc:
@@ -211,7 +214,15 @@ def run_point(description: dict, path: str, poll: float = 1.0) -> dict:
             break                              # the store says failed, with the message
         except StoreError as exc:
             return _failed(f"store: {exc}")
-    return _summary(path)
+    return _row(path)
+
+
+def _row(path) -> dict:
+    """The table row of a run store, or a failed row saying why it cannot be read."""
+    try:
+        return _summary(path)
+    except ValueError as exc:       # a store error, or a chunk failing its checksum
+        return _failed(f"store: {exc}")
 
 
 def _write_table(root: zarr.Group, names, points, rows) -> None:
@@ -303,7 +314,7 @@ def _drive(sweep, out, points, names, client, scheduler, workers, progress, star
     rows, todo = {}, []
     for name, point in zip(names, points):
         if _status(paths[name]) in ("finished", "failed"):
-            rows[name] = _summary(paths[name])
+            rows[name] = _row(paths[name])
             continue
         todo.append((name, apply(sweep.base, point)))
     skipped = len(rows)

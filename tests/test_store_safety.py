@@ -113,28 +113,34 @@ def test_overwrite_replaces_a_run_store_and_an_empty_directory(workdir):
 
 
 # -- 2. a kill inside --overwrite never leaves a hybrid ------------------------------------
-def test_a_kill_between_the_two_renames_of_a_swap_is_completed_by_the_next_writer(workdir,
-                                                                                 capsys):
-    finished(workdir / "s.zarr", OLD)
-    arguments = ["run", "base.toml", "--out", "s.zarr", "--overwrite", "--no-progress"]
+@pytest.mark.parametrize("name", ["s.zarr", "r[1].zarr", "granframe-new.zarr"])
+def test_a_kill_between_the_two_renames_of_a_swap_is_completed_by_the_next_writer(
+        workdir, capsys, name):
+    """Also for names that are glob patterns or hold the staging marker: the next writer
+    finds the swap of its own store, and leaves another store's staging alone."""
+    finished(workdir / name, OLD)
+    decoy = workdir / ".r1.zarr.granframe-new-0123456789ab"   # r1.zarr's, being created
+    decoy.mkdir()
+    arguments = ["run", "base.toml", "--out", name, "--overwrite", "--no-progress"]
     (workdir / "count").mkdir()
     (workdir / "count" / "base.toml").write_text(NEW.to_toml())
-    finished(workdir / "count" / "s.zarr", OLD)
+    finished(workdir / "count" / name, OLD)
     renames = [int(line.split()[0]) for line in writes(workdir / "count", arguments)
                if line.split()[1] == "rename"]
     killed = subprocess.run([sys.executable, str(HARNESS), str(renames[1]), "log", *arguments],
                             capture_output=True, text=True, timeout=120)
     assert killed.returncode == -signal.SIGKILL
     # the old store was moved aside and the new one not yet in place: nothing reads as data
-    assert not (workdir / "s.zarr").exists() and RunStore.exists(workdir / "s.zarr")
+    assert not (workdir / name).exists() and RunStore.exists(workdir / name)
     with pytest.raises(FileNotFoundError):
-        xarray.open_zarr(workdir / "s.zarr")
-    assert main(["info", "s.zarr"]) == 2
+        xarray.open_zarr(workdir / name)
+    assert main(["info", name]) == 2
     assert "replacement was cut short: run it again with --resume" in capsys.readouterr().err
-    assert main(["run", "base.toml", "--out", "s.zarr", "--resume", "--no-progress"]) == 0
+    assert main(["run", "base.toml", "--out", name, "--resume", "--no-progress"]) == 0
     reference = contents(finished(workdir / "reference.zarr"))
-    assert_same(contents(workdir / "s.zarr"), reference, "completed swap")
-    assert not [p.name for p in workdir.iterdir() if p.name.startswith(".s.zarr")]
+    assert_same(contents(workdir / name), reference, "completed swap")
+    assert not [p.name for p in workdir.iterdir() if p.name.startswith(f".{name}")]
+    assert decoy.is_dir()
 
 
 # -- 3. checksums; a missing chunk is never a zero ------------------------------------------
@@ -408,3 +414,77 @@ def test_check_reads_every_run_and_the_table_of_a_sweep_store(workdir, capsys):
     flip(workdir / "s.zarr" / "table" / "temperature" / "c" / "0", count=4)
     assert main(["check", "s.zarr"]) == 3
     assert "damaged: table/temperature" in capsys.readouterr().out
+
+
+def test_a_ctrl_c_after_the_last_commit_leaves_the_store_finished(workdir, monkeypatch):
+    write = RunStore._write_progress
+
+    def then_ctrl_c(self, progress):
+        write(self, progress)
+        if progress["status"] == "finished":
+            raise KeyboardInterrupt
+    monkeypatch.setattr(RunStore, "_write_progress", then_ctrl_c)
+    assert main(["run", "base.toml", "--out", "s.zarr", "--no-progress"]) == 130
+    assert RunStore.open("s.zarr").progress["status"] == "finished"
+
+
+def test_an_array_removed_whole_is_damage_and_never_a_traceback(workdir, capsys):
+    import shutil
+
+    finished(workdir / "s.zarr")
+    progress = dict(RunStore.open("s.zarr").progress, status="running")
+    cut = RunStore.open("s.zarr", mode="r+")
+    cut.group.attrs["granframe"] = dict(cut.metadata, progress=progress)
+    shutil.rmtree(workdir / "s.zarr" / "mass")
+    assert main(["check", "s.zarr"]) == 3
+    assert "missing array: mass" in capsys.readouterr().out
+    for command in (["info", "s.zarr"],
+                    ["run", "base.toml", "--out", "s.zarr", "--resume", "--no-progress"]):
+        assert main(command) == 2
+        assert "damaged: missing array mass" in capsys.readouterr().err
+
+
+def test_a_sweep_task_on_a_damaged_finished_store_returns_a_failed_row(workdir):
+    path = finished(workdir / "runs" / "point")
+    (path / "f" / "c" / "1" / "0" / "0").unlink()
+    row = run_point(NEW.to_dict(), str(path))
+    assert row["status"] == "failed" and "cannot be read" in row["message"]
+
+
+def test_a_resume_that_finds_the_store_made_meanwhile_continues_it(workdir, monkeypatch):
+    """Another writer published the store between this run's look and its lock."""
+    finished(workdir / "s.zarr")
+    monkeypatch.setattr(RunStore, "exists", staticmethod(lambda path: False))
+    result = Simulation(NEW).run(workdir / "s.zarr", resume=True, progress=False)
+    assert result.status == "already finished"
+
+
+def test_overwrite_refuses_a_sweep_store_whose_run_is_still_written(workdir, capsys):
+    root = zarr.open_group("sweep.zarr", mode="w", zarr_format=3)
+    root.attrs["granframe_sweep"] = {"schema": "granframe.sweep/1", "runs": ["a"]}
+    finished(workdir / "sweep.zarr" / "runs" / "a")
+    with WriterLock(workdir / "sweep.zarr" / "runs" / "a"):   # a worker that outlived its driver
+        assert main(["run", "base.toml", "--out", "sweep.zarr", "--overwrite",
+                     "--no-progress"]) == 2
+    assert f"is being written by pid {os.getpid()}" in capsys.readouterr().err
+    assert RunStore.exists(workdir / "sweep.zarr" / "runs" / "a")
+    assert main(["run", "base.toml", "--out", "sweep.zarr", "--overwrite", "--no-progress"]) == 0
+
+
+def test_check_calls_a_sweep_with_an_unreadable_run_damaged(workdir, capsys):
+    root = zarr.open_group("s.zarr", mode="w", zarr_format=3)
+    root.attrs["granframe_sweep"] = {"schema": "granframe.sweep/1", "runs": ["a"]}
+    finished(workdir / "s.zarr" / "runs" / "a")
+    (workdir / "s.zarr" / "runs" / "a" / "zarr.json").write_text("{not json")
+    assert main(["check", "s.zarr"]) == 3
+    assert "runs/a is not a readable run store" in capsys.readouterr().out
+
+
+def test_resume_with_rollback_of_a_health_stop_exits_3(workdir, capsys):
+    d = heated(integrator="forward_euler", heat_bath=50.0, time_step=0.05, final_time=5.0,
+               output={"snapshot_interval": 0.5}, health={"step_limit": False})
+    (workdir / "bad.toml").write_text(d.to_toml())
+    assert main(["run", "bad.toml", "--out", "bad.zarr", "--no-progress"]) == 3
+    assert main(["run", "bad.toml", "--out", "bad.zarr", "--resume", "--rollback",
+                 "--no-progress"]) == 3
+    assert "stopped earlier by a health check" in capsys.readouterr().err
