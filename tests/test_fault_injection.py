@@ -113,6 +113,7 @@ def test_a_run_killed_at_any_write_of_its_creation_or_commits_resumes_bitwise(
             continue
         assert_resumes_to(store, reference, toml)
         outcomes["resumed"] += 1
+    print(f"creation and commits: {len(lines)} writes, outcomes {outcomes}")
     assert outcomes["nothing"] >= 5 and outcomes["resumed"] >= 10, outcomes
 
 
@@ -144,4 +145,5 @@ def test_overwrite_killed_at_any_write_leaves_the_old_store_or_a_resumable_new_o
             continue
         assert_resumes_to(store, reference, toml)
         outcomes["new"] += 1
+    print(f"--overwrite: {len(lines)} writes, outcomes {outcomes}")
     assert outcomes["old"] >= 5 and outcomes["new"] >= 10, outcomes
