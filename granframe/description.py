@@ -49,6 +49,7 @@ import numpy
 import tomli_w
 
 from granframe import validators as check
+from granframe.errors import BackendUnavailableError
 from granframe.backends import PRECISIONS
 from granframe.grid import VelocityGrid
 from granframe.initial import callable_reference, resolve_callable
@@ -313,7 +314,10 @@ class RunDescription:
         self.build("initial")
         if self.rescaled:
             check_rescalable(kernel, restitution, self.heat_bath, "RunDescription")
-        self.build("backend")
+        try:
+            self.build("backend")
+        except BackendUnavailableError:
+            pass    # valid, but not on this machine: a store of it is still read here
         self._operator_options()   # quadratures given as tables are built (cheap)
         integrator = self.build("integrator")
         self._check_time_stepping(integrator.adaptive)

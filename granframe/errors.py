@@ -14,6 +14,14 @@ class UnknownNameError(ValueError):
     """A registry was asked for a name nobody registered."""
 
 
+class BackendUnavailableError(ValueError):
+    """An array backend whose package or device this machine lacks.
+
+    The description naming it is still valid (its parameters were checked): a store
+    written with it can be read here, and only building a run with it fails.
+    """
+
+
 class NonFiniteError(ValueError):
     """An operator was given an f with NaN or Inf (in a run: a step that blew up)."""
 

@@ -362,3 +362,27 @@ def test_cli_resume_of_a_finished_run_checks_the_description(tmp_path, capsys):
     toml.write_text(heated(final_time=0.5, heat_bath=0.2).to_toml())
     assert main(["run", str(toml), "--out", str(store), "--resume"]) == 2
     assert "another description (differs in: heat_bath)" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(__import__("importlib").util.find_spec("cupy") is not None,
+                    reason="CuPy is installed")
+def test_a_store_written_on_a_gpu_is_read_on_a_machine_without_one(tmp_path, capsys):
+    """A run with backend = {name = "cupy"} (written here on the NumPy backend, its stored
+    description then naming the GPU backend, as a GPU machine writes it): info, check, plot
+    and the description work without CuPy; only building the run needs it."""
+    from granframe.errors import BackendUnavailableError
+
+    store = tmp_path / "gpu.zarr"
+    Simulation(heated(final_time=0.5)).run(store, progress=False)
+    written = RunStore.open(store, mode="r+")
+    meta = written.metadata
+    meta["description"]["backend"] = {"name": "cupy"}
+    written.group.attrs["granframe"] = meta
+    for command in (["info", str(store)], ["check", str(store)],
+                    ["plot", str(store), "--out", str(tmp_path / "figures")]):
+        assert main(command) == 0, capsys.readouterr().err
+    assert (tmp_path / "figures" / "temperature.png").is_file()
+    description = RunDescription.from_dict(meta["description"])
+    assert description.backend.name == "cupy"
+    with pytest.raises(BackendUnavailableError, match="needs the cupy package"):
+        Simulation(description)

@@ -35,6 +35,7 @@ import numpy
 from granframe import hookimpl
 from granframe import validators as check
 from granframe.backends import ArrayBackend, RealFFT
+from granframe.errors import BackendUnavailableError
 
 #: Array namespace and its SciPy-style transforms, per ``module``.
 MODULES = {"cupy": ("cupy", "cupyx.scipy.fft"), "numpy": ("numpy", "scipy.fft")}
@@ -50,8 +51,8 @@ def _import(module: str):
     try:
         return tuple(importlib.import_module(name) for name in MODULES[module])
     except ImportError as exc:
-        raise ValueError("array backend 'cupy' needs the cupy package and a CUDA GPU: "
-                         "pip install 'granframe[gpu]'") from exc
+        raise BackendUnavailableError("array backend 'cupy' needs the cupy package and a CUDA "
+                                      "GPU: pip install 'granframe[gpu]'") from exc
 
 
 def kernel_source() -> str:
@@ -115,10 +116,12 @@ class CuPyBackend(ArrayBackend):
             try:
                 count = xp.cuda.runtime.getDeviceCount()
             except Exception as exc:          # CUDA driver or runtime missing
-                raise ValueError(f"array backend 'cupy': no usable CUDA device ({exc})") from None
+                raise BackendUnavailableError(f"array backend 'cupy': no usable CUDA device "
+                                              f"({exc})") from None
             if not self.device < count:
                 check.reject("CuPyBackend", "device", self.device,
-                             f"must be below the number of CUDA devices, {count}")
+                             f"must be below the number of CUDA devices here, {count}",
+                             error=BackendUnavailableError)
             xp.cuda.Device(self.device).use()
             if self.memory_limit is not None:
                 xp.get_default_memory_pool().set_limit(size=self.memory_limit)

@@ -12,14 +12,15 @@ import attrs
 from granframe import hookimpl
 from granframe import validators as check
 from granframe.backends import CPUBackend, RealFFT
+from granframe.errors import BackendUnavailableError
 
 
 def _pyfftw():
     try:
         import pyfftw
     except ImportError as exc:
-        raise ValueError("array backend 'pyfftw' needs the pyfftw package: "
-                         "pip install 'granframe[fftw]'") from exc
+        raise BackendUnavailableError("array backend 'pyfftw' needs the pyfftw package: "
+                                      "pip install 'granframe[fftw]'") from exc
     return pyfftw
 
 
@@ -27,8 +28,8 @@ def _kernels():
     try:
         from granframe_fftw import _numba_kernels
     except ImportError as exc:
-        raise ValueError("array backend 'pyfftw' needs the numba package for its fused "
-                         "kernels: pip install 'granframe[fftw]'") from exc
+        raise BackendUnavailableError("array backend 'pyfftw' needs the numba package for its "
+                                      "fused kernels: pip install 'granframe[fftw]'") from exc
     return _numba_kernels
 
 
