@@ -348,27 +348,20 @@ class Simulation:
         try:
             for target in targets:
                 while (step < target) if not adaptive else (t < target):
-                    if adaptive:
-                        try:
+                    try:
+                        if adaptive:
                             f, t, dt, dt_next = controller.advance(
                                 self.integrator, self.equation, t, f, dt_next, target, xp)
-                        except NonFiniteError:     # a trial stage blew up
-                            self._fail(store, records, state, f"health check failed at step "
-                                       f"{step + 1}, t = {t:.6g}: f is not finite (NaN or "
-                                       "Inf) within the step")
-                        except StepSizeError as exc:
-                            self._fail(store, records, state, f"health check failed at step "
-                                       f"{step + 1}, t = {t:.6g}: {exc}")
-                        step += 1
-                    else:
-                        try:
+                        else:
                             f = self.integrator.step(self.equation, t, f, d.time_step)
-                        except NonFiniteError:     # a stage of the step blew up
-                            self._fail(store, records, state, f"health check failed at step "
-                                       f"{step + 1}, t = {t:.6g}: f is not finite (NaN or "
-                                       "Inf) within the step")
-                        step, dt = step + 1, d.time_step
-                        t = step * d.time_step
+                    except (NonFiniteError, StepSizeError) as exc:   # a stage blew up, or
+                        problem = (exc if isinstance(exc, StepSizeError)   # dt fell to round-off
+                                   else "f is not finite (NaN or Inf) within the step")
+                        self._fail(store, records, state, f"health check failed at step "
+                                   f"{step + 1}, t = {t:.6g}: {problem}")
+                    step += 1
+                    if not adaptive:
+                        dt, t = d.time_step, step * d.time_step
                     record = moments(grid, f, xp)
                     records.add(step, t, dt, record)
                     problem = health_problem(record, mass0, d.health)
