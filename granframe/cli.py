@@ -134,13 +134,11 @@ def _run(args) -> int:
 
 
 def _where(exc: BaseException, source) -> str:
-    """``Type: message (at file:line)``, the line being the last one in ``source``."""
-    import traceback
+    """``Type: message (at file:line)``, the line being the innermost one in ``source``."""
+    from granframe.runner import line_in
 
-    frames = [frame for frame in traceback.extract_tb(exc.__traceback__)
-              if pathlib.Path(frame.filename).resolve() == pathlib.Path(source).resolve()]
-    at = f" (at {frames[-1].filename}:{frames[-1].lineno})" if frames else ""
-    return f"{type(exc).__name__}: {exc}{at}"
+    line = line_in(exc, source)
+    return f"{type(exc).__name__}: {exc}" + (f" (at {source}:{line})" if line else "")
 
 
 def _run_one(description, out, args) -> int:

@@ -68,6 +68,16 @@ class Study:
                        "OUT/<name>.zarr)")
 
 
+def line_in(exc: BaseException, source) -> int | None:
+    """The line of the file ``source`` where ``exc`` was raised (for a syntax error, its
+    line), the innermost if there are several; None when it was not raised there."""
+    if isinstance(exc, SyntaxError):
+        return exc.lineno
+    lines = [frame.lineno for frame in traceback.extract_tb(exc.__traceback__)
+             if pathlib.Path(frame.filename).resolve() == pathlib.Path(source).resolve()]
+    return lines[-1] if lines else None
+
+
 def load_study(source, quick: bool = False) -> Study:
     """A TOML description, or a study module defining ``runs(quick)`` or ``description(quick)``.
 
@@ -86,12 +96,8 @@ def load_study(source, quick: bool = False) -> Study:
                          "description or a .py study module")
     def failure(exc, what):
         """ValueError: the study's own error, with its line in the study file."""
-        if isinstance(exc, SyntaxError):
-            message, line = exc.msg, exc.lineno
-        else:
-            lines = [frame.lineno for frame in traceback.extract_tb(exc.__traceback__)
-                     if pathlib.Path(frame.filename).resolve() == path.resolve()]
-            message, line = str(exc), lines[-1] if lines else None
+        message = exc.msg if isinstance(exc, SyntaxError) else str(exc)
+        line = line_in(exc, path)
         return ValueError(f"run: study '{source}' {what}: {type(exc).__name__}: {message}"
                           + (f" (line {line})" if line else ""))
 
