@@ -77,11 +77,9 @@ def _bench(args) -> int:
 
 def _run(args) -> int:
     from granframe import storage
-    from granframe.runner import load_study
+    from granframe.runner import check_run_modes, load_study
 
-    if args.resume and args.overwrite:
-        raise ValueError("run: --resume and --overwrite exclude each other: --resume "
-                         "continues the store, --overwrite replaces it")
+    check_run_modes(args.resume, args.overwrite)   # before the study is loaded
     if args.rollback and not args.resume:
         raise ValueError("run: --rollback applies to --resume (it continues from the last "
                          "intact commit of a damaged store)")
@@ -96,10 +94,12 @@ def _run(args) -> int:
     if unknown:
         raise ValueError(f"run: parameter 'only' = {args.only!r} is invalid; the study's runs "
                          f"are {', '.join(study.runs)}")
-    if storage.store_kind(out) in ("run", "sweep", "file"):
+    kind = {"run": "run store", "sweep": "sweep store", "file": "file"}.get(
+        storage.store_kind(out))
+    if kind is not None:
         raise ValueError(f"run: parameter 'out' = '{out}' is invalid; a study with several "
                          f"runs writes a folder of stores (OUT/<name>.zarr), and '{out}' is a "
-                         f"{storage.store_kind(out).replace('run', 'run store').replace('sweep', 'sweep store')}")
+                         f"{kind}")
     out.mkdir(parents=True, exist_ok=True)
     status = 0
     for name in names:

@@ -135,6 +135,13 @@ def load_description(source, quick: bool = False) -> RunDescription:
     return study.runs[""]
 
 
+def check_run_modes(resume: bool, overwrite: bool) -> None:
+    """Refuse ``resume`` together with ``overwrite``."""
+    if resume and overwrite:
+        raise ValueError("run: --resume and --overwrite exclude each other: --resume "
+                         "continues the store, --overwrite replaces it")
+
+
 class HealthError(RuntimeError):
     """A run stopped by a health check; the message says which check, when and by how much."""
 
@@ -288,9 +295,7 @@ class Simulation:
         path of ``protect``). ``progress`` None shows a progress bar on a terminal only.
         A Ctrl-C leaves the store with status 'interrupted', ready to resume.
         """
-        if resume and overwrite:
-            raise ValueError("run: --resume and --overwrite exclude each other: --resume "
-                             "continues the store, --overwrite replaces it")
+        check_run_modes(resume, overwrite)
         d, grid, backend = self.description, self.grid, self.backend
         xp = backend.xp
         start_wall = time.perf_counter()
