@@ -527,7 +527,7 @@ class RunStore:
         if not isinstance(meta, dict) or meta.get("schema") != SCHEMA:
             raise StoreError(f"'{path}' is not a granframe run store (no '{SCHEMA}' metadata)")
         store = cls(path, group)
-        missing = store._absent_arrays() + (store._missing() if complete else [])
+        missing = store.verify(read=False) if complete else store._absent_arrays()
         if missing:
             raise StoreDamagedError(f"store '{path}' is damaged: {summarise(missing)} "
                                     "(granframe check lists every problem)", missing)
@@ -616,22 +616,13 @@ class RunStore:
         return [{"array": name, "chunk": [], "first": 0, "kind": "missing array",
                  "detail": ""} for name in sorted(expected - set(self._names()))]
 
-    def _missing(self) -> list[dict]:
-        """Committed chunks that are not on disk."""
-        missing = []
-        for name in self._names():
-            array = self.group[name]
-            for index in _chunk_grid(array, self._extent(name)):
-                if not _chunk_file(self.path, name, index).is_file():
-                    missing.append(_problem(name, array, index, "missing"))
-        return missing
-
-    def verify(self, names=None, snapshots=None) -> list[dict]:
+    def verify(self, names=None, snapshots=None, read: bool = True) -> list[dict]:
         """Every committed chunk of ``names`` (default: all arrays) read and checked.
 
         Returns the problems, each a dict: array, chunk (index), first (first entry along
-        the first axis), kind ('missing' or 'damaged') and detail. ``snapshots`` limits
-        the chunks of ``f`` read to those indices.
+        the first axis), kind ('missing array', 'missing' or 'damaged') and detail.
+        ``snapshots`` limits the chunks of ``f`` read to those indices; ``read`` False
+        only checks that the chunks are on disk.
         """
         problems = self._absent_arrays() if names is None else []
         for name in names or self._names():
@@ -641,6 +632,8 @@ class RunStore:
                     continue
                 if not _chunk_file(self.path, name, index).is_file():
                     problems.append(_problem(name, array, index, "missing"))
+                    continue
+                if not read:
                     continue
                 try:
                     array.get_block_selection(index)
