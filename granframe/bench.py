@@ -132,14 +132,13 @@ def check_options(backend: str, threads: int, repeats: int) -> None:
 
     names = default_registries().names("array_backends")
     if backend not in names:
-        raise ValueError(f"bench: parameter 'backend' = {backend!r} is invalid; must be a "
-                         f"registered array backend: {', '.join(names)}")
+        check.reject("bench", "backend", backend,
+                     f"must be a registered array backend: {', '.join(names)}")
     if not check.is_integer(threads) or not 1 <= threads <= MAX_THREADS:
-        raise ValueError(f"bench: parameter 'threads' = {threads!r} is invalid; must be an "
-                         f"integer >= 1 and <= {MAX_THREADS}")
+        check.reject("bench", "threads", threads, f"must be an integer >= 1 and <= {MAX_THREADS}")
     if not check.is_integer(repeats) or repeats < 1:
-        raise ValueError(f"bench: parameter 'repeats' = {repeats!r} is invalid; must be an "
-                         "integer >= 1 (the time is the median of that many evaluations)")
+        check.reject("bench", "repeats", repeats, "must be an integer >= 1 (the time is the "
+                     "median of that many evaluations)")
 
 
 def run(configs, backend: str, threads: int, repeats: int,
@@ -209,7 +208,7 @@ def check_config(config) -> tuple:
               "product rule), e.g. 32"))
     for name, value, good, allowed in rules:
         if not good:
-            raise ValueError(f"bench: parameter '{name}' = {value} is invalid; {allowed}")
+            check.reject("bench", name, value, allowed)
     return config
 
 
