@@ -36,7 +36,7 @@ class _Run:
     """What the figures read from a store."""
 
     def __init__(self, path):
-        store = RunStore.open(path)
+        store = RunStore.open(path, complete=False)
         problems = store.verify()     # every committed chunk present and passing its checksum
         if problems:
             raise StoreDamagedError(f"plot: store '{path}' is damaged: {summarise(problems)} "
