@@ -359,5 +359,42 @@ def main(argv: list[str] | None = None) -> int:
         return 2
 
 
+def _interrupt(signum, frame):
+    """Ctrl-C as KeyboardInterrupt, but never inside the import machinery: raised in one of
+    importlib's lock callbacks it would be printed as "Exception ignored" and lost (the run
+    would go on), so there it is sent again 10 ms later, once the import has returned."""
+    if frame is not None and frame.f_code.co_filename.startswith("<frozen importlib"):
+        import os
+        import threading
+
+        threading.Timer(0.01, os.kill, (os.getpid(), signum)).start()
+        return
+    raise KeyboardInterrupt
+
+
+def entry() -> None:
+    """The ``granframe`` command: :func:`main`'s status as the process's exit status.
+
+    Ctrl-C is delivered outside the import machinery (:func:`_interrupt`). After it the
+    process leaves with status 130 through ``os._exit`` (stdout and stderr flushed first;
+    the run has already marked and released its store): CPython would otherwise end it by
+    SIGINT whenever the KeyboardInterrupt passed through code run by ``PyRun_*``, such as
+    the initialisation of a compiled module being imported, even though :func:`main`
+    handled it.
+    """
+    import signal
+
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:   # not ignored
+        signal.signal(signal.SIGINT, _interrupt)
+    code = main()
+    if code == 130:
+        import os
+
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(130)
+    sys.exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    entry()
