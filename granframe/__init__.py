@@ -20,13 +20,13 @@ from granframe._version import __version__
 _EXPORTS = {
     "ArrayBackend": "granframe.backends", "NumpyBackend": "granframe.backends",
     "AliasingWarning": "granframe.errors", "PluginError": "granframe.errors",
-    "UnknownNameError": "granframe.errors", "VelocityGrid": "granframe.grid",
-    "hookimpl": "granframe.hookspecs", "TimeIntegrator": "granframe.integrators",
-    "VariableHardSpheres": "granframe.kernels", "CollisionOperator": "granframe.operators",
-    "CircleTrapezoid": "granframe.quadratures", "GaussLegendre": "granframe.quadratures",
-    "Lebedev": "granframe.quadratures", "Quadrature": "granframe.quadratures",
-    "SphereProduct": "granframe.quadratures", "FAMILIES": "granframe.registry",
-    "default_registries": "granframe.registry", "RestitutionLaw": "granframe.restitution",
+    "UnknownNameError": "granframe.errors", "VelocityGrid": "granframe.velocity.grid",
+    "hookimpl": "granframe.hookspecs", "TimeIntegrator": "granframe.stepping.integrators",
+    "VariableHardSpheres": "granframe.model.kernels", "CollisionOperator": "granframe.abc",
+    "CircleTrapezoid": "granframe.velocity.quadratures", "GaussLegendre": "granframe.velocity.quadratures",
+    "Lebedev": "granframe.velocity.quadratures", "Quadrature": "granframe.velocity.quadratures",
+    "SphereProduct": "granframe.velocity.quadratures", "FAMILIES": "granframe.registry",
+    "default_registries": "granframe.registry", "RestitutionLaw": "granframe.model.restitution",
 }
 
 

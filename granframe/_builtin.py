@@ -4,7 +4,10 @@ This module is a plugin like any third-party one (see docs/plugins.md); the
 plugin manager registers it under the name ``builtin``.
 """
 
-from granframe import backends, initial, integrators, kernels, quadratures, restitution
+from granframe import backends
+from granframe.model import initial, kernels, restitution
+from granframe.stepping import integrators
+from granframe.velocity import quadratures
 from granframe.hookspecs import hookimpl
 
 

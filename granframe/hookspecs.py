@@ -21,14 +21,14 @@ def granframe_register_collision_kernels(registry):
     """Add collision kernels B(|g|, cos theta, E).
 
     A factory returns an object with the interface of
-    :class:`granframe.kernels.VariableHardSpheres`.
+    :class:`granframe.model.kernels.VariableHardSpheres`.
     """
 
 
 @hookspec
 def granframe_register_restitution_laws(registry):
     """Add restitution laws e(|g|); factories return
-    :class:`granframe.restitution.RestitutionLaw` instances."""
+    :class:`granframe.model.restitution.RestitutionLaw` instances."""
 
 
 @hookspec
@@ -41,19 +41,19 @@ def granframe_register_quadratures(registry):
 def granframe_register_collision_operators(registry):
     """Add collision operators; a factory is called as
     ``factory(grid, kernel, restitution, backend, **options)`` and returns a
-    :class:`granframe.operators.CollisionOperator`."""
+    :class:`granframe.abc.CollisionOperator`."""
 
 
 @hookspec
 def granframe_register_time_integrators(registry):
     """Add time integrators; factories return
-    :class:`granframe.integrators.TimeIntegrator` instances."""
+    :class:`granframe.stepping.integrators.TimeIntegrator` instances."""
 
 
 @hookspec
 def granframe_register_initial_conditions(registry):
     """Add initial conditions; factories return
-    :class:`granframe.initial.InitialCondition` instances."""
+    :class:`granframe.model.initial.InitialCondition` instances."""
 
 
 @hookspec

@@ -6,8 +6,8 @@ same physics checks granframe runs on its own.
 
 from __future__ import annotations
 
-from granframe.equation import HomogeneousBoltzmann
-from granframe.exact import heated_maxwell_temperature
+from granframe.equations.homogeneous import HomogeneousBoltzmann
+from granframe.model.exact import heated_maxwell_temperature
 from granframe.registry import default_registries
 
 
@@ -19,7 +19,7 @@ def heated_maxwell_error(operator, restitution: float, heat_bath: float = 0.1,
     d_t f = Q(f, f) + tau Delta f from a Maxwellian of temperature T0, the registered
     classical RK4 with ``time_step`` for ``steps`` steps (the review: dt = 0.01 to t = 2),
     temperature compared at every step with
-    :func:`granframe.exact.heated_maxwell_temperature`. ``operator`` must be built for
+    :func:`granframe.model.exact.heated_maxwell_temperature`. ``operator`` must be built for
     Maxwell molecules with the review's constant and constant restitution coefficient
     ``restitution``.
     """

@@ -43,9 +43,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
 
 import granframe as gf  # noqa: E402
-from granframe.bench import median_time, preferred_backend  # noqa: E402
-from granframe.exact import bkw  # noqa: E402
-from granframe.studykit import (command, read_summary, save_figure, write_csv,  # noqa: E402
+from granframe.tools.bench import median_time, preferred_backend  # noqa: E402
+from granframe.model.exact import bkw  # noqa: E402
+from granframe.tools.studykit import (command, read_summary, save_figure, write_csv,  # noqa: E402
                                 write_summary)
 from granframe.testing import heated_maxwell_error  # noqa: E402
 

@@ -35,12 +35,12 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
 from scipy.interpolate import CubicSpline  # noqa: E402
 
-from granframe.advise import Scene, advise, evaluation_seconds  # noqa: E402
-from granframe.description import RunDescription  # noqa: E402
-from granframe.exact import bkw, heated_maxwell_law  # noqa: E402
-from granframe.runner import Simulation  # noqa: E402
-from granframe.stability import step_limit  # noqa: E402
-from granframe.studykit import command, save_figure, write_csv, write_summary  # noqa: E402
+from granframe.tools.advise import Scene, advise, evaluation_seconds  # noqa: E402
+from granframe.run.description import RunDescription  # noqa: E402
+from granframe.model.exact import bkw, heated_maxwell_law  # noqa: E402
+from granframe.run.runner import Simulation  # noqa: E402
+from granframe.stepping.stability import step_limit  # noqa: E402
+from granframe.tools.studykit import command, save_figure, write_csv, write_summary  # noqa: E402
 
 MAXWELLIAN = {"name": "maxwellian", "temperature": 1.0}
 SCENES = {

@@ -7,7 +7,7 @@ concentrates at its mean velocity. Three parts (``--only``):
 
 - ``concentration``: 2D hard spheres, e = 0.5, T0 = 1, S = 4, N = 32 and 64 (h = 0.55, 0.28),
   RK4. The unscaled equation (dt = 0.05) is run to t = 100 next to the rescaled one
-  (:mod:`granframe.rescaling`, ds = 0.1) to the same t. Reference: the rescaled N = 64 run,
+  (:mod:`granframe.equations.rescaled`, ds = 0.1) to the same t. Reference: the rescaled N = 64 run,
   checked against the unscaled N = 64 run while both are resolved. Reported: when the unscaled
   temperature leaves the reference by 1e-3 and when its negative-mass share passes the
   runner's 1 % limit, with T/T0 and the thermal speed sqrt(T) in grid spacings there.
@@ -34,11 +34,11 @@ import numpy  # noqa: E402
 from scipy.interpolate import CubicSpline  # noqa: E402
 
 import granframe as gf  # noqa: E402
-from granframe.bench import preferred_backend  # noqa: E402
-from granframe.equation import HomogeneousBoltzmann  # noqa: E402
-from granframe.rescaling import RescaledBoltzmann  # noqa: E402
-from granframe.runner import moments  # noqa: E402
-from granframe.studykit import (command, read_summary, save_figure, write_csv,  # noqa: E402
+from granframe.tools.bench import preferred_backend  # noqa: E402
+from granframe.equations.homogeneous import HomogeneousBoltzmann  # noqa: E402
+from granframe.equations.rescaled import RescaledBoltzmann  # noqa: E402
+from granframe.run.runner import moments  # noqa: E402
+from granframe.tools.studykit import (command, read_summary, save_figure, write_csv,  # noqa: E402
                                 write_summary)
 
 PARTS = ("concentration", "hcs", "maxwell")

@@ -12,7 +12,7 @@ on to t = 55 for f_infinity).
 ``--quick`` (the CI smoke test): N = 32, N_rho = 16, M = 8, dt = 0.02 to t = 2.
 """
 
-from granframe.description import RunDescription
+from granframe.run.description import RunDescription
 
 
 def description(quick: bool = False) -> RunDescription:

@@ -2,7 +2,7 @@
 
     python studies/heated_state_sweep.py --out docs/figures/sweep   # ~4 min on 2 cores
 
-A sweep (granframe.sweep) over e in {0.2, 0.4, 0.6, 0.8, 0.9, 0.95} (product) and the two
+A sweep (granframe.run.sweep) over e in {0.2, 0.4, 0.6, 0.8, 0.9, 0.95} (product) and the two
 kernels (product), with the heat bath tau = (1 - e^2)/8 zipped to e. That tau makes the
 exact steady temperature of Maxwell molecules 8 tau / (1 - e^2) = 1 for every e. f0 is
 the Maxwellian T0 = 1, with N = 48, S = 4.5, N_rho = 24, M = 24, RK4, dt = 0.05, to t = 20.
@@ -25,8 +25,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
 import tomli_w  # noqa: E402
 
-from granframe.studykit import command, save_figure, write_csv, write_summary  # noqa: E402
-from granframe.sweep import Sweep, read_table, run_sweep  # noqa: E402
+from granframe.tools.studykit import command, save_figure, write_csv, write_summary  # noqa: E402
+from granframe.run.sweep import Sweep, read_table, run_sweep  # noqa: E402
 
 RESTITUTIONS = (0.2, 0.4, 0.6, 0.8, 0.9, 0.95)
 

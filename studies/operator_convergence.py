@@ -16,8 +16,8 @@ import time
 import numpy
 
 import granframe as gf
-from granframe.exact import bkw
-from granframe.bench import preferred_backend
+from granframe.model.exact import bkw
+from granframe.tools.bench import preferred_backend
 from granframe.testing import heated_maxwell_error
 
 

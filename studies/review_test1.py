@@ -39,11 +39,11 @@ import numpy  # noqa: E402
 import xarray  # noqa: E402
 
 import granframe as gf  # noqa: E402
-from granframe.analysis import exponential_rate, relative_entropy  # noqa: E402
-from granframe.bench import preferred_backend  # noqa: E402
-from granframe.description import RunDescription  # noqa: E402
-from granframe.exact import heated_maxwell_temperature, maxwell_energy_dissipation  # noqa: E402
-from granframe.storage import RunStore  # noqa: E402
+from granframe.tools.analysis import exponential_rate, relative_entropy  # noqa: E402
+from granframe.tools.bench import preferred_backend  # noqa: E402
+from granframe.run.description import RunDescription  # noqa: E402
+from granframe.model.exact import heated_maxwell_temperature, maxwell_energy_dissipation  # noqa: E402
+from granframe.run.storage import RunStore  # noqa: E402
 
 W0 = 2 * math.sqrt(6)
 EDGE = 1.0   # c_smooth: the flat data's edges smoothed by a Gaussian of this deviation

@@ -28,9 +28,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
 import xarray  # noqa: E402
 
-from granframe.analysis import tail_exponent  # noqa: E402
-from granframe.description import RunDescription  # noqa: E402
-from granframe.storage import RunStore  # noqa: E402
+from granframe.tools.analysis import tail_exponent  # noqa: E402
+from granframe.run.description import RunDescription  # noqa: E402
+from granframe.run.storage import RunStore  # noqa: E402
 
 W0 = 2 * math.sqrt(6)
 KERNELS = {"maxwell": 1.0, "hard_spheres": 1.5}   # kernel: theoretical tail exponent

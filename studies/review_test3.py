@@ -37,8 +37,8 @@ import scipy.optimize  # noqa: E402
 import xarray  # noqa: E402
 
 import granframe as gf  # noqa: E402
-from granframe.description import RunDescription  # noqa: E402
-from granframe.storage import RunStore  # noqa: E402
+from granframe.run.description import RunDescription  # noqa: E402
+from granframe.run.storage import RunStore  # noqa: E402
 
 HALF_WIDTH = 5 * (3 + math.sqrt(2))
 TANH = {"centre": 4.0, "width": 1.0}    # the review's tanh law, e0 given per run

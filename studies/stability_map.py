@@ -18,7 +18,7 @@ A point is *unstable* when f stops being finite or max |f| exceeds 10 times the 
 max f0 and the peak of the Maxwellian at the exact temperature (so that a gas that cools
 and concentrates is not called unstable), *inaccurate* when stable with
 max |T/T_exact - 1| > 1e-3, *accurate* otherwise. Each map
-draws the predicted explicit limit of :mod:`granframe.stability`, dt = interval / rate.
+draws the predicted explicit limit of :mod:`granframe.stepping.stability`, dt = interval / rate.
 """
 
 from __future__ import annotations
@@ -34,10 +34,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
 
 import granframe as gf  # noqa: E402
-from granframe.equation import HomogeneousBoltzmann  # noqa: E402
-from granframe.exact import heated_maxwell_temperature  # noqa: E402
-from granframe.stability import step_limit  # noqa: E402
-from granframe.studykit import (command, read_summary, save_figure, write_csv,  # noqa: E402
+from granframe.equations.homogeneous import HomogeneousBoltzmann  # noqa: E402
+from granframe.model.exact import heated_maxwell_temperature  # noqa: E402
+from granframe.stepping.stability import step_limit  # noqa: E402
+from granframe.tools.studykit import (command, read_summary, save_figure, write_csv,  # noqa: E402
                                 write_summary)
 
 STEPS = 200

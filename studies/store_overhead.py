@@ -3,7 +3,7 @@
     python studies/store_overhead.py --out docs/figures/store     # about two minutes
 
 Every chunk of a run store is compressed with zstd and then checksummed with CRC-32C
-(granframe.storage.codecs). This study times, for f snapshots of 2D N = 64, 3D N = 32
+(granframe.run.storage.codecs). This study times, for f snapshots of 2D N = 64, 3D N = 32
 and 3D N = 64 (a Maxwellian), the commit of one snapshot with its moment records
 (RunStore.commit) and the read of one snapshot back, with the shipped codecs and with
 zstd alone (the store as it was without checksums), median of repeated runs; and the wall
@@ -22,10 +22,10 @@ import time
 import numpy
 import zarr
 
-import granframe.storage as storage
-from granframe.grid import VelocityGrid
-from granframe.runner import Simulation, load_description
-from granframe.studykit import command, write_csv, write_summary
+import granframe.run.storage as storage
+from granframe.velocity.grid import VelocityGrid
+from granframe.run.runner import Simulation, load_description
+from granframe.tools.studykit import command, write_csv, write_summary
 
 STUDY = pathlib.Path(__file__).with_name("heated_maxwell.py")
 GRIDS = [(2, 64), (3, 32), (3, 64)]

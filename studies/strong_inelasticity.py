@@ -23,11 +23,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
 
 import granframe as gf  # noqa: E402
-from granframe.bench import preferred_backend  # noqa: E402
-from granframe.equation import HomogeneousBoltzmann  # noqa: E402
-from granframe.exact import heated_maxwell_temperature  # noqa: E402
-from granframe.runner import moments  # noqa: E402
-from granframe.studykit import command, save_figure, write_csv, write_summary  # noqa: E402
+from granframe.tools.bench import preferred_backend  # noqa: E402
+from granframe.equations.homogeneous import HomogeneousBoltzmann  # noqa: E402
+from granframe.model.exact import heated_maxwell_temperature  # noqa: E402
+from granframe.run.runner import moments  # noqa: E402
+from granframe.tools.studykit import command, save_figure, write_csv, write_summary  # noqa: E402
 
 TAU, FINAL, DT = 0.1, 10.0, 0.02
 

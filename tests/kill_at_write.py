@@ -47,6 +47,6 @@ def install(kill_at: int, log) -> None:
 if __name__ == "__main__":
     kill_at, log_path, arguments = int(sys.argv[1]), sys.argv[2], sys.argv[3:]
     install(kill_at, open(log_path, "w", buffering=1))
-    from granframe.cli import main
+    from granframe.tools.cli import main
 
     sys.exit(main(arguments))

@@ -8,12 +8,12 @@ import attrs
 import numpy
 import pytest
 
-from granframe.advise import Scene, advise
-from granframe.quadratures import Lebedev
-from granframe.cli import main
-from granframe.description import RunDescription
-from granframe.exact import bkw, heated_maxwell_temperature
-from granframe.runner import Simulation
+from granframe.tools.advise import Scene, advise
+from granframe.velocity.quadratures import Lebedev
+from granframe.tools.cli import main
+from granframe.run.description import RunDescription
+from granframe.model.exact import bkw, heated_maxwell_temperature
+from granframe.run.runner import Simulation
 
 MAXWELLIAN = {"name": "maxwellian", "temperature": 1.0}
 

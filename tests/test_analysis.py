@@ -4,7 +4,7 @@ import numpy
 import pytest
 
 import granframe as gf
-from granframe.analysis import exponential_rate, relative_entropy, tail_exponent
+from granframe.tools.analysis import exponential_rate, relative_entropy, tail_exponent
 
 
 @pytest.mark.parametrize("alpha", [1.0, 1.5, 2.0])

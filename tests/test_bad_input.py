@@ -8,10 +8,10 @@ import numpy
 import pytest
 
 import granframe as gf
-from granframe import bench
-from granframe.description import RunDescription
-from granframe.initial import FromCallable
-from granframe.runner import Simulation, load_study
+from granframe.tools import bench
+from granframe.run.description import RunDescription
+from granframe.model.initial import FromCallable
+from granframe.run.runner import Simulation, load_study
 from granframe.testing import evaluate_on_host
 from granframe_spectral import DirectSpectral, FastSpectral
 
@@ -318,8 +318,8 @@ def test_nyquist_projection_changing_f0_is_refused():
 def test_a_step_that_blows_up_within_its_stages_is_a_health_stop(tmp_path):
     """A heat bath far beyond the step limit (the check switched off): Q meets an infinite
     stage inside an RK4 step; the run is stopped and marked failed like any blow-up."""
-    from granframe.runner import HealthError
-    from granframe.storage import RunStore
+    from granframe.run.runner import HealthError
+    from granframe.run.storage import RunStore
     from test_runner import heated
 
     d = heated(heat_bath=1e300, health={"step_limit": False}, final_time=0.5)
@@ -332,8 +332,8 @@ def test_a_step_that_blows_up_within_its_stages_is_a_health_stop(tmp_path):
 def test_the_nyquist_projection_of_f0_is_reported_and_stored(tmp_path, capsys):
     """The case of 2D N = 16, S = 10, T0 = 8: within the default tolerance, so the run goes
     on, but the change of T0 is said and kept with the run."""
-    from granframe.cli import main
-    from granframe.storage import RunStore, describe
+    from granframe.tools.cli import main
+    from granframe.run.storage import RunStore, describe
     from test_runner import heated
 
     d = heated(grid={"dimension": 2, "n_modes": 16, "support_radius": 10.0}, final_time=0.1,

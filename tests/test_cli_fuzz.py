@@ -16,8 +16,8 @@ import tomli_w
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from granframe.cli import main
-from granframe.runner import Simulation
+from granframe.tools.cli import main
+from granframe.run.runner import Simulation
 from test_fault_injection import NEW, OLD
 
 #: seconds one command may take (a generated run is a few steps on a 16^2 grid)

@@ -10,9 +10,9 @@ import numpy
 import pytest
 
 import granframe as gf
-from granframe.description import RunDescription
-from granframe.runner import Simulation
-from granframe.storage import RunStore
+from granframe.run.description import RunDescription
+from granframe.run.runner import Simulation
+from granframe.run.storage import RunStore
 from granframe.testing import evaluate_on_host
 from granframe_cupy import CuPyBackend, gpu_available
 
@@ -118,7 +118,7 @@ def test_f_moves_to_the_host_only_when_a_snapshot_is_written(tmp_path, monkeypat
 @pytest.mark.gpu
 @pytest.mark.skipif(not gpu_available(), reason="needs CuPy and a CUDA GPU")
 def test_bench_times_with_cuda_events_and_reports_device_memory():
-    from granframe.bench import measure
+    from granframe.tools.bench import measure
 
     record = measure(3, 16, 8, 32, "cupy", 1, 5)
     assert record["evaluation_s"] > 0 and record["device_memory_gib"] > 0

@@ -1,4 +1,4 @@
-"""Error indicators (granframe.estimators) against closed forms for Maxwellians."""
+"""Error indicators (granframe.velocity.estimators) against closed forms for Maxwellians."""
 
 import math
 
@@ -6,7 +6,7 @@ import pytest
 import scipy.special
 
 import granframe as gf
-from granframe.estimators import mass_beyond, pair_share_beyond, spectral_tail
+from granframe.velocity.estimators import mass_beyond, pair_share_beyond, spectral_tail
 
 
 @pytest.mark.parametrize("dimension, n_modes, temperature", [(2, 32, 1.0), (2, 64, 0.2),

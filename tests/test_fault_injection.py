@@ -14,9 +14,9 @@ import numpy
 import pytest
 import zarr
 
-from granframe.cli import main
-from granframe.runner import Simulation
-from granframe.storage import RunStore, check
+from granframe.tools.cli import main
+from granframe.run.runner import Simulation
+from granframe.run.storage import RunStore, check
 from test_runner import heated
 
 HARNESS = pathlib.Path(__file__).with_name("kill_at_write.py")

@@ -6,9 +6,10 @@ import numpy
 import pytest
 
 import granframe as gf
-from granframe.equation import HomogeneousBoltzmann
-from granframe.heatbath import HeatBath
-from granframe.integrators import Equation, StepController, StepSizeError
+from granframe.equations.homogeneous import HomogeneousBoltzmann
+from granframe.model.exact import heated_maxwell_temperature
+from granframe.velocity.heatbath import HeatBath
+from granframe.stepping.integrators import Equation, StepController, StepSizeError
 
 INTEGRATORS = gf.default_registries().names("time_integrators")
 
@@ -192,7 +193,7 @@ def _stiff_run(name, restitution, knudsen, heat_bath, dt, steps, n_modes=32):
         f = integrator.step(equation, i * dt, f, dt)
         if not numpy.all(numpy.isfinite(f)) or numpy.abs(f).max() > 1e3:
             return None
-        law = gf.exact.heated_maxwell_temperature((i + 1) * dt, T0, restitution, heat_bath,
+        law = heated_maxwell_temperature((i + 1) * dt, T0, restitution, heat_bath,
                                                   rho / knudsen)
         worst = max(worst, abs(grid.temperature(f) / law - 1))
     target = equation.relaxation(f)[1]

@@ -4,7 +4,7 @@ import numpy
 import pytest
 
 import granframe
-from granframe.kernels import VariableHardSpheres, hard_spheres, maxwell_molecules
+from granframe.model.kernels import VariableHardSpheres, hard_spheres, maxwell_molecules
 
 
 def test_review_constants():

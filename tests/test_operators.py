@@ -4,9 +4,10 @@ import numpy
 import pytest
 
 import granframe as gf
-from granframe.bench import preferred_backend
-from granframe.exact import bkw, maxwell_energy_dissipation
-from granframe.heatbath import HeatBath
+from granframe.tools.bench import preferred_backend
+from granframe.model.exact import bkw, maxwell_energy_dissipation
+from granframe.velocity.heatbath import HeatBath
+from granframe.velocity.quadratures import LEBEDEV_ORDERS
 from granframe.testing import evaluate_on_host, heated_maxwell_error
 
 def build(name, grid, kernel="maxwell", law=("constant", {"value": 1.0}), backend="numpy",
@@ -144,7 +145,7 @@ def test_momentum_and_elastic_energy_converge(dimension, sizes):
     for n in sizes:
         grid = gf.VelocityGrid(dimension, n, 5.0)
         sphere = (gf.CircleTrapezoid(n) if dimension == 2
-                  else gf.Lebedev(min(o for o in gf.quadratures.LEBEDEV_ORDERS if o >= n - 1)))
+                  else gf.Lebedev(min(o for o in LEBEDEV_ORDERS if o >= n - 1)))
         op = build("fast_spectral", grid, kernel="hard_spheres", backend=FAST_BACKEND,
                    radial_points=n, sphere=sphere)
         t1, t2 = (0.6, 0.4) if dimension == 2 else (1.0, 0.8)

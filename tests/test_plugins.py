@@ -80,7 +80,7 @@ def test_plugin_can_be_disabled_by_environment(monkeypatch, fresh_registries):
 def test_duplicate_name_names_both_sources(make_distribution, fresh_registries):
     make_distribution("granframe-clash", "granframe_clash", """
         import granframe
-        from granframe.restitution import Constant
+        from granframe.model.restitution import Constant
 
         @granframe.hookimpl
         def granframe_register_restitution_laws(registry):
@@ -113,7 +113,7 @@ def test_broken_plugin_is_reported_with_its_origin(make_distribution):
 def test_invalid_registered_name(make_distribution):
     make_distribution("granframe-badname", "granframe_badname", """
         import granframe
-        from granframe.restitution import Constant
+        from granframe.model.restitution import Constant
 
         @granframe.hookimpl
         def granframe_register_restitution_laws(registry):
@@ -138,7 +138,7 @@ def _env_with_fake_site():
 
 
 def test_cli_plugins_json_is_stable_and_lists_sources():
-    out = subprocess.run([sys.executable, "-m", "granframe.cli", "plugins", "--json"],
+    out = subprocess.run([sys.executable, "-m", "granframe.tools.cli", "plugins", "--json"],
                          env=_env_with_fake_site(), capture_output=True, text=True, check=True)
     doc = json.loads(out.stdout)
     assert doc["schema"] == "granframe.plugins/1"
@@ -159,7 +159,7 @@ def test_cli_plugins_json_is_stable_and_lists_sources():
 
 
 def test_cli_plugins_text():
-    out = subprocess.run([sys.executable, "-m", "granframe.cli", "plugins"],
+    out = subprocess.run([sys.executable, "-m", "granframe.tools.cli", "plugins"],
                          capture_output=True, text=True, check=True)
     assert "restitution_laws (5)" in out.stdout
     assert "viscoelastic" in out.stdout and "plugin 'builtin' of granframe" in out.stdout
@@ -168,7 +168,7 @@ def test_cli_plugins_text():
 def test_cli_reports_a_broken_plugin_without_traceback(make_distribution):
     site = make_distribution("granframe-broken", "granframe_broken", "import nonexisting_mod\n")
     env = dict(os.environ, PYTHONPATH=str(site))
-    out = subprocess.run([sys.executable, "-m", "granframe.cli", "plugins"], env=env,
+    out = subprocess.run([sys.executable, "-m", "granframe.tools.cli", "plugins"], env=env,
                          capture_output=True, text=True)
     assert out.returncode == 2
     assert "granframe: error: cannot load plugin 'granframe_broken'" in out.stderr
@@ -183,7 +183,7 @@ def test_core_imports_neither_pyfftw_nor_cupy():
 
 
 def test_cli_bench_runs_and_reports_the_floor():
-    out = subprocess.run([sys.executable, "-m", "granframe.cli", "bench", "--json",
+    out = subprocess.run([sys.executable, "-m", "granframe.tools.cli", "bench", "--json",
                           "--config", "2:16:8:8", "--repeats", "2", "--backend", "numpy"],
                          capture_output=True, text=True, check=True)
     record = json.loads(out.stdout)["records"][0]
@@ -192,11 +192,11 @@ def test_cli_bench_runs_and_reports_the_floor():
     assert record["time_over_floor"] == record["evaluation_s"] / record["floor_s"]
     # the floor transforms in the operator's own batches
     assert record["floor_s"] == record["fft_batch_s"] * 8 * 4 / record["batch"]
-    single = subprocess.run([sys.executable, "-m", "granframe.cli", "bench", "--precision",
+    single = subprocess.run([sys.executable, "-m", "granframe.tools.cli", "bench", "--precision",
                              "float32", "--config", "2:16:8:8", "--repeats", "2", "--backend",
                              "numpy"], capture_output=True, text=True, check=True)
     assert "float32" in single.stdout.splitlines()[0] and "| float32 |" in single.stdout
-    bad = subprocess.run([sys.executable, "-m", "granframe.cli", "bench", "--config", "4:16"],
+    bad = subprocess.run([sys.executable, "-m", "granframe.tools.cli", "bench", "--config", "4:16"],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "parameter 'config' = '4:16'" in bad.stderr
 

@@ -7,7 +7,7 @@ import numpy
 import pytest
 
 import granframe
-from granframe.quadratures import (CircleTrapezoid, GaussLegendre, Lebedev, SphereProduct,
+from granframe.velocity.quadratures import (CircleTrapezoid, GaussLegendre, Lebedev, SphereProduct,
                                    monomial_sphere_integral, sphere_area)
 
 

@@ -1,4 +1,4 @@
-"""The rescaled formulation of free cooling (granframe.rescaling): physics and refusals."""
+"""The rescaled formulation of free cooling (granframe.equations.rescaled): physics and refusals."""
 
 import math
 import re
@@ -7,11 +7,11 @@ import numpy
 import pytest
 
 import granframe as gf
-from granframe.description import RunDescription
-from granframe.equation import HomogeneousBoltzmann
-from granframe.rescaling import RescaledBoltzmann, Rescaling
-from granframe.runner import Simulation
-from granframe.storage import RunStore
+from granframe.run.description import RunDescription
+from granframe.equations.homogeneous import HomogeneousBoltzmann
+from granframe.equations.rescaled import RescaledBoltzmann, Rescaling
+from granframe.run.runner import Simulation
+from granframe.run.storage import RunStore
 
 RK4 = gf.time_integrator("rk4")
 
@@ -171,7 +171,7 @@ def test_a_step_above_the_drift_limit_is_refused_and_one_below_runs():
 
 def test_plots_of_a_rescaled_run_are_in_physical_time_and_temperature(tmp_path):
     """granframe plot reads the stored map: Maxwell molecules' T(t) against the exact law."""
-    from granframe.plotting import _Run, plot
+    from granframe.tools.plotting import _Run, plot
 
     description = _description(kernel="maxwell", final_time=4.0, time_step=0.1,
                                grid=dict(dimension=2, n_modes=48, support_radius=5.0))

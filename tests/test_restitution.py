@@ -4,7 +4,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import granframe
-from granframe.restitution import Constant, Tanh, Threshold, Toscani, Viscoelastic
+from granframe.model.restitution import Constant, Tanh, Threshold, Toscani, Viscoelastic
 
 SPEEDS = numpy.concatenate([[0.0], numpy.logspace(-14, 8, 4001)])
 

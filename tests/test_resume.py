@@ -9,15 +9,15 @@ import time
 import numpy
 import xarray
 
-from granframe.runner import Simulation
-from granframe.storage import RunStore
+from granframe.run.runner import Simulation
+from granframe.run.storage import RunStore
 from test_runner import heated
 
 DESCRIPTION = heated(time_step=0.005, final_time=1.0, output={"snapshot_interval": 0.025})
 
 
 def start(toml, store, *extra):
-    return subprocess.Popen([sys.executable, "-m", "granframe.cli", "run", str(toml), "--out",
+    return subprocess.Popen([sys.executable, "-m", "granframe.tools.cli", "run", str(toml), "--out",
                              str(store), "--no-progress", *extra],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
@@ -54,7 +54,7 @@ def test_interrupted_and_killed_run_resumes_to_the_uninterrupted_result(tmp_path
     killed_at = RunStore.open(store).progress
     assert killed_at["status"] == "running" and killed_at["snapshots"] < 41
 
-    done = subprocess.run([sys.executable, "-m", "granframe.cli", "run", str(toml), "--out",
+    done = subprocess.run([sys.executable, "-m", "granframe.tools.cli", "run", str(toml), "--out",
                            str(store), "--resume"], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     final = RunStore.open(store).progress

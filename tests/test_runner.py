@@ -9,12 +9,12 @@ import xarray
 import zarr
 
 import granframe as gf
-from granframe.cli import main
-from granframe.description import RunDescription
-from granframe.heatbath import HeatBath
-from granframe.initial import check_fits
-from granframe.runner import HealthError, Simulation, health_problem, load_description
-from granframe.storage import RunStore, StoreError
+from granframe.tools.cli import main
+from granframe.run.description import RunDescription
+from granframe.velocity.heatbath import HeatBath
+from granframe.model.initial import check_fits
+from granframe.run.runner import HealthError, Simulation, health_problem, load_description
+from granframe.run.storage import RunStore, StoreError
 
 STUDY = pathlib.Path(__file__).parent.parent / "studies" / "heated_maxwell.py"
 
@@ -294,8 +294,8 @@ def test_a_time_step_above_the_explicit_limit_is_refused_before_the_run(
 def test_step_limit_matches_the_observed_blow_up():
     """RK4 on the heat bath alone: stable just below dt = 2.7853 / (tau max|k|^2),
     unstable just above (the highest mode grows from round-off over 800 steps)."""
-    from granframe.integrators import Equation
-    from granframe.stability import step_limit
+    from granframe.stepping.integrators import Equation
+    from granframe.stepping.stability import step_limit
 
     grid = gf.VelocityGrid(2, 32, 4.0)
     heat = HeatBath(grid, 0.5, gf.array_backend())

@@ -17,11 +17,11 @@ import pytest
 import xarray
 import zarr
 
-from granframe.cli import main
-from granframe.runner import Simulation, Study
-from granframe.storage import (RunStore, StoreDamagedError, StoreLockedError, WriterLock,
+from granframe.tools.cli import main
+from granframe.run.runner import Simulation, Study
+from granframe.run.storage import (RunStore, StoreDamagedError, StoreLockedError, WriterLock,
                                check, lock_path)
-from granframe.sweep import run_point
+from granframe.run.sweep import run_point
 from test_fault_injection import HARNESS, NEW, OLD, assert_same, contents, writes
 from test_runner import heated
 
@@ -220,7 +220,7 @@ def wait_for(condition, what, timeout=60):
 
 def test_a_second_writer_is_refused_by_name_and_the_first_run_is_intact(workdir, capsys):
     (workdir / "slow.toml").write_text(SLOW.to_toml())
-    writer = subprocess.Popen([sys.executable, "-m", "granframe.cli", "run", "slow.toml",
+    writer = subprocess.Popen([sys.executable, "-m", "granframe.tools.cli", "run", "slow.toml",
                                "--out", "s.zarr", "--no-progress"], stderr=subprocess.PIPE,
                               text=True)
     wait_for(lambda: RunStore.open("s.zarr").snapshot_count >= 2, "the first snapshots")
@@ -240,7 +240,7 @@ def test_a_second_writer_is_refused_by_name_and_the_first_run_is_intact(workdir,
 def test_a_lock_of_a_dead_process_does_not_block(workdir):
     holder = subprocess.Popen([sys.executable, "-c", textwrap.dedent("""
         import sys, time
-        from granframe.storage import WriterLock
+        from granframe.run.storage import WriterLock
         lock = WriterLock("s.zarr").acquire()
         print("held", flush=True)
         time.sleep(600)
@@ -260,7 +260,7 @@ def test_a_sweep_task_given_again_waits_for_the_live_worker_and_never_writes_twi
     """Dask gives a task presumed dead to another worker while the first still runs it:
     the second waits for the first's writer lock, then returns the finished run's row."""
     path = workdir / "runs" / "point"
-    first = subprocess.Popen([sys.executable, "-c", "import json, sys; from granframe.sweep "
+    first = subprocess.Popen([sys.executable, "-c", "import json, sys; from granframe.run.sweep "
                               "import run_point; run_point(json.loads(sys.argv[1]), "
                               "sys.argv[2])", __import__("json").dumps(SLOW.to_dict()),
                               str(path)])
@@ -350,7 +350,7 @@ def test_partial_files_of_a_killed_write_are_reported_and_removed_on_resume(work
 
 def test_a_study_report_that_raises_is_a_clear_error_and_keeps_the_runs(workdir, capsys):
     (workdir / "study.py").write_text(textwrap.dedent(f"""
-        from granframe.description import RunDescription
+        from granframe.run.description import RunDescription
 
         def runs(quick=False):
             d = RunDescription.from_toml({NEW.to_toml()!r})
@@ -368,7 +368,7 @@ def test_a_study_report_that_raises_is_a_clear_error_and_keeps_the_runs(workdir,
 
 
 def test_ctrl_c_during_start_up_exits_130_without_a_traceback(workdir):
-    process = subprocess.Popen([sys.executable, "-m", "granframe.cli", "run", "base.toml",
+    process = subprocess.Popen([sys.executable, "-m", "granframe.tools.cli", "run", "base.toml",
                                 "--out", "s.zarr", "--no-progress"], stderr=subprocess.PIPE,
                                text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
     # start-up: main() has begun the run (NumPy, which the command line itself does not
@@ -388,7 +388,7 @@ def test_ctrl_c_to_a_sweep_exits_130_and_leaves_its_runs_resumable(workdir):
 
     (workdir / "sweep.toml").write_text(tomli_w.dumps(
         {"base": SLOW.to_dict(), "product": {"restitution.value": [0.5, 0.6]}}))
-    process = subprocess.Popen([sys.executable, "-m", "granframe.cli", "sweep", "sweep.toml",
+    process = subprocess.Popen([sys.executable, "-m", "granframe.tools.cli", "sweep", "sweep.toml",
                                 "--out", "s.zarr", "--workers", "1", "--no-progress"],
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     wait_for(lambda: any(RunStore.open(p).snapshot_count >= 2
@@ -404,10 +404,10 @@ def test_ctrl_c_to_a_sweep_exits_130_and_leaves_its_runs_resumable(workdir):
 
 
 def test_check_reads_every_run_and_the_table_of_a_sweep_store(workdir, capsys):
-    from granframe.sweep import _summary, _write_table
+    from granframe.run.sweep import _summary, _write_table
 
     root = zarr.open_group("s.zarr", mode="w", zarr_format=3)
-    root.attrs["granframe_sweep"] = {"schema": "granframe.sweep/1", "runs": ["a"]}
+    root.attrs["granframe_sweep"] = {"schema": "granframe.run.sweep/1", "runs": ["a"]}
     finished(workdir / "s.zarr" / "runs" / "a")
     _write_table(root, ["a"], [{"restitution.value": 0.5}], {"a": _summary("s.zarr/runs/a")})
     assert main(["check", "s.zarr"]) == 0
@@ -461,7 +461,7 @@ def test_a_resume_that_finds_the_store_made_meanwhile_continues_it(workdir, monk
 
 def test_overwrite_refuses_a_sweep_store_whose_run_is_still_written(workdir, capsys):
     root = zarr.open_group("sweep.zarr", mode="w", zarr_format=3)
-    root.attrs["granframe_sweep"] = {"schema": "granframe.sweep/1", "runs": ["a"]}
+    root.attrs["granframe_sweep"] = {"schema": "granframe.run.sweep/1", "runs": ["a"]}
     finished(workdir / "sweep.zarr" / "runs" / "a")
     with WriterLock(workdir / "sweep.zarr" / "runs" / "a"):   # a worker that outlived its driver
         assert main(["run", "base.toml", "--out", "sweep.zarr", "--overwrite",
@@ -473,7 +473,7 @@ def test_overwrite_refuses_a_sweep_store_whose_run_is_still_written(workdir, cap
 
 def test_check_calls_a_sweep_with_an_unreadable_run_damaged(workdir, capsys):
     root = zarr.open_group("s.zarr", mode="w", zarr_format=3)
-    root.attrs["granframe_sweep"] = {"schema": "granframe.sweep/1", "runs": ["a"]}
+    root.attrs["granframe_sweep"] = {"schema": "granframe.run.sweep/1", "runs": ["a"]}
     finished(workdir / "s.zarr" / "runs" / "a")
     (workdir / "s.zarr" / "runs" / "a" / "zarr.json").write_text("{not json")
     assert main(["check", "s.zarr"]) == 3

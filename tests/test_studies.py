@@ -8,7 +8,7 @@ import pathlib
 
 import pytest
 
-from granframe.cli import main
+from granframe.tools.cli import main
 
 STUDIES = pathlib.Path(__file__).parent.parent / "studies"
 REPORTS = {
@@ -89,7 +89,7 @@ def test_stability_map_quick_separates_explicit_and_penalised(tmp_path):
 
 def test_aliasing_quick_shows_the_box_bound(tmp_path, capsys):
     """BKW 2D with R = 2S: L = 1.5 S aliases (error 7e-3), L = 2.21 S does not (2e-8);
-    through the study's command line (granframe.studykit.command)."""
+    through the study's command line (granframe.tools.studykit.command)."""
     assert _load_study("aliasing").main(["--out", str(tmp_path), "--quick"]) == 0
     assert "L/S = 2.21" in capsys.readouterr().out
     rows = list(csv.DictReader(open(tmp_path / "aliasing.csv")))

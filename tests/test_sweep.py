@@ -1,4 +1,4 @@
-"""Sweeps on Dask (granframe.sweep): expansion, the store, and a worker killed mid-sweep."""
+"""Sweeps on Dask (granframe.run.sweep): expansion, the store, and a worker killed mid-sweep."""
 
 import logging
 import os
@@ -9,10 +9,10 @@ import time
 import numpy
 import pytest
 
-from granframe.description import RunDescription
-from granframe.runner import Simulation
-from granframe.storage import RunStore, StoreError
-from granframe.sweep import Sweep, apply, read_table, run_name, run_sweep
+from granframe.run.description import RunDescription
+from granframe.run.runner import Simulation
+from granframe.run.storage import RunStore, StoreError
+from granframe.run.sweep import Sweep, apply, read_table, run_name, run_sweep
 
 distributed = pytest.importorskip("distributed")
 
@@ -154,7 +154,7 @@ def test_a_sweep_runs_on_a_cluster_given_by_its_address(cluster, tmp_path):
 def test_command_line_sweep(tmp_path, capsys):
     import tomli_w
 
-    from granframe.cli import main
+    from granframe.tools.cli import main
 
     sweep = {"base": {**BASE, "final_time": 0.1, "output": {}},
              "product": {"restitution.value": [0.5]}, "zip": {}}
@@ -178,7 +178,7 @@ def test_rerunning_a_sweep_resumes_a_run_cut_short_and_records_a_health_stop(clu
     out = tmp_path / "s.zarr"
     point = sweep.points()[0]
     path = out / "runs" / run_name(point)
-    script = ("import json, sys; from granframe.sweep import run_point; "
+    script = ("import json, sys; from granframe.run.sweep import run_point; "
               "run_point(json.loads(sys.argv[1]), sys.argv[2])")
     process = subprocess.Popen([sys.executable, "-c", script,
                                 json.dumps(apply(BASE, point)), str(path)])

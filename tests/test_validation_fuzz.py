@@ -11,7 +11,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import granframe
-from granframe import backends, grid, kernels, quadratures, restitution
+from granframe import backends
+from granframe.model import kernels, restitution
+from granframe.velocity import grid, quadratures
 
 #: constructor -> a valid set of arguments; the fuzzer replaces some of them.
 CONSTRUCTORS = {

@@ -30,7 +30,7 @@ import pathlib
 import subprocess
 import sys
 
-from granframe import bench
+from granframe.tools import bench
 from granframe_cupy import gpu_available
 
 CONFIGS = [(3, n, 30, 32) for n in (8, 16, 32, 64, 128)]

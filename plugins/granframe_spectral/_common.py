@@ -15,7 +15,7 @@ import scipy.special
 
 from granframe import validators as check
 from granframe.errors import NonFiniteError
-from granframe.quadratures import GaussLegendre
+from granframe.velocity.quadratures import GaussLegendre
 
 
 def isotropic_sphere_average(x, dimension: int):

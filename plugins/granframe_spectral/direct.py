@@ -14,8 +14,8 @@ import scipy.special
 
 from granframe import memory
 from granframe import validators as check
-from granframe.operators import CollisionOperator, check_arguments
-from granframe.quadratures import MAX_GAUSS_POINTS, sphere_area
+from granframe.abc import CollisionOperator, check_arguments
+from granframe.velocity.quadratures import MAX_GAUSS_POINTS, sphere_area
 
 from granframe_spectral._common import (check_operands, energy_factor, isotropic_sphere_average,
                                         radial_rule)
@@ -62,7 +62,7 @@ class DirectSpectral(CollisionOperator):
     radial_points : int or None
         Gauss-Legendre points for the rho-integral of the weights (default 2N + 16,
         enough to resolve the Bessel oscillations to round-off; at most
-        :data:`~granframe.quadratures.MAX_GAUSS_POINTS`).
+        :data:`~granframe.velocity.quadratures.MAX_GAUSS_POINTS`).
     angular_degree : int
         Highest degree of the zonal expansion of b(cos theta) (anisotropic kernels), at
         most :data:`MAX_ANGULAR_DEGREE`.

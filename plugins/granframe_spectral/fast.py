@@ -15,10 +15,10 @@ import numpy
 import threadpoolctl
 
 from granframe import validators as check
-from granframe.backends import PRECISIONS
+from granframe.abc import PRECISIONS
 from granframe import memory
-from granframe.operators import CollisionOperator, check_arguments
-from granframe.quadratures import (MAX_GAUSS_POINTS, CircleTrapezoid, SphereProduct,
+from granframe.abc import CollisionOperator, check_arguments
+from granframe.velocity.quadratures import (MAX_GAUSS_POINTS, CircleTrapezoid, SphereProduct,
                                    SurfaceQuadrature, antipodal_pairs, sphere_area)
 
 from granframe_spectral._common import (check_operands, energy_factor, isotropic_sphere_average,

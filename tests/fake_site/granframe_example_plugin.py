@@ -11,7 +11,7 @@ import numpy
 
 import granframe
 from granframe import validators
-from granframe.restitution import RestitutionLaw
+from granframe.model.restitution import RestitutionLaw
 
 
 @attrs.frozen

@@ -58,14 +58,14 @@ def _plugins(args) -> int:
 
 
 def _bench(args) -> int:
-    from granframe import bench
+    from granframe.tools import bench
 
     backend = bench.preferred_backend() if args.backend is None else args.backend
     configs = ([bench.parse_config(c) for c in args.config] if args.config
                else list(bench.DEFAULT_CONFIGS))
     records = bench.run(configs, backend, args.threads, args.repeats, args.precision)
     if args.json:
-        json.dump({"schema": "granframe.bench/1", "granframe_version": __version__,
+        json.dump({"schema": "granframe.tools.bench/1", "granframe_version": __version__,
                    "records": records}, sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
@@ -76,8 +76,8 @@ def _bench(args) -> int:
 
 
 def _run(args) -> int:
-    from granframe import storage
-    from granframe.runner import check_run_modes, load_study
+    from granframe.run import storage
+    from granframe.run.runner import check_run_modes, load_study
 
     check_run_modes(args.resume, args.overwrite)   # before the study is loaded
     if args.rollback and not args.resume:
@@ -135,16 +135,16 @@ def _run(args) -> int:
 
 def _where(exc: BaseException, source) -> str:
     """``Type: message (at file:line)``, the line being the innermost one in ``source``."""
-    from granframe.runner import line_in
+    from granframe.run.runner import line_in
 
     line = line_in(exc, source)
     return f"{type(exc).__name__}: {exc}" + (f" (at {source}:{line})" if line else "")
 
 
 def _run_one(description, out, args) -> int:
-    from granframe.initial import projection_note
-    from granframe.runner import HealthError, Simulation
-    from granframe.storage import RunStore, check_replaceable, store_kind
+    from granframe.model.initial import projection_note
+    from granframe.run.runner import HealthError, Simulation
+    from granframe.run.storage import RunStore, check_replaceable, store_kind
 
     if args.overwrite:          # refused before the operator is built
         check_replaceable(out, protect=[args.source])
@@ -182,7 +182,7 @@ def _run_one(description, out, args) -> int:
 
 def _interrupted(out) -> str:
     """What a Ctrl-C left at ``out``, in words."""
-    from granframe.storage import RunStore, StoreError
+    from granframe.run.storage import RunStore, StoreError
 
     if not RunStore.exists(out):
         return f"nothing was written to '{out}'"
@@ -197,7 +197,7 @@ def _interrupted(out) -> str:
 
 
 def _check(args) -> int:
-    from granframe.storage import check
+    from granframe.run.storage import check
 
     intact, lines = check(args.store)
     print("\n".join(lines))
@@ -207,7 +207,7 @@ def _check(args) -> int:
 
 
 def _plot(args) -> int:
-    from granframe.plotting import plot
+    from granframe.tools.plotting import plot
 
     for path in plot(args.store, args.out):
         print(path)
@@ -215,14 +215,14 @@ def _plot(args) -> int:
 
 
 def _info(args) -> int:
-    from granframe.storage import describe
+    from granframe.run.storage import describe
 
     print(describe(args.store))
     return 0
 
 
 def _sweep(args) -> int:
-    from granframe.sweep import Sweep, run_sweep
+    from granframe.run.sweep import Sweep, run_sweep
 
     path = pathlib.Path(args.sweep)
     if not path.is_file():
@@ -245,7 +245,7 @@ def _sweep(args) -> int:
 def _advise(args) -> int:
     import tomllib
 
-    from granframe.advise import Scene, advise
+    from granframe.tools.advise import Scene, advise
 
     path = pathlib.Path(args.scene)
     if not path.is_file():

@@ -8,7 +8,7 @@ product). Each point is a run; :func:`run_sweep` submits one Dask task per run, 
 Layout of the sweep store ``STORE``::
 
     STORE/zarr.json            group; attrs["granframe_sweep"]: the sweep, run names
-    STORE/runs/<name>/         one run store (granframe.storage) per point
+    STORE/runs/<name>/         one run store (granframe.run.storage) per point
     STORE/table/               the sweep table: one row per run, in sweep order
 
 The run stores are the record: each is written by the runner's commits (a store is
@@ -38,10 +38,10 @@ import tqdm
 import zarr
 
 from granframe import validators as check
-from granframe.description import RunDescription
-from granframe.storage import WriterLock, codecs, store_kind
+from granframe.run.description import RunDescription
+from granframe.run.storage import WriterLock, codecs, store_kind
 
-SCHEMA = "granframe.sweep/1"
+SCHEMA = "granframe.run.sweep/1"
 #: the final moments of a run the table keeps
 TABLE_MOMENTS = ("temperature", "kurtosis", "sonine_a2", "mass", "negative_mass_fraction")
 
@@ -150,7 +150,7 @@ def apply(base: dict, point: dict) -> dict:
 
 def _summary(path) -> dict:
     """The table row of a run store: status, message, wall time, steps, final moments."""
-    from granframe.storage import RunStore
+    from granframe.run.storage import RunStore
 
     store = RunStore.open(path)
     progress = store.progress
@@ -165,8 +165,8 @@ def _summary(path) -> dict:
 
 def _status(path) -> str | None:
     """The status of the run store at ``path``; None when there is none (a store is put
-    in place whole, see granframe.storage), ``damaged`` when it cannot be read."""
-    from granframe.storage import RunStore, StoreError
+    in place whole, see granframe.run.storage), ``damaged`` when it cannot be read."""
+    from granframe.run.storage import RunStore, StoreError
 
     if not RunStore.exists(path):
         return None
@@ -191,8 +191,8 @@ def run_point(description: dict, path: str, poll: float = 1.0) -> dict:
     ``poll`` seconds, and then takes the store as that process left it: finished, or cut
     short and resumed from there. Two processes never write one store.
     """
-    from granframe.runner import HealthError, Simulation
-    from granframe.storage import StoreError, StoreLockedError
+    from granframe.run.runner import HealthError, Simulation
+    from granframe.run.storage import StoreError, StoreLockedError
 
     status = _status(path)
     if status in ("finished", "failed"):

@@ -96,7 +96,7 @@ def heated_maxwell_law(kernel, restitution, heat_bath: float, knudsen: float = 1
     :func:`heated_maxwell_temperature` with density rho/eps (Haff's exponential
     law when tau = 0).
     """
-    from granframe.restitution import Constant
+    from granframe.model.restitution import Constant
 
     if (kernel.exponent != 0.0 or not kernel.is_isotropic or kernel.energy_exponent != 0.0
             or kernel.constant is not None or not isinstance(restitution, Constant)):

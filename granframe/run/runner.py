@@ -1,10 +1,10 @@
-"""Run a :class:`~granframe.description.RunDescription` into a store.
+"""Run a :class:`~granframe.run.description.RunDescription` into a store.
 
 :class:`Simulation` builds every object once (operator precomputation
 included) and checks f0 against the grid; :meth:`Simulation.run` steps to
 ``final_time``, computes the moments after every step, checks the health
 limits, and commits a snapshot of f with the pending moment records on the
-output schedule (see :mod:`granframe.storage` for why a stop at any moment
+output schedule (see :mod:`granframe.run.storage` for why a stop at any moment
 leaves a valid store). ``resume=True`` continues from the last committed
 snapshot; the result equals that of an uninterrupted run to round-off.
 """
@@ -28,16 +28,16 @@ import zarr
 
 from granframe._version import __version__
 from granframe.backends import available_cpus
-from granframe.description import _FAMILIES, RunDescription
-from granframe.equation import HomogeneousBoltzmann
+from granframe.run.description import _FAMILIES, RunDescription
+from granframe.equations.homogeneous import HomogeneousBoltzmann
 from granframe.errors import NonFiniteError
-from granframe.initial import check_fits, check_projection
-from granframe.integrators import StepController, StepSizeError
+from granframe.model.initial import check_fits, check_projection
+from granframe.stepping.integrators import StepController, StepSizeError
 from granframe.memory import check_run_memory
-from granframe.stability import check_time_step
+from granframe.stepping.stability import check_time_step
 from granframe.registry import default_registries
-from granframe.rescaling import RescaledBoltzmann
-from granframe.storage import SCALAR_MOMENTS, RunStore, StoreExistsError
+from granframe.equations.rescaled import RescaledBoltzmann
+from granframe.run.storage import SCALAR_MOMENTS, RunStore, StoreExistsError
 from granframe.validators import reject
 
 _RUN_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")

@@ -63,7 +63,6 @@ import pathlib
 import platform
 import shutil
 import sys
-import time
 import uuid
 import warnings
 
@@ -415,9 +414,9 @@ class RunStore:
         Refuses an existing store unless ``overwrite``, and anything but a granframe
         store or an empty directory even then (:func:`check_replaceable`, ``protect``:
         paths that must not be inside it). ``rescaling`` (rescaled runs) is the map to
-        physical variables, :meth:`granframe.rescaling.Rescaling.to_dict`, and
+        physical variables, :meth:`granframe.equations.rescaled.Rescaling.to_dict`, and
         ``projection`` the moments of f0 before and after its Nyquist projection
-        (:func:`granframe.initial.check_projection`), both kept in the metadata. The first :meth:`commit` and :meth:`publish` put it in place.
+        (:func:`granframe.model.initial.check_projection`), both kept in the metadata. The first :meth:`commit` and :meth:`publish` put it in place.
         """
         path = pathlib.Path(path)
         _check_creatable(path, overwrite, protect)   # refused before anything is written

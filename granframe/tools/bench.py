@@ -71,7 +71,7 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
     """Build and time one operator in this process; returns a JSON-ready record.
     ``options`` are further parameters of the array backend (e.g. ``{"fused": False}``)."""
     import granframe as gf
-    from granframe.quadratures import CircleTrapezoid, SphereProduct
+    from granframe.velocity.quadratures import CircleTrapezoid, SphereProduct
 
     baseline = peak_rss_kib()
     grid = gf.VelocityGrid(dimension, n_modes, 4.0)
@@ -155,7 +155,7 @@ def run(configs, backend: str, threads: int, repeats: int,
     records = []
     for dimension, n_modes, radial, sphere in configs:
         command = [sys.executable, "-c",
-                   "import json, sys; from granframe.bench import measure; "
+                   "import json, sys; from granframe.tools.bench import measure; "
                    f"print(json.dumps(measure({dimension}, {n_modes}, {radial}, {sphere}, "
                    f"{backend!r}, {threads}, {repeats}, precision={precision!r}, "
                    f"options={options!r})))"]
@@ -194,7 +194,7 @@ def check_config(config) -> tuple:
     parameter: d in {2, 3}, N an even integer in [4, 65536] (the grid's rule), N_rho in
     [1, MAX_GAUSS_POINTS], M in [1, MAX_SURFACE_POINTS] (in 3D 2 n^2, a Gauss product
     rule)."""
-    from granframe.quadratures import MAX_GAUSS_POINTS, MAX_SURFACE_POINTS
+    from granframe.velocity.quadratures import MAX_GAUSS_POINTS, MAX_SURFACE_POINTS
 
     dimension, n_modes, radial, sphere = config
     rules = (("config", dimension, dimension in (2, 3), "D must be 2 or 3"),

@@ -6,8 +6,8 @@ import math
 
 import numpy
 
-from granframe.heatbath import HeatBath
-from granframe.integrators import Equation
+from granframe.velocity.heatbath import HeatBath
+from granframe.stepping.integrators import Equation
 
 
 def collision_frequency(kernel, dimension: int, density: float, temperature: float,
@@ -71,7 +71,7 @@ class HomogeneousBoltzmann(Equation):
                                    temperature, energy, self._frequency_constant)
 
     def stiffness(self, f) -> dict:
-        r"""Spectral radii at f that bound explicit time steps (:mod:`granframe.stability`).
+        r"""Spectral radii at f that bound explicit time steps (:mod:`granframe.stepping.stability`).
 
         - ``linear``: the heat bath, tau max |k|^2 (pi/L)^2 over the evolved modes;
         - ``nonlinear``: the collisions, nu_max / eps with the largest loss frequency
@@ -99,7 +99,7 @@ class HomogeneousBoltzmann(Equation):
         return rates
 
     def relaxation(self, f):
-        r"""BGK penalisation for :class:`~granframe.integrators.PenalisedIMEX`.
+        r"""BGK penalisation for :class:`~granframe.stepping.integrators.PenalisedIMEX`.
 
         r = penalty nu(rho, T) / eps with :meth:`collision_frequency`. The penalty (2 by
         default) must bound the spectrum of the linearised collision operator, which

@@ -8,7 +8,6 @@ should carry when that is known, so that data cut off by the box is caught.
 
 from __future__ import annotations
 
-import abc
 import functools
 import importlib
 import math
@@ -19,20 +18,8 @@ import numpy
 import scipy.special
 
 from granframe import validators as check
-from granframe.exact import bkw
-
-
-class InitialCondition(abc.ABC):
-    """f0 on a velocity grid."""
-
-    @abc.abstractmethod
-    def sample(self, grid) -> numpy.ndarray:
-        """f0 at the grid points, shape ``grid.shape``."""
-
-    @property
-    def intended_mass(self) -> float | None:
-        """The mass f0 carries on the whole space, or ``None`` when not known."""
-        return None
+from granframe.abc import InitialCondition
+from granframe.model.exact import bkw
 
 
 def _velocity(instance, attribute, value):
@@ -309,7 +296,7 @@ def check_projection(grid, f, projected, condition: InitialCondition, tolerance:
     The operators evolve f0 without its modes |k_i| = N/2, so a run starts from
     ``projected``, not from ``f``. Refused: a relative change of the mass or the
     temperature above ``tolerance``, or of the kurtosis above ``kurtosis_tolerance``
-    (:class:`granframe.description.Health`): the grid does not resolve f0, and the run
+    (:class:`granframe.run.description.Health`): the grid does not resolve f0, and the run
     would silently start from other data. Returns the moments before and after,
     name -> {"before", "after"}, which the run stores and reports
     (:func:`projection_note`).

@@ -13,23 +13,7 @@ import attrs
 import numpy
 
 from granframe import validators as check
-
-
-class RestitutionLaw:
-    """Interface: ``law(speed) -> e`` with values in [0, 1] and ``law.is_constant``."""
-
-    is_constant: bool = False
-
-    def __call__(self, speed):
-        speed = numpy.asarray(speed, dtype=float)
-        if speed.size and not (numpy.all(numpy.isfinite(speed)) and speed.min() >= 0.0):
-            check.reject(type(self).__name__, "speed", speed,
-                         "relative speeds must be finite and >= 0")
-        with numpy.errstate(divide="ignore", over="ignore", invalid="ignore"):
-            return self._evaluate(speed)
-
-    def _evaluate(self, speed):
-        raise NotImplementedError
+from granframe.abc import RestitutionLaw
 
 
 @attrs.frozen

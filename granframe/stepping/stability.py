@@ -9,7 +9,7 @@ real axis (:attr:`TimeIntegrator.stability_interval`). The radii are those that
 - the collisions Q/eps (``nonlinear``): the largest loss frequency over eps;
 - the energy dissipation (``dissipation``), which the penalised schemes keep
   explicit: (1 - e^2) nu / (4 eps);
-- the drift of the rescaled formulation (``drift``, :mod:`granframe.rescaling`), a
+- the drift of the rescaled formulation (``drift``, :mod:`granframe.equations.rescaled`), a
   transport term with an imaginary spectrum: schemes not stable on the imaginary
   axis (:attr:`TimeIntegrator.imaginary_interval` = 0) are refused at any step, and
   the others get the smaller of their two intervals.

@@ -19,11 +19,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
 
-from granframe.analysis import relative_entropy  # noqa: E402
-from granframe.description import RunDescription  # noqa: E402
-from granframe.exact import heated_maxwell_law  # noqa: E402
-from granframe.rescaling import Rescaling  # noqa: E402
-from granframe.storage import RunStore, StoreDamagedError, summarise  # noqa: E402
+from granframe.tools.analysis import relative_entropy  # noqa: E402
+from granframe.run.description import RunDescription  # noqa: E402
+from granframe.model.exact import heated_maxwell_law  # noqa: E402
+from granframe.equations.rescaled import Rescaling  # noqa: E402
+from granframe.run.storage import RunStore, StoreDamagedError, summarise  # noqa: E402
 
 #: Largest max|f(t_end) - f(t_end - interval)| / max f for which f(t_end) is taken as f_infinity.
 STATIONARY = 1e-6

@@ -43,7 +43,7 @@ import attrs
 import numpy
 
 from granframe import validators as check
-from granframe.equation import HomogeneousBoltzmann
+from granframe.equations.homogeneous import HomogeneousBoltzmann
 
 
 @attrs.frozen
@@ -100,7 +100,7 @@ class Rescaling:
 
     @classmethod
     def from_store(cls, store) -> "Rescaling":
-        """The map stored with a rescaled run (a :class:`~granframe.storage.RunStore`)."""
+        """The map stored with a rescaled run (a :class:`~granframe.run.storage.RunStore`)."""
         data = store.metadata.get("rescaling")
         if data is None:
             check.reject("Rescaling", "store", str(store.path), "must hold a rescaled run")
@@ -166,7 +166,7 @@ class RescaledBoltzmann(HomogeneousBoltzmann):
     initial : array
         g(0) = f0 (backend array): fixes u and a_0.
     knudsen, penalty : float
-        As for :class:`~granframe.equation.HomogeneousBoltzmann`.
+        As for :class:`~granframe.equations.homogeneous.HomogeneousBoltzmann`.
     """
 
     def __init__(self, operator, initial, knudsen: float = 1.0, penalty: float = 2.0):

@@ -3,7 +3,7 @@ r"""``granframe advise``: the cheapest configuration predicted to meet a toleran
 A :class:`Scene` says what is to be computed, without numerics: the physics (dimension,
 kernel, restitution law, heat bath, Knudsen number, initial data, final time), the quantity
 wanted, and a relative tolerance. :func:`advise` returns an :class:`Advice`. That is a full
-:class:`~granframe.description.RunDescription`, or a closed form where one exists, with
+:class:`~granframe.run.description.RunDescription`, or a closed form where one exists, with
 the predicted error of each discretisation and the predicted cost.
 
 How each choice is made (docs/advise.md):
@@ -12,19 +12,19 @@ How each choice is made (docs/advise.md):
    zeta(T) = -int Q(M_T) |v|^2 / (d rho T) is measured with the discrete operator on a
    well-resolved Maxwellian. It is exact for Maxwell molecules; otherwise it gives the range.
 2. **Formulation.** A closed form for the temperature of Maxwell molecules with a constant
-   e (:func:`granframe.exact.heated_maxwell_law`). The rescaled formulation
-   (:mod:`granframe.rescaling`) for free cooling that would concentrate f by more than
+   e (:func:`granframe.model.exact.heated_maxwell_law`). The rescaled formulation
+   (:mod:`granframe.equations.rescaled`) for free cooling that would concentrate f by more than
    a factor 4 in T.
 3. **Support S.** The smallest S whose truncation of relative speeds at R = 2S removes at
    most tol/10 of the rate that matters, after the amplification of a rate error over
    the run (zeta times the horizon). The rate is the energy dissipation (weight
    |g|^(lambda+2)) for the temperature and the loss frequency (weight |g|^lambda) for f.
    It is checked for f0, for the hottest Maxwellian and for the cooling state of a rescaled
-   run (:func:`granframe.estimators.pair_share_beyond`). Also at most tol/10 of |f| may
+   run (:func:`granframe.velocity.estimators.pair_share_beyond`). Also at most tol/10 of |f| may
    lie beyond 2.4 S, where the box aliases.
-4. **Modes N.** The smallest N whose spectral tail (:func:`granframe.estimators.spectral_tail`)
+4. **Modes N.** The smallest N whose spectral tail (:func:`granframe.velocity.estimators.spectral_tail`)
    times 3 is below tol/3, for f0 and for the coldest Maxwellian, on a grid the runner
-   accepts f0 on (:func:`granframe.initial.check_fits`). The factor 3 is calibrated on
+   accepts f0 on (:func:`granframe.model.initial.check_fits`). The factor 3 is calibrated on
    the free-cooling study: a temperature error of 1e-3 came with a tail of 3.5e-4.
 5. **Quadratures** (N_rho, circle or Lebedev rule). The cheapest pair (cost ~ N_rho M) whose
    operator, applied to f0, to the coldest Maxwellian and to an anisotropic Gaussian,
@@ -33,7 +33,7 @@ How each choice is made (docs/advise.md):
    which such an error acts. A rule whose error on the anisotropic Gaussian exceeds 10 % of
    max |Q| is not consistent and is never proposed.
 6. **Time step.** RK4 (IF-RK4 when the heat bath sets the explicit limit). dt is 0.9 times
-   the explicit limit (:mod:`granframe.stability`), halved until the error measured by
+   the explicit limit (:mod:`granframe.stepping.stability`), halved until the error measured by
    step doubling over the first 8 steps, scaled to the horizon, is within what is left of
    the tolerance.
 7. **Precision.** float32 where the tolerance is 1e-4 or looser (its measured floor is 4e-6,
@@ -53,16 +53,16 @@ import scipy.integrate
 import scipy.special
 
 from granframe import validators as check
-from granframe.description import (_FAMILIES, Component, Health, RunDescription, _component,
+from granframe.run.description import (_FAMILIES, Component, Health, RunDescription, _component,
                                    _instance_of)
-from granframe.equation import collision_frequency
-from granframe.estimators import mass_beyond, pair_share_beyond, spectral_tail
-from granframe.exact import heated_maxwell_law
-from granframe.grid import VelocityGrid
-from granframe.initial import check_fits, face_share
-from granframe.quadratures import LEBEDEV_ORDERS, CircleTrapezoid, Lebedev
+from granframe.equations.homogeneous import collision_frequency
+from granframe.velocity.estimators import mass_beyond, pair_share_beyond, spectral_tail
+from granframe.model.exact import heated_maxwell_law
+from granframe.velocity.grid import VelocityGrid
+from granframe.model.initial import check_fits, face_share
+from granframe.velocity.quadratures import LEBEDEV_ORDERS, CircleTrapezoid, Lebedev
 from granframe.registry import default_registries
-from granframe.stability import step_limit
+from granframe.stepping.stability import step_limit
 
 QUANTITIES = ("temperature", "distribution")
 #: the modes per axis advise chooses from: sizes with factors 2, 3 and 5 only (in 2D, N = 28
@@ -310,7 +310,7 @@ def _support(probe, hottest: float, budget: float, amplification: float,
 def _cooling_state(probe, final_s: float):
     """(grid, g) of a rescaled probe run to min(s_final, 10 collision times): the cooling
     state's profile, whose tails are fatter than a Maxwellian's."""
-    from granframe.rescaling import RescaledBoltzmann
+    from granframe.equations.rescaled import RescaledBoltzmann
 
     temperature = probe.t0
     grid = VelocityGrid(probe.d, 48 if probe.d == 2 else 32, 4.0 * math.sqrt(temperature))
@@ -346,7 +346,7 @@ def _anisotropic(probe, grid, temperature: float):
 
 
 def _fits(probe, grid) -> bool:
-    """Whether the runner accepts f0 on ``grid`` (:func:`granframe.initial.check_fits` with
+    """Whether the runner accepts f0 on ``grid`` (:func:`granframe.model.initial.check_fits` with
     the default health limits)."""
     health = Health()
     try:
@@ -418,8 +418,8 @@ def _quadrature(probe, grid, coldest, budget, horizon):
 def evaluation_seconds(simulation, repeats: int = 7) -> float:
     """Median seconds of one evaluation of a simulation's right-hand side on f0 (the
     collision operator, and the drift of a rescaled run), after two warm-up evaluations,
-    timed by the backend (:func:`granframe.bench.median_time`)."""
-    from granframe.bench import median_time
+    timed by the backend (:func:`granframe.tools.bench.median_time`)."""
+    from granframe.tools.bench import median_time
 
     f = simulation.backend.asarray(simulation.f0)
 
@@ -433,7 +433,7 @@ def evaluation_seconds(simulation, repeats: int = 7) -> float:
 
 def _time_evaluation(description) -> float:
     """:func:`evaluation_seconds` of a description."""
-    from granframe.runner import Simulation
+    from granframe.run.runner import Simulation
 
     return evaluation_seconds(Simulation(description))
 
@@ -445,7 +445,7 @@ def advise(scene: Scene, *, backend: str = "auto", closed_forms: bool = True) ->
     """
     if not isinstance(scene, Scene):
         check.reject("advise", "scene", scene, "must be a Scene", error=TypeError)
-    from granframe.bench import preferred_backend
+    from granframe.tools.bench import preferred_backend
     backend_name = preferred_backend() if backend == "auto" else backend
     array_backend = default_registries().create("array_backends", backend_name)
     probe = _Probe(scene, array_backend)
@@ -454,7 +454,7 @@ def advise(scene: Scene, *, backend: str = "auto", closed_forms: bool = True) ->
     if closed_forms and scene.quantity == "temperature" and law_t is not None:
         reasons.append("Maxwell molecules with a constant restitution coefficient: "
                        "T(t) is known exactly whatever f0 is (review, eq. (ext_temp))")
-        return Advice(scene, None, "granframe.exact.heated_maxwell_law", {"total": 0.0}, 0.0, 0,
+        return Advice(scene, None, "granframe.model.exact.heated_maxwell_law", {"total": 0.0}, 0.0, 0,
                       tuple(reasons))
     coldest, hottest, final_t, zeta0, zeta = probe.temperature_history()
     reasons.append(f"Maxwellian closure: T from {probe.t0:.4g} to {final_t:.4g} "
@@ -534,12 +534,12 @@ def advise(scene: Scene, *, backend: str = "auto", closed_forms: bool = True) ->
 def _time_step(description, probe, final, horizon, budget):
     """(dt, integrator, predicted time error).
 
-    The largest of 0.9 x the explicit limit (:mod:`granframe.stability`), halved as often
+    The largest of 0.9 x the explicit limit (:mod:`granframe.stepping.stability`), halved as often
     as needed, whose RK4 error is within ``budget``. The error is
     measured by step doubling over a window of 8 steps at the start (where f0 relaxes),
     err = |q_dt - q_dt/2| 16/15 (RK4), and scaled by horizon / window.
     """
-    from granframe.runner import Simulation
+    from granframe.run.runner import Simulation
 
     simulation = Simulation(description)
     equation, backend = simulation.equation, simulation.backend

@@ -50,11 +50,11 @@ import tomli_w
 
 from granframe import validators as check
 from granframe.errors import BackendUnavailableError
-from granframe.backends import PRECISIONS
-from granframe.grid import VelocityGrid
-from granframe.initial import callable_reference, resolve_callable
+from granframe.abc import PRECISIONS
+from granframe.velocity.grid import VelocityGrid
+from granframe.model.initial import callable_reference, resolve_callable
 from granframe.registry import default_registries
-from granframe.rescaling import check_rescalable
+from granframe.equations.rescaled import check_rescalable
 
 #: Tolerance on "final_time and snapshot_interval are whole multiples of time_step".
 _MULTIPLE_TOLERANCE = 1e-9
@@ -187,7 +187,7 @@ class Health:
         grid (S = 4); the default 1 lets them run.
     step_limit : bool
         Refuse, before the first step, a fixed time step above the integrator's
-        explicit stability limit (:mod:`granframe.stability`). Set it false only to
+        explicit stability limit (:mod:`granframe.stepping.stability`). Set it false only to
         study the instability itself; the step-by-step checks then stop the run.
     """
 
@@ -255,7 +255,7 @@ class RunDescription:
     knudsen : float
         epsilon > 0.
     rescaled : bool
-        Solve free cooling in self-similar variables (:mod:`granframe.rescaling`):
+        Solve free cooling in self-similar variables (:mod:`granframe.equations.rescaled`):
         the stored f is g(s, xi) and the run's times are the rescaled time s
         (final_time, time_step and the snapshot interval too); the map to the physical
         t and f is stored with the run (``RunStore.metadata["rescaling"]``).
@@ -378,7 +378,7 @@ class RunDescription:
         if field == "operator":
             params = self._operator_options()
         if field == "backend" and component.name == "auto":
-            from granframe.bench import preferred_backend
+            from granframe.tools.bench import preferred_backend
             return default_registries().create("array_backends", preferred_backend(), **params)
         return default_registries().create(_FAMILIES[field], component.name, **params, **extra)
 

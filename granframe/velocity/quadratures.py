@@ -21,6 +21,7 @@ import scipy.integrate
 import scipy.special
 
 from granframe import validators as check
+from granframe.abc import Quadrature, SurfaceQuadrature
 
 #: Largest Gauss-Legendre rule: numpy's ``leggauss`` solves a dense n x n eigenproblem
 #: (4096: 128 MiB, a few seconds), and 4096 nodes resolve radial oscillations far beyond
@@ -36,52 +37,6 @@ MAX_SURFACE_POINTS = 2048
 #: Orders accepted by :func:`scipy.integrate.lebedev_rule` (= exact degree).
 LEBEDEV_ORDERS = (3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31, 35, 41, 47, 53,
                   59, 65, 71, 77, 83, 89, 95, 101, 107, 113, 119, 125, 131)
-
-
-class Quadrature:
-    """Interface shared by all rules.
-
-    Attributes
-    ----------
-    kind : {"radial", "circle", "sphere"}
-        The domain: an interval [0, R], S^1, or S^2.
-    degree : int
-        Highest total degree of polynomials integrated exactly.
-    n_points : int
-        Number of nodes.
-    """
-
-    kind: ClassVar[str]
-
-    @property
-    def degree(self) -> int:
-        raise NotImplementedError
-
-    @property
-    def n_points(self) -> int:
-        raise NotImplementedError
-
-
-class SurfaceQuadrature(Quadrature):
-    """A rule on the unit sphere S^{d-1}: ``nodes()`` (M, d), ``weights()`` (M,)."""
-
-    #: Dimension d of the ambient space (2 for the circle, 3 for the sphere).
-    dimension: ClassVar[int]
-
-    def nodes(self):
-        return self._rule()[0]
-
-    def weights(self):
-        return self._rule()[1]
-
-    @property
-    def is_antipodal(self) -> bool:
-        """True when -ghat is a node of equal weight for every node ghat."""
-        _, w_plus, w_minus = antipodal_pairs(*self._rule())
-        return bool(numpy.allclose(w_plus, w_minus, rtol=1e-12, atol=0.0))
-
-    def _rule(self):
-        raise NotImplementedError
 
 
 @attrs.frozen

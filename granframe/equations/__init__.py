@@ -1,0 +1,2 @@
+"""Equations of motion: the space-homogeneous Boltzmann equation and its self-similar
+rescaling."""

@@ -1,0 +1,1 @@
+"""Time stepping: the registered integrators (fixed and adaptive) and their stability limits."""
