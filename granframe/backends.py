@@ -26,6 +26,32 @@ def available_cpus() -> int:
         return os.cpu_count() or 1
 
 
+#: The backend name meaning :func:`preferred_backend`.
+AUTO = "auto"
+
+
+def preferred_backend() -> str:
+    """The array backend that ``backend = "auto"`` (a run description's default), ``granframe
+    bench`` and the studies use: 'pyfftw' when that backend is registered and can be built
+    (pyfftw and numba installed), else 'numpy'. The one home of that policy."""
+    from granframe.registry import default_registries
+
+    registries = default_registries()
+    if "pyfftw" in registries.names("array_backends"):
+        try:
+            registries.create("array_backends", "pyfftw")
+            return "pyfftw"
+        except ValueError:
+            pass
+    return "numpy"
+
+
+def resolve_backend(name: str) -> str:
+    """The registered backend a name stands for: :func:`preferred_backend` for ``"auto"``,
+    else the name itself."""
+    return preferred_backend() if name == AUTO else name
+
+
 #: Largest ``threads`` of a CPU backend. Not this machine's CPU count: a description or
 #: store written on a large machine must still be read on a small one, and tests run two
 #: pipelines on one core. 1024 is above the hardware threads of current single machines

@@ -43,7 +43,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
 
 import granframe as gf  # noqa: E402
-from granframe.tools.bench import median_time, preferred_backend  # noqa: E402
+from granframe.backends import preferred_backend
+from granframe.tools.bench import median_time  # noqa: E402
 from granframe.model.exact import bkw  # noqa: E402
 from granframe.tools.studykit import (command, read_summary, save_figure, write_csv,  # noqa: E402
                                 write_summary)

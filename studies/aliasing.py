@@ -24,7 +24,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
 
 import granframe as gf  # noqa: E402
-from granframe.tools.bench import preferred_backend  # noqa: E402
+from granframe.backends import preferred_backend  # noqa: E402
 from granframe.model.exact import bkw  # noqa: E402
 from granframe.velocity.grid import ANTI_ALIASING_FACTOR  # noqa: E402
 from granframe.tools.studykit import command, save_figure, write_csv, write_summary  # noqa: E402

@@ -34,7 +34,7 @@ import numpy  # noqa: E402
 from scipy.interpolate import CubicSpline  # noqa: E402
 
 import granframe as gf  # noqa: E402
-from granframe.tools.bench import preferred_backend  # noqa: E402
+from granframe.backends import preferred_backend  # noqa: E402
 from granframe.equations.homogeneous import HomogeneousBoltzmann  # noqa: E402
 from granframe.equations.rescaled import RescaledBoltzmann  # noqa: E402
 from granframe.run.runner import moments  # noqa: E402

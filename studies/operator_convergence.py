@@ -17,7 +17,7 @@ import numpy
 
 import granframe as gf
 from granframe.model.exact import bkw
-from granframe.tools.bench import preferred_backend
+from granframe.backends import preferred_backend
 from granframe.testing import heated_maxwell_error
 
 

@@ -40,7 +40,7 @@ import xarray  # noqa: E402
 
 import granframe as gf  # noqa: E402
 from granframe.tools.analysis import exponential_rate, relative_entropy  # noqa: E402
-from granframe.tools.bench import preferred_backend  # noqa: E402
+from granframe.backends import preferred_backend  # noqa: E402
 from granframe.run.description import RunDescription  # noqa: E402
 from granframe.model.exact import heated_maxwell_temperature, maxwell_energy_dissipation  # noqa: E402
 from granframe.run.storage import RunStore  # noqa: E402

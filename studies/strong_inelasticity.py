@@ -23,7 +23,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
 
 import granframe as gf  # noqa: E402
-from granframe.tools.bench import preferred_backend  # noqa: E402
+from granframe.backends import preferred_backend  # noqa: E402
 from granframe.equations.homogeneous import HomogeneousBoltzmann  # noqa: E402
 from granframe.model.exact import heated_maxwell_temperature  # noqa: E402
 from granframe.run.runner import moments  # noqa: E402

@@ -4,7 +4,7 @@ import numpy
 import pytest
 
 import granframe as gf
-from granframe.tools.bench import preferred_backend
+from granframe.backends import preferred_backend
 from granframe.model.exact import bkw, maxwell_energy_dissipation
 from granframe.velocity.heatbath import HeatBath
 from granframe.velocity.quadratures import LEBEDEV_ORDERS

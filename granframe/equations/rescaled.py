@@ -193,8 +193,7 @@ class RescaledBoltzmann(HomogeneousBoltzmann):
         derivative = []
         for axis, k in enumerate(grid.half_wavenumbers()):
             symbol = numpy.reshape(1j * factor * k, [-1 if j == axis else 1 for j in range(d)])
-            symbol = numpy.broadcast_to(symbol, grid.half_shape).copy()
-            symbol[grid.nyquist_mask()] = 0.0
+            symbol = grid.without_nyquist(numpy.broadcast_to(symbol, grid.half_shape).copy())
             derivative.append(backend.asarray(symbol))
         self._derivative = derivative
         weight = backend.asarray(radius ** 2 * grid.cell_volume)

@@ -51,6 +51,7 @@ import tomli_w
 from granframe import validators as check
 from granframe.errors import BackendUnavailableError
 from granframe.abc import PRECISIONS
+from granframe.backends import AUTO, resolve_backend
 from granframe.velocity.grid import VelocityGrid
 from granframe.model.initial import callable_reference, resolve_callable
 from granframe.registry import default_registries
@@ -276,7 +277,7 @@ class RunDescription:
                                      validator=_instance_of(Component, "a name or a table"))
     operator: Component = attrs.field(default=Component("fast_spectral"), converter=_component,
                                       validator=_instance_of(Component, "a name or a table"))
-    backend: Component = attrs.field(default=Component("auto"), converter=_component,
+    backend: Component = attrs.field(default=Component(AUTO), converter=_component,
                                      validator=_instance_of(Component, "a name or a table"))
     integrator: Component = attrs.field(default=Component("rk4"), converter=_component,
                                         validator=_instance_of(Component, "a name or a table"))
@@ -299,7 +300,7 @@ class RunDescription:
         registries = default_registries()
         for field, family in _FAMILIES.items():
             component = getattr(self, field)
-            if field == "backend" and component.name == "auto":
+            if field == "backend" and component.name == AUTO:
                 continue
             entry = registries.get(family, component.name)  # unknown names: clear error
             if field == "operator":
@@ -377,9 +378,9 @@ class RunDescription:
             params["angular"] = resolve_callable("kernel", "angular", params["angular"])
         if field == "operator":
             params = self._operator_options()
-        if field == "backend" and component.name == "auto":
-            from granframe.tools.bench import preferred_backend
-            return default_registries().create("array_backends", preferred_backend(), **params)
+        if field == "backend":
+            return default_registries().create("array_backends",
+                                               resolve_backend(component.name), **params)
         return default_registries().create(_FAMILIES[field], component.name, **params, **extra)
 
     def _operator_options(self) -> dict:

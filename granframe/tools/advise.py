@@ -445,8 +445,8 @@ def advise(scene: Scene, *, backend: str = "auto", closed_forms: bool = True) ->
     """
     if not isinstance(scene, Scene):
         check.reject("advise", "scene", scene, "must be a Scene", error=TypeError)
-    from granframe.tools.bench import preferred_backend
-    backend_name = preferred_backend() if backend == "auto" else backend
+    from granframe.backends import resolve_backend
+    backend_name = resolve_backend(backend)
     array_backend = default_registries().create("array_backends", backend_name)
     probe = _Probe(scene, array_backend)
     tol, reasons = scene.tolerance, []

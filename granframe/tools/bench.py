@@ -30,20 +30,6 @@ DEFAULT_CONFIGS = ((2, 64, 32, 16), (2, 128, 32, 16), (3, 16, 30, 32), (3, 32, 3
                    (3, 64, 30, 32))
 
 
-def preferred_backend() -> str:
-    """'pyfftw' when that backend is registered and can be built (pyfftw installed), else 'numpy'."""
-    from granframe.registry import default_registries
-
-    registries = default_registries()
-    if "pyfftw" in registries.names("array_backends"):
-        try:
-            registries.create("array_backends", "pyfftw")
-            return "pyfftw"
-        except ValueError:
-            pass
-    return "numpy"
-
-
 def peak_rss_kib() -> int:
     """Peak resident set size of this process in KiB: ``VmHWM`` of /proc/self/status where
     there is one (Linux), else ``ru_maxrss``. On Linux ``ru_maxrss`` survives fork + exec,

@@ -60,7 +60,9 @@ def _plugins(args) -> int:
 def _bench(args) -> int:
     from granframe.tools import bench
 
-    backend = bench.preferred_backend() if args.backend is None else args.backend
+    from granframe.backends import AUTO, resolve_backend
+
+    backend = resolve_backend(AUTO if args.backend is None else args.backend)
     configs = ([bench.parse_config(c) for c in args.config] if args.config
                else list(bench.DEFAULT_CONFIGS))
     records = bench.run(configs, backend, args.threads, args.repeats, args.precision)

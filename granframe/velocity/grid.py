@@ -173,6 +173,14 @@ class VelocityGrid:
             mask[tuple(index)] = True
         return mask
 
+    def without_nyquist(self, half):
+        """``half`` (a NumPy array whose last axes have the rfft layout ``half_shape``) with
+        its Nyquist modes set to zero, in place; returned. The one place where the modes
+        the spectral operators do not evolve are removed: from f (:meth:`project`), the
+        heat-bath symbol and the drift's derivative symbols."""
+        half[..., self.nyquist_mask()] = 0.0
+        return half
+
     def project(self, f):
         """f without its Nyquist modes (NumPy): the space the spectral operators work in.
 
@@ -182,8 +190,7 @@ class VelocityGrid:
         """
         self.check_shape(f)
         axes = tuple(range(self.dimension))
-        spectrum = numpy.fft.rfftn(f, axes=axes)
-        spectrum[self.nyquist_mask()] = 0.0
+        spectrum = self.without_nyquist(numpy.fft.rfftn(f, axes=axes))
         return numpy.fft.irfftn(spectrum, s=self.shape, axes=axes)
 
     def mesh(self, xp=numpy):

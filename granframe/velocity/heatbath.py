@@ -28,8 +28,8 @@ class HeatBath:
         if not check.is_real(tau) or not (0.0 <= float(tau) < math.inf):
             check.reject("HeatBath", "tau", tau, "must be a finite real number >= 0")
         self.grid, self.tau, self.backend = grid, float(tau), backend
-        symbol = -self.tau * (math.pi / grid.half_width) ** 2 * grid.half_wavenumber_squared()
-        symbol[grid.nyquist_mask()] = 0.0
+        symbol = grid.without_nyquist(
+            -self.tau * (math.pi / grid.half_width) ** 2 * grid.half_wavenumber_squared())
         self.multiplier = backend.asarray(symbol)
         #: tau max |k|^2 (pi/L)^2 over the evolved modes: the stiffness an explicit scheme sees
         self.spectral_radius = float(-symbol.min()) if symbol.size else 0.0
