@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import os
 
+from types import ModuleType
+
 import attrs
 import numpy
 import scipy.fft
@@ -90,40 +92,70 @@ class CPUBackend(ArrayBackend):
     def concurrency(self) -> int:
         return self.workers
 
+    def thread_options(self, threads: int | None) -> dict:
+        """``workers`` of :mod:`scipy.fft`-style modules: ``threads``, or all of the
+        backend's threads when None."""
+        return {"workers": self.workers if threads is None else threads}
+
+
+class SciPyFFTBackend(ArrayBackend):
+    """A backend whose transforms come from a module with :mod:`scipy.fft`'s interface.
+
+    The transforms are written once here for every such module: SciPy's pocketfft
+    (:class:`NumpyBackend`), pyFFTW's ``interfaces.scipy_fft`` (the one-off transforms of
+    the pyFFTW backend) and CuPy's ``cupyx.scipy.fft`` (cuFFT). A subclass names the module
+    (:meth:`fft_module`) and how it is told a number of threads (:meth:`thread_options`).
+    """
+
+    def fft_module(self) -> ModuleType:
+        """The module providing ``fftn``, ``ifftn``, ``rfftn`` and ``irfftn`` with
+        :mod:`scipy.fft`'s signatures."""
+        raise NotImplementedError(f"{type(self).__name__} must name its FFT module")
+
+    def thread_options(self, threads: int | None) -> dict:
+        """Keyword arguments running one transform on ``threads`` threads (None: the
+        backend's own count); none by default (a device library)."""
+        return {}
+
+    def fftn(self, a, axes=None):
+        return self.fft_module().fftn(a, axes=axes, **self.thread_options(None))
+
+    def ifftn(self, a, axes=None):
+        return self.fft_module().ifftn(a, axes=axes, **self.thread_options(None))
+
+    def rfftn(self, a, axes=None):
+        return self.fft_module().rfftn(a, axes=axes, **self.thread_options(None))
+
+    def irfftn(self, a, s, axes=None):
+        return self.fft_module().irfftn(a, s=s, axes=axes, **self.thread_options(None))
+
+    def real_fft(self, shape, axes, threads: int = 1, precision: str = "float64") -> RealFFT:
+        return SciPyRealFFT(self, tuple(shape), tuple(axes), threads, precision)
+
+
+class SciPyRealFFT(RealFFT):
+    """:class:`~granframe.abc.RealFFT` through a :class:`SciPyFFTBackend`'s module: the input
+    may be destroyed (``overwrite_x``), and the inverse is unnormalised by
+    ``norm="forward"`` rather than by a scaling pass (both keep float32 in single precision)."""
+
+    def __init__(self, backend: SciPyFFTBackend, shape, axes, threads, precision):
+        super().__init__(backend, shape, axes, precision=precision)
+        self._module = backend.fft_module()
+        self._options = backend.thread_options(threads)
+
+    def forward(self):
+        return self._module.rfftn(self.real, axes=self.axes, overwrite_x=True, **self._options)
+
+    def inverse(self):
+        return self._module.irfftn(self.spectrum, s=self._sizes, axes=self.axes, norm="forward",
+                                   overwrite_x=True, **self._options)
+
 
 @attrs.frozen
-class NumpyBackend(CPUBackend):
+class NumpyBackend(CPUBackend, SciPyFFTBackend):
     """NumPy arrays with SciPy's pocketfft transforms (``threads`` as in :class:`CPUBackend`)."""
 
     name = "numpy"
 
-    def fftn(self, a, axes=None):
-        return scipy.fft.fftn(a, axes=axes, workers=self.workers)
-
-    def ifftn(self, a, axes=None):
-        return scipy.fft.ifftn(a, axes=axes, workers=self.workers)
-
-    def rfftn(self, a, axes=None):
-        return scipy.fft.rfftn(a, axes=axes, workers=self.workers)
-
-    def irfftn(self, a, s, axes=None):
-        return scipy.fft.irfftn(a, s=s, axes=axes, workers=self.workers)
-
-    def real_fft(self, shape, axes, threads: int = 1, precision: str = "float64") -> RealFFT:
-        return _ScipyRealFFT(self, tuple(shape), tuple(axes), threads, precision)
-
-
-class _ScipyRealFFT(RealFFT):
-    """pocketfft transforms on ``threads`` threads, overwriting the input (pocketfft keeps
-    float32 in single precision)."""
-
-    def __init__(self, backend, shape, axes, threads, precision):
-        super().__init__(backend, shape, axes, precision=precision)
-        self.threads = threads
-
-    def forward(self):
-        return scipy.fft.rfftn(self.real, axes=self.axes, workers=self.threads)
-
-    def inverse(self):
-        return scipy.fft.irfftn(self.spectrum, s=self._sizes, axes=self.axes, norm="forward",
-                                workers=self.threads, overwrite_x=True)
+    def fft_module(self) -> ModuleType:
+        return scipy.fft

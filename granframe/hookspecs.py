@@ -59,4 +59,4 @@ def granframe_register_initial_conditions(registry):
 @hookspec
 def granframe_register_array_backends(registry):
     """Add array backends; factories return
-    :class:`granframe.backends.ArrayBackend` instances."""
+    :class:`granframe.abc.ArrayBackend` instances."""

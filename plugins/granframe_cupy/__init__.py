@@ -13,7 +13,7 @@ moments as scalars. What this backend changes is how the work is cut and fused:
   unnormalised by ``norm="forward"`` instead of a separate scaling pass;
 - large batches (:attr:`CuPyBackend.batch_bytes`), so that one cuFFT call and one kernel
   launch cover many (rho, ghat) pairs;
-- the two element-wise steps of :class:`granframe.backends.ArrayBackend` as fused CUDA
+- the two element-wise steps of :class:`granframe.abc.ArrayBackend` as fused CUDA
   kernels (``kernels.cu``), one pass over memory each.
 
 ``module = "numpy"`` runs this backend's own code path with NumPy on the host: the same
@@ -34,7 +34,7 @@ import numpy
 
 from granframe import hookimpl
 from granframe import validators as check
-from granframe.backends import ArrayBackend, RealFFT
+from granframe.backends import SciPyFFTBackend
 from granframe.errors import BackendUnavailableError
 
 #: Array namespace and its SciPy-style transforms, per ``module``.
@@ -76,7 +76,7 @@ def _module(device: int):
 
 
 @attrs.frozen
-class CuPyBackend(ArrayBackend):
+class CuPyBackend(SciPyFFTBackend):
     """CuPy arrays, cuFFT transforms (plans cached by CuPy), CuPy's memory pool.
 
     Parameters
@@ -155,20 +155,10 @@ class CuPyBackend(ArrayBackend):
         """Bytes held by CuPy's memory pool (None on the host)."""
         return int(self.xp.get_default_memory_pool().total_bytes()) if self.on_device else None
 
-    def fftn(self, a, axes=None):
-        return self.fft.fftn(a, axes=axes)
-
-    def ifftn(self, a, axes=None):
-        return self.fft.ifftn(a, axes=axes)
-
-    def rfftn(self, a, axes=None):
-        return self.fft.rfftn(a, axes=axes)
-
-    def irfftn(self, a, s, axes=None):
-        return self.fft.irfftn(a, s=s, axes=axes)
-
-    def real_fft(self, shape, axes, threads: int = 1, precision: str = "float64") -> RealFFT:
-        return _CuFFTRealFFT(self, tuple(shape), tuple(axes), precision=precision)
+    def fft_module(self):
+        """``cupyx.scipy.fft`` (cuFFT, plans cached by CuPy), or ``scipy.fft`` for
+        ``module = "numpy"``: the same calls either way."""
+        return self.fft
 
     @property
     def _uses_kernels(self) -> bool:
@@ -211,23 +201,6 @@ class CuPyBackend(ArrayBackend):
         self._launch("lowrank_accumulate", acc, heads, tails, values, groups, batch // groups,
                      rows, cols, rank)
         return acc
-
-
-class _CuFFTRealFFT(RealFFT):
-    """Real transforms through the backend's SciPy-style module (cuFFT on the GPU): the
-    input may be destroyed (``overwrite_x``), and the inverse is unnormalised by
-    ``norm="forward"`` rather than by a scaling pass."""
-
-    def __init__(self, backend, shape, axes, precision):
-        super().__init__(backend, shape, axes, precision=precision)
-        self.fft = backend.fft
-
-    def forward(self):
-        return self.fft.rfftn(self.real, axes=self.axes, overwrite_x=True)
-
-    def inverse(self):
-        return self.fft.irfftn(self.spectrum, s=self._sizes, axes=self.axes, norm="forward",
-                               overwrite_x=True)
 
 
 def gpu_available() -> bool:

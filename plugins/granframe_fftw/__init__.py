@@ -11,7 +11,8 @@ import attrs
 
 from granframe import hookimpl
 from granframe import validators as check
-from granframe.backends import CPUBackend, RealFFT
+from granframe.abc import RealFFT
+from granframe.backends import CPUBackend, SciPyFFTBackend
 from granframe.errors import BackendUnavailableError
 
 
@@ -37,7 +38,7 @@ _EFFORTS = ("FFTW_ESTIMATE", "FFTW_MEASURE", "FFTW_PATIENT")
 
 
 @attrs.frozen
-class PyFFTWBackend(CPUBackend):
+class PyFFTWBackend(CPUBackend, SciPyFFTBackend):
     """NumPy arrays; FFTW transforms planned once per shape and reused; fused kernels.
 
     :meth:`separable_product` and :meth:`lowrank_accumulate` are numba
@@ -70,22 +71,12 @@ class PyFFTWBackend(CPUBackend):
     def lowrank_accumulate(self, acc, heads, tails, values):
         return _kernels().lowrank_accumulate(acc, heads, tails, values)
 
-    def _interfaces(self):
+    def fft_module(self):
+        """pyFFTW's :mod:`scipy.fft`-style interface, its plans cached between calls (the
+        one-off transforms; operators use :meth:`real_fft`'s planned buffers)."""
         pyfftw = _pyfftw()
         pyfftw.interfaces.cache.enable()
-        return pyfftw.interfaces.numpy_fft
-
-    def fftn(self, a, axes=None):
-        return self._interfaces().fftn(a, axes=axes, threads=self.workers)
-
-    def ifftn(self, a, axes=None):
-        return self._interfaces().ifftn(a, axes=axes, threads=self.workers)
-
-    def rfftn(self, a, axes=None):
-        return self._interfaces().rfftn(a, axes=axes, threads=self.workers)
-
-    def irfftn(self, a, s, axes=None):
-        return self._interfaces().irfftn(a, s=s, axes=axes, threads=self.workers)
+        return pyfftw.interfaces.scipy_fft
 
     def real_fft(self, shape, axes, threads: int = 1, precision: str = "float64") -> RealFFT:
         return _FFTWRealFFT(self, tuple(shape), tuple(axes), threads, precision)
