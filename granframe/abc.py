@@ -93,30 +93,33 @@ class ArrayBackend:
     def separable_product(self, out, spectrum, head, tail):
         r"""Batch of spectra times separable factors, into ``out``.
 
-        .. math:: \mathrm{out}_{b,i,j} = S_{i,j}\, h_{b,i}\, t_{b,j}
+        .. math:: \mathrm{out}_{d,b,i,j} = S_{d,i,j}\, h_{b,i}\, t_{b,j}
 
-        with ``spectrum`` S of shape (I, J), ``head`` h (B, I), ``tail`` t
-        (B, J) and ``out`` (B, I, J), all complex. Returns ``out``.
+        with ``spectrum`` S of shape (D, I, J), ``head`` h (B, I), ``tail`` t
+        (B, J) and ``out`` (D, B, I, J), all complex: every one of D spectra
+        (distributions) times every one of B factors. Without the leading D axis
+        (S of shape (I, J), ``out`` (B, I, J)) it is the case D = 1. Returns ``out``.
         """
-        self.xp.multiply(spectrum, tail[:, None, :], out=out)
+        self.xp.multiply(spectrum[..., None, :, :], tail[:, None, :], out=out)
         out *= head[:, :, None]
         return out
 
     def lowrank_accumulate(self, acc, heads, tails, values):
         r"""Add low-rank-weighted batches of spectra into per-group accumulators.
 
-        .. math:: \mathrm{acc}_{q,i,j} \mathrel{+}= \sum_{b \in q} \Big(\sum_t
-           H_{b,i,t} T_{b,t,j}\Big) V_{b,i,j}
+        .. math:: \mathrm{acc}_{d,q,i,j} \mathrel{+}= \sum_{b \in q} \Big(\sum_t
+           H_{b,i,t} T_{b,t,j}\Big) V_{d,b,i,j}
 
-        with ``acc`` (Q, I, J), ``heads`` H (B, I, R), ``tails`` T (B, R, J) and
-        ``values`` V (B, I, J), all complex; group q holds the consecutive
-        batch entries b = q B/Q, ..., (q+1) B/Q - 1. ``values`` may be
-        overwritten. Returns ``acc``.
+        with ``acc`` (D, Q, I, J), ``heads`` H (B, I, R), ``tails`` T (B, R, J) and
+        ``values`` V (D, B, I, J), all complex: the weights are shared by the D
+        distributions. Group q holds the consecutive batch entries
+        b = q B/Q, ..., (q+1) B/Q - 1. Without the leading D axis (``acc`` (Q, I, J),
+        ``values`` (B, I, J)) it is the case D = 1. ``values`` may be overwritten.
+        Returns ``acc``.
         """
-        weighted = self.xp.matmul(heads, tails)
-        weighted *= values
-        groups = acc.shape[0]
-        acc += weighted.reshape((groups, -1) + weighted.shape[1:]).sum(axis=1)
+        values *= self.xp.matmul(heads, tails)
+        groups, rows, cols = acc.shape[-3:]
+        acc += values.reshape(values.shape[:-3] + (groups, -1, rows, cols)).sum(axis=-3)
         return acc
 
     def fftn(self, a, axes=None):

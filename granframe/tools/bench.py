@@ -9,6 +9,13 @@ the P (rho, ghat) pairs the operator transforms -- the ratio time/floor, the
 peak resident set size of the process, and the device memory of device backends.
 Batching the floor as the operator batches keeps it a floor on a GPU, where one
 small transform alone is bound by its launch, not by the transform.
+
+With a stack size D (``--batch D``) the operator evaluates a stack of D distinct
+distributions at once; reported per distribution are the time of that evaluation / D
+and the floor of the same batched transforms: the median time of one forward + inverse
+transform of the T = D max(1, B / D) grids of one pipeline call
+(:meth:`~granframe_spectral.FastSpectral.stack_transforms`), times D P / T calls, / D,
+i.e. ``fft_batch_s * P / T``. D = 1 is the floor above (T = B).
 """
 
 from __future__ import annotations
@@ -24,6 +31,9 @@ import time
 import numpy
 
 from granframe import validators as check
+
+#: Largest stack size D of ``--batch``.
+MAX_BATCH = 4096
 
 #: The review's configurations (section 3): (dimension, N, N_rho, M).
 DEFAULT_CONFIGS = ((2, 64, 32, 16), (2, 128, 32, 16), (3, 16, 30, 32), (3, 32, 30, 32),
@@ -53,9 +63,12 @@ def median_time(function, repeats: int, backend) -> float:
 
 def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int,
             backend: str, threads: int, repeats: int, method: str = "fast_spectral",
-            precision: str = "float64", options: dict | None = None) -> dict:
+            precision: str = "float64", options: dict | None = None,
+            distributions: int = 1) -> dict:
     """Build and time one operator in this process; returns a JSON-ready record.
-    ``options`` are further parameters of the array backend (e.g. ``{"fused": False}``)."""
+    ``options`` are further parameters of the array backend (e.g. ``{"fused": False}``);
+    ``distributions`` D > 1 times stacks of D distributions, per distribution (module
+    notes)."""
     import granframe as gf
     from granframe.velocity.quadratures import CircleTrapezoid, SphereProduct
 
@@ -80,14 +93,19 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
                                      sphere=sphere,
                                      **({} if precision == "float64" else {"precision": precision}))
     precompute = time.perf_counter() - start
-    f = array_backend.asarray(grid.maxwellian(temperature=1.0))
+    if distributions == 1:
+        f = array_backend.asarray(grid.maxwellian(temperature=1.0))
+    else:       # distinct distributions: temperatures 0.8 to 1.2
+        f = array_backend.asarray(numpy.stack([
+            grid.maxwellian(temperature=t) for t in numpy.linspace(0.8, 1.2, distributions)]))
     operator(f)
     array_backend.synchronize()
-    evaluation = median_time(lambda: operator(f), repeats, array_backend)
+    evaluation = median_time(lambda: operator(f), repeats, array_backend) / distributions
     batch = operator.batch
-    fft = array_backend.real_fft((batch,) + grid.shape, tuple(range(1, dimension + 1)),
+    transforms = operator.stack_transforms(distributions)
+    fft = array_backend.real_fft((transforms,) + grid.shape, tuple(range(1, dimension + 1)),
                                  threads=threads, precision=precision)
-    fft.real[...] = f
+    fft.real[...] = f.reshape((-1,) + grid.shape)[:1]
 
     def pair():
         fft.forward()
@@ -95,14 +113,16 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
 
     pair()
     single = median_time(pair, max(20, 3 * repeats), array_backend)
-    floor = single * operator.transform_pairs / batch
+    floor = single * operator.transform_pairs / transforms
     peak = peak_rss_kib()
     device = array_backend.device_memory()
     return {
         "dimension": dimension, "n_modes": n_modes, "radial_points": radial_points,
         "sphere_points": sphere_points, "method": method, "backend": backend, "threads": threads,
         "precision": precision, "backend_options": options or {},
-        "transform_pairs": operator.transform_pairs, "batch": batch, "precompute_s": precompute,
+        "transform_pairs": operator.transform_pairs, "batch": batch,
+        "distributions": distributions, "stack_transforms": transforms,
+        "precompute_s": precompute,
         "evaluation_s": evaluation, "repeats": repeats, "fft_batch_s": single, "floor_s": floor,
         "time_over_floor": evaluation / floor, "peak_rss_gib": peak / 2 ** 20,
         "baseline_rss_gib": baseline / 2 ** 20,
@@ -128,43 +148,57 @@ def check_options(backend: str, threads: int, repeats: int) -> None:
 
 
 def run(configs, backend: str, threads: int, repeats: int,
-        precision: str = "float64", options: dict | None = None) -> list[dict]:
-    """Measure each configuration in its own subprocess (``options``: see :func:`measure`).
+        precision: str = "float64", options: dict | None = None,
+        batches=(1,)) -> list[dict]:
+    """Measure each configuration, for each stack size D of ``batches``, in its own
+    subprocess (``options``, D: see :func:`measure`); records in the order configuration,
+    then D.
 
-    The options and every configuration are checked first (:func:`check_options`,
-    :func:`check_config`); a configuration that fails in its subprocess is reported by
-    its last line, the error, not by the subprocess's traceback.
+    The options, every configuration and every D (an integer >= 1) are checked first
+    (:func:`check_options`, :func:`check_config`); a configuration that fails in its
+    subprocess is reported by its last line, the error, not by the subprocess's traceback.
     """
     check_options(backend, threads, repeats)
     for config in configs:
         check_config(config)
+    for stack in batches:
+        if not check.is_integer(stack) or not 1 <= stack <= MAX_BATCH:
+            check.reject("bench", "batch", stack, f"must be an integer >= 1 and <= {MAX_BATCH}")
     records = []
     for dimension, n_modes, radial, sphere in configs:
-        command = [sys.executable, "-c",
-                   "import json, sys; from granframe.tools.bench import measure; "
-                   f"print(json.dumps(measure({dimension}, {n_modes}, {radial}, {sphere}, "
-                   f"{backend!r}, {threads}, {repeats}, precision={precision!r}, "
-                   f"options={options!r})))"]
-        done = subprocess.run(command, capture_output=True, text=True)
-        if done.returncode != 0:
-            lines = done.stderr.strip().splitlines() or [f"exit status {done.returncode}"]
-            raise ValueError(f"bench: configuration d={dimension} N={n_modes} failed: "
-                             f"{lines[-1]}")
-        records.append(json.loads(done.stdout.strip().splitlines()[-1]))
+        for stack in batches:
+            command = [sys.executable, "-c",
+                       "import json, sys; from granframe.tools.bench import measure; "
+                       f"print(json.dumps(measure({dimension}, {n_modes}, {radial}, {sphere}, "
+                       f"{backend!r}, {threads}, {repeats}, precision={precision!r}, "
+                       f"options={options!r}, distributions={int(stack)})))"]
+            done = subprocess.run(command, capture_output=True, text=True)
+            if done.returncode != 0:
+                lines = done.stderr.strip().splitlines() or [f"exit status {done.returncode}"]
+                raise ValueError(f"bench: configuration d={dimension} N={n_modes} "
+                                 f"batch={stack} failed: {lines[-1]}")
+            records.append(json.loads(done.stdout.strip().splitlines()[-1]))
     return records
 
 
 def table(records) -> str:
-    """Markdown table of bench records (with the device memory of device backends)."""
+    """Markdown table of bench records (with the device memory of device backends, and
+    the stack size D, time and floor per distribution, when a record has D > 1)."""
     device = any(r.get("device_memory_gib") is not None for r in records)
-    lines = ["| d | N | N_rho | M | precision | pairs | batch | precompute | time / eval "
-             "| FFT floor | time/floor | peak RSS |" + (" device memory |" if device else ""),
-             "|---|---|---|---|---|---|---|---|---|---|---|---|" + ("---|" if device else "")]
+    stacks = any(r.get("distributions", 1) > 1 for r in records)
+    lines = ["| d | N | N_rho | M | precision | pairs | batch |" + (" B |" if stacks else "")
+             + " precompute | " + ("time / distribution" if stacks else "time / eval")
+             + (" | floor / distribution" if stacks else " | FFT floor")
+             + " | time/floor | peak RSS |" + (" device memory |" if device else ""),
+             "|---|---|---|---|---|---|---|---|---|---|---|---|" + ("---|" if stacks else "")
+             + ("---|" if device else "")]
     for r in records:
         lines.append(
             f"| {r['dimension']} | {r['n_modes']} | {r['radial_points']} | {r['sphere_points']} "
             f"| {r.get('precision', 'float64')} "
-            f"| {r['transform_pairs']} | {r['batch']} | {r['precompute_s']:.2f} s "
+            f"| {r['transform_pairs']} | {r['batch']} |"
+            + (f" {r.get('distributions', 1)} |" if stacks else "")
+            + f" {r['precompute_s']:.2f} s "
             f"| {_ms(r['evaluation_s'])} "
             f"| {_ms(r['floor_s'])} | {r['time_over_floor']:.2f} | {r['peak_rss_gib']:.2f} GiB |"
             + (f" {r['device_memory_gib']:.2f} GiB |" if device else ""))

@@ -6,8 +6,9 @@ plugins [--json]
     List every registered implementation per family with its source and a
     one-line description. The JSON form is documented in docs/plugins.md.
 bench [--json] [--backend NAME] [--threads T] [--repeats R] [--precision P]
-      [--config D:N[:N_RHO:M]]
-    Time the fast operator against the FFT floor (docs/benchmarks.md).
+      [--config D:N[:N_RHO:M] ...] [--batch B ...]
+    Time the fast operator against the FFT floor (docs/benchmarks.md); with --batch, on
+    stacks of B distributions, per distribution.
 run SOURCE --out STORE [--resume [--rollback]] [--overwrite] [--quick] [--only NAMES]
     [--progress]
     Run a description (a TOML file or a study module under studies/) into a zarr store;
@@ -65,14 +66,17 @@ def _bench(args) -> int:
     backend = resolve_backend(AUTO if args.backend is None else args.backend)
     configs = ([bench.parse_config(c) for c in args.config] if args.config
                else list(bench.DEFAULT_CONFIGS))
-    records = bench.run(configs, backend, args.threads, args.repeats, args.precision)
+    records = bench.run(configs, backend, args.threads, args.repeats, args.precision,
+                        batches=args.batch or (1,))
     if args.json:
         json.dump({"schema": "granframe.tools.bench/1", "granframe_version": __version__,
                    "records": records}, sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
         print(f"fast_spectral, backend {backend}, {args.threads} threads, {args.precision}, "
-              f"median of {args.repeats} evaluations after warm-up")
+              f"median of {args.repeats} evaluations after warm-up"
+              + (", B distributions per evaluation (time and floor per distribution)"
+                 if args.batch else ""))
         print(bench.table(records))
     return 0
 
@@ -291,8 +295,13 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--repeats", type=int, default=7, help="timed evaluations (default 7)")
     bench.add_argument("--precision", default="float64", choices=["float64", "float32"],
                        help="arithmetic of the operator and of the floor (default float64)")
-    bench.add_argument("--config", action="append", metavar="D:N[:N_RHO:M]",
-                       help="configuration (repeatable); default: the review's five")
+    bench.add_argument("--config", action="extend", nargs="+", metavar="D:N[:N_RHO:M]",
+                       help="configurations (one or more, repeatable); default: the review's "
+                            "five")
+    bench.add_argument("--batch", action="extend", nargs="+", type=int, metavar="B",
+                       help="stack sizes: evaluate B distributions at once and report the "
+                            "time and FFT floor per distribution (e.g. --batch 1 8 64); "
+                            "default: one distribution")
     bench.set_defaults(handler=_bench)
     run = commands.add_parser("run", help="run a description (TOML or study module) into a store")
     run.add_argument("source", metavar="STUDY_OR_TOML",

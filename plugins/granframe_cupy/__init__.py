@@ -187,7 +187,10 @@ class CuPyBackend(SciPyFFTBackend):
         if not self._uses_kernels:
             return super().separable_product(out, spectrum, head, tail)
         spectrum, head, tail = self._operands(out, spectrum, head, tail)
-        self._launch("separable_product", out, spectrum, head, tail, *out.shape)
+        batch, rows, cols = out.shape[-3:]
+        distributions = out.shape[0] if out.ndim == 4 else 1
+        self._launch("separable_product", out, spectrum, head, tail, batch, rows, cols,
+                     distributions)
         return out
 
     def lowrank_accumulate(self, acc, heads, tails, values):
@@ -196,10 +199,11 @@ class CuPyBackend(SciPyFFTBackend):
         if not self._uses_kernels:
             return super().lowrank_accumulate(acc, heads, tails, values)
         heads, tails, values = self._operands(acc, heads, tails, values)
-        groups, rows, cols = acc.shape
+        groups, rows, cols = acc.shape[-3:]
+        distributions = acc.shape[0] if acc.ndim == 4 else 1
         batch, _, rank = heads.shape
         self._launch("lowrank_accumulate", acc, heads, tails, values, groups, batch // groups,
-                     rows, cols, rank)
+                     rows, cols, rank, distributions)
         return acc
 
 

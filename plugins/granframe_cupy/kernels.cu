@@ -14,40 +14,50 @@
 #include <cupy/complex.cuh>
 #endif
 
-// out[b, i, j] = spectrum[i, j] * head[b, i] * tail[b, j]; out (B, I, J), spectrum (I, J),
-// head (B, I), tail (B, J).
+// out[d, b, i, j] = spectrum[d, i, j] * head[b, i] * tail[b, j]; out (D, B, I, J), spectrum
+// (D, I, J), head (B, I), tail (B, J). D = distributions, 1 by default (out (B, I, J),
+// spectrum (I, J)).
 template <typename T>
 __global__ void separable_product(T* __restrict__ out, const T* __restrict__ spectrum,
                                   const T* __restrict__ head, const T* __restrict__ tail,
-                                  long long batch, long long rows, long long cols)
+                                  long long batch, long long rows, long long cols,
+                                  long long distributions = 1)
 {
     const long long plane = rows * cols;
-    const long long size = batch * plane;
+    const long long stack = batch * plane;
+    const long long size = distributions * stack;
     const long long stride = (long long)blockDim.x * gridDim.x;
     for (long long k = (long long)blockIdx.x * blockDim.x + threadIdx.x; k < size; k += stride) {
-        const long long b = k / plane;
-        const long long ij = k - b * plane;
+        const long long d = k / stack;
+        const long long bij = k - d * stack;
+        const long long b = bij / plane;
+        const long long ij = bij - b * plane;
         const long long i = ij / cols;
         const long long j = ij - i * cols;
-        out[k] = spectrum[ij] * (head[b * rows + i] * tail[b * cols + j]);
+        out[k] = spectrum[d * plane + ij] * (head[b * rows + i] * tail[b * cols + j]);
     }
 }
 
-// acc[q, i, j] += sum over b in group q of (sum_t heads[b, i, t] tails[b, t, j]) values[b, i, j];
-// acc (Q, I, J), heads (B, I, R), tails (B, R, J), values (B, I, J); group q holds the
-// consecutive entries b = q B/Q, ..., (q + 1) B/Q - 1.
+// acc[d, q, i, j] += sum over b in group q of (sum_t heads[b, i, t] tails[b, t, j])
+// values[d, b, i, j]; acc (D, Q, I, J), heads (B, I, R), tails (B, R, J), values
+// (D, B, I, J); group q holds the consecutive entries b = q B/Q, ..., (q + 1) B/Q - 1.
+// D = distributions, 1 by default (acc (Q, I, J), values (B, I, J)).
 template <typename T>
 __global__ void lowrank_accumulate(T* __restrict__ acc, const T* __restrict__ heads,
                                    const T* __restrict__ tails, const T* __restrict__ values,
                                    long long groups, long long per_group, long long rows,
-                                   long long cols, long long rank)
+                                   long long cols, long long rank,
+                                   long long distributions = 1)
 {
     const long long plane = rows * cols;
-    const long long size = groups * plane;
+    const long long batch = groups * per_group;
+    const long long size = distributions * groups * plane;
     const long long stride = (long long)blockDim.x * gridDim.x;
     for (long long k = (long long)blockIdx.x * blockDim.x + threadIdx.x; k < size; k += stride) {
-        const long long q = k / plane;
-        const long long ij = k - q * plane;
+        const long long dq = k / plane;
+        const long long d = dq / groups;
+        const long long q = dq - d * groups;
+        const long long ij = k - dq * plane;
         const long long i = ij / cols;
         const long long j = ij - i * cols;
         T sum = acc[k];
@@ -56,7 +66,7 @@ __global__ void lowrank_accumulate(T* __restrict__ acc, const T* __restrict__ he
             for (long long t = 0; t < rank; ++t) {
                 weight += heads[(b * rows + i) * rank + t] * tails[(b * rank + t) * cols + j];
             }
-            sum += weight * values[b * plane + ij];
+            sum += weight * values[(d * batch + b) * plane + ij];
         }
         acc[k] = sum;
     }

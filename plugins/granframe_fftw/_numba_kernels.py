@@ -19,54 +19,79 @@ _JIT = {"nogil": True, "fastmath": {"contract", "reassoc"}, "cache": True}
 
 
 @numba.njit(**_JIT)
-def separable_product(out, spectrum, head, tail):
-    """out[b, i, j] = spectrum[i, j] head[b, i] tail[b, j]."""
-    batch, rows, cols = out.shape
+def _separable_product(out, spectrum, head, tail):
+    """out[d, b, i, j] = spectrum[d, i, j] head[b, i] tail[b, j]; each factor row
+    head[b, i] tail[b, :] formed once for all d."""
+    distributions, batch, rows, cols = out.shape
+    row = numpy.empty(cols, dtype=out.dtype)
     for b in range(batch):
         for i in range(rows):
             h = head[b, i]
             for j in range(cols):
-                out[b, i, j] = spectrum[i, j] * (h * tail[b, j])
+                row[j] = h * tail[b, j]
+            for d in range(distributions):
+                for j in range(cols):
+                    out[d, b, i, j] = spectrum[d, i, j] * row[j]
     return out
+
+
+def separable_product(out, spectrum, head, tail):
+    """out[d, b, i, j] = spectrum[d, i, j] head[b, i] tail[b, j]; without the d axis
+    (spectrum (I, J), out (B, I, J)) the case of one distribution."""
+    if out.ndim == 3:
+        _separable_product(out[None], spectrum[None], head, tail)
+        return out
+    return _separable_product(out, spectrum, head, tail)
 
 
 @numba.njit(**_JIT)
 def _accumulate_rank2(acc, heads, tails, values):
-    """Rank-2 case of :func:`lowrank_accumulate`, the weight formed on the fly."""
-    batch, rows, cols = values.shape
-    per_group = batch // acc.shape[0]
+    """Rank-2 case of :func:`lowrank_accumulate`, each weight row formed once for all d."""
+    distributions, batch, rows, cols = values.shape
+    per_group = batch // acc.shape[1]
+    weight = numpy.empty(cols, dtype=acc.dtype)
     for b in range(batch):
         q = b // per_group
         for i in range(rows):
             h0 = heads[b, i, 0]
             h1 = heads[b, i, 1]
             for j in range(cols):
-                acc[q, i, j] += (h0 * tails[b, 0, j] + h1 * tails[b, 1, j]) * values[b, i, j]
+                weight[j] = h0 * tails[b, 0, j] + h1 * tails[b, 1, j]
+            for d in range(distributions):
+                for j in range(cols):
+                    acc[d, q, i, j] += weight[j] * values[d, b, i, j]
     return acc
 
 
 @numba.njit(**_JIT)
 def _accumulate_dense(acc, heads, tails, values):
-    """Any rank: the weight of each batch entry by one BLAS product, then a fused update."""
-    batch, rows, cols = values.shape
-    per_group = batch // acc.shape[0]
+    """Any rank: the weight of each batch entry by one BLAS product, then a fused update
+    of every distribution."""
+    distributions, batch, rows, cols = values.shape
+    per_group = batch // acc.shape[1]
     for b in range(batch):
         q = b // per_group
         weight = numpy.dot(heads[b], tails[b])
-        for i in range(rows):
-            for j in range(cols):
-                acc[q, i, j] += weight[i, j] * values[b, i, j]
+        for d in range(distributions):
+            for i in range(rows):
+                for j in range(cols):
+                    acc[d, q, i, j] += weight[i, j] * values[d, b, i, j]
     return acc
 
 
 def lowrank_accumulate(acc, heads, tails, values):
-    """acc[q, i, j] += sum_{b in q} (sum_t heads[b, i, t] tails[b, t, j]) values[b, i, j].
+    """acc[d, q, i, j] += sum_{b in q} (sum_t heads[b, i, t] tails[b, t, j]) values[d, b, i, j].
 
-    The rank-2 weights of isotropic kernels (a pair and its antipode) are
-    formed on the fly; larger ranks (a sigma rule for anisotropic b) go
-    through BLAS.
+    Without the d axis (acc (Q, I, J), values (B, I, J)) the case of one distribution.
+    The rank-2 weights of isotropic kernels (a pair and its antipode) are formed on the
+    fly; larger ranks (a sigma rule for anisotropic b) go through BLAS. Either way a
+    weight is formed once for all distributions.
     """
+    stacked = acc[None] if acc.ndim == 3 else acc
+    values = values[None] if values.ndim == 3 else values
     if heads.shape[2] == 2:
-        return _accumulate_rank2(acc, heads, tails, values)
-    return _accumulate_dense(acc, numpy.ascontiguousarray(heads),
-                             numpy.ascontiguousarray(tails), values)
+        _accumulate_rank2(stacked, heads, tails, values)
+    else:
+        _accumulate_dense(stacked, numpy.ascontiguousarray(heads),
+                          numpy.ascontiguousarray(tails), values)
+    return acc

@@ -28,27 +28,41 @@ def isotropic_sphere_average(x, dimension: int):
     return numpy.sinc(numpy.asarray(x) / math.pi)
 
 
-def energy_factor(kernel, grid, f, xp) -> float:
-    """E(f)^gamma with E = int |v|^2/2 f dv; 1 when gamma = 0 (no moment taken)."""
+def energy_factor(kernel, grid, f, backend) -> numpy.ndarray:
+    r"""E(f_b)^gamma for each distribution f_b of a stack ``f`` of shape (B, *grid.shape).
+
+    .. math:: E(f_b) = \tfrac12 \Delta v \sum_j |v_j|^2 f_b(v_j)
+
+    with Delta v the cell volume. Returns a NumPy array of B factors, all 1 when
+    gamma = 0 (no moment taken).
+    """
+    count = f.shape[0]
     if kernel.energy_exponent == 0.0:
-        return 1.0
-    return kernel.energy_factor(grid.kinetic_energy(f, xp))
+        return numpy.ones(count)
+    axes = tuple(range(1, f.ndim))
+    xp = backend.xp
+    sums = backend.to_numpy(xp.sum(grid.speed_squared(xp) * f, axis=axes))
+    return numpy.array([kernel.energy_factor(0.5 * float(s) * grid.cell_volume) for s in sums])
 
 
 def check_operands(owner: str, grid, f, backend):
-    """Refuse an f that is not a finite real array of the grid's shape on this backend.
+    """Refuse an f that is not a finite real array of shape (..., *grid.shape) on this
+    backend; return it as a stack of shape (B, *grid.shape) with the batch shape.
 
-    Finiteness costs one reduction, the sum of f (NaN or Inf anywhere makes it
-    non-finite), in the backend's namespace, so that every backend refuses alike; a NaN
-    or Inf in f would otherwise spread through the transforms to every point of Q.
+    A plain ``grid.shape`` f is the stack of one distribution, batch shape (). Finiteness
+    costs one reduction, the sum of f (NaN or Inf anywhere makes it non-finite), in the
+    backend's namespace, so that every backend refuses alike; a NaN or Inf in f would
+    otherwise spread through the transforms to every point of Q.
     """
     xp = backend.xp
     if not isinstance(f, xp.ndarray):
         check.reject(owner, "f", type(f).__name__,
                      f"must be a {xp.__name__} array (backend '{backend.name}')", error=TypeError)
-    shape = tuple(f.shape)
-    if shape != grid.shape:
-        check.reject(owner, "f.shape", shape, f"must equal the grid shape {grid.shape}")
+    shape, d = tuple(f.shape), grid.dimension
+    if len(shape) < d or shape[len(shape) - d:] != grid.shape or 0 in shape:
+        check.reject(owner, "f.shape", shape, f"must be the grid shape {grid.shape}, or batch "
+                     f"axes then the grid shape, (..., {', '.join(map(str, grid.shape))}), "
+                     "with no empty axis")
     if f.dtype.kind != "f":
         check.reject(owner, "f.dtype", str(f.dtype), "must be a real floating-point type",
                      error=TypeError)
@@ -58,6 +72,8 @@ def check_operands(owner: str, grid, f, backend):
                      "infinity", "must be finite everywhere on the grid (NaN or Inf in f, "
                      "e.g. from a blown-up step, would fill Q with NaN)",
                      error=NonFiniteError)
+    batch_shape = shape[:len(shape) - d]
+    return f.reshape((math.prod(batch_shape),) + grid.shape), batch_shape
 
 
 def radial_rule(grid, n_radial: int):

@@ -15,13 +15,17 @@ import scipy.special
 from granframe import memory
 from granframe import validators as check
 from granframe.abc import CollisionOperator, check_arguments
-from granframe.velocity.quadratures import MAX_GAUSS_POINTS, sphere_area
+from granframe.velocity.quadratures import MAX_GAUSS_POINTS, GaussLegendre, sphere_area
 
 from granframe_spectral._common import (check_operands, energy_factor, isotropic_sphere_average,
                                         radial_rule)
 
-#: Bytes per (k, m) entry: weight (complex), gather index, triple key, gathered f-hat.
+#: Bytes per (k, m) entry: weight (complex), gather index, triple key, gathered f-hat (of
+#: one distribution; a stack of D distributions gathers D of them,
+#: :data:`BYTES_PER_GATHERED` each).
 BYTES_PER_ENTRY = 16 + 8 + 8 + 16
+#: Bytes per (k, m) entry and distribution of the gathered f-hat.
+BYTES_PER_GATHERED = 16
 
 #: Largest ``angular_degree``: its coefficients take a Gauss rule of 2 degree + 64 points,
 #: which must stay within the radial rule's bound; degree 1024 resolves b(cos theta) far
@@ -41,7 +45,9 @@ def angular_coefficients(kernel, dimension: int, max_degree: int):
         return numpy.array([2.0 if dimension == 3 else 2.0 * math.pi]), 0
     n = numpy.arange(max_degree + 1)
     if dimension == 3:
-        t, w = numpy.polynomial.legendre.leggauss(2 * max_degree + 64)
+        # Gauss-Legendre on [-1, 1]: the rule on [0, 2] shifted by -1
+        t, w = GaussLegendre(2 * max_degree + 64).rule(2.0)
+        t = t - 1.0
         values = kernel.angular_part(t)
         coeffs = numpy.array([w @ (values * scipy.special.eval_legendre(k, t)) for k in n])
     else:
@@ -70,7 +76,9 @@ class DirectSpectral(CollisionOperator):
         Bytes the weights may use; a larger problem is refused, before anything is
         allocated, with the memory it needs (:meth:`estimate_memory`). The default is
         ``GRANFRAME_MEMORY_BUDGET`` when that environment variable is set, else 4 GiB
-        (:mod:`granframe.memory`).
+        (:mod:`granframe.memory`). A stack of D distributions gathers D f-hat per
+        (k, m) entry at the call; a stack that would exceed the budget is refused then,
+        naming ``f``.
 
     Notes
     -----
@@ -95,6 +103,10 @@ class DirectSpectral(CollisionOperator):
     n >= 1 terms doubled) and loss 2 pi beta_0 J_0(pi rho |m|/L). G depends on
     k and m only through (|k|^2, |m|^2, k.m), which is evaluated once per
     distinct triple.
+
+    f may hold a stack of distributions f_b, shape (..., *grid.shape): the sum is one
+    contraction over the stack (the weights read once for all b), and each f_b gets its
+    own E(f_b)^gamma.
     """
 
     name = "direct_spectral"
@@ -113,6 +125,7 @@ class DirectSpectral(CollisionOperator):
             memory_budget = memory.budget(self.DEFAULT_MEMORY_BUDGET)
         if not check.is_real(memory_budget) or memory_budget <= 0:
             check.reject(owner, "memory_budget", memory_budget, "must be a positive number of bytes")
+        self.memory_budget = memory_budget
         if self.memory_bytes > memory_budget:
             check.reject(owner, "memory_budget", memory_budget,
                          f"is too small: the direct method needs {memory.gib(self.memory_bytes)} "
@@ -124,10 +137,12 @@ class DirectSpectral(CollisionOperator):
 
     @classmethod
     def estimate_memory(cls, grid, kernel, restitution, backend, *, radial_points=None,
-                        angular_degree=48, memory_budget=None) -> int:
-        """Bytes of the weights, :data:`BYTES_PER_ENTRY` per pair of Nyquist-free modes
-        (nothing is allocated); invalid options raise the operator's own errors.
-        ``memory_budget`` does not change the estimate (it is what it is compared with)."""
+                        angular_degree=48, memory_budget=None, distributions=1) -> int:
+        """Bytes of the weights for stacks of ``distributions`` distributions,
+        :data:`BYTES_PER_ENTRY` + (D - 1) :data:`BYTES_PER_GATHERED` per pair of
+        Nyquist-free modes (nothing is allocated); invalid options raise the operator's
+        own errors. ``memory_budget`` does not change the estimate (it is what it is
+        compared with)."""
         owner = "direct_spectral"
         check_arguments(owner, grid, kernel, restitution, backend)
         radial_points = 2 * grid.n_modes + 16 if radial_points is None else radial_points
@@ -137,7 +152,10 @@ class DirectSpectral(CollisionOperator):
         if not check.is_integer(angular_degree) or not 0 <= angular_degree <= MAX_ANGULAR_DEGREE:
             check.reject(owner, "angular_degree", angular_degree,
                          f"must be an integer >= 0 and <= {MAX_ANGULAR_DEGREE}")
-        return BYTES_PER_ENTRY * ((grid.n_modes - 1) ** grid.dimension) ** 2
+        if not check.is_integer(distributions) or distributions < 1:
+            check.reject(owner, "distributions", distributions, "must be an integer >= 1")
+        return ((BYTES_PER_ENTRY + (int(distributions) - 1) * BYTES_PER_GATHERED)
+                * ((grid.n_modes - 1) ** grid.dimension) ** 2)
 
     def _build(self):
         grid, xp = self.grid, self.backend.xp
@@ -217,15 +235,31 @@ class DirectSpectral(CollisionOperator):
         return out * omega * sphere_area(d)
 
     def __call__(self, f):
-        """Q_I(f, f) on the grid: the Galerkin sum over l + m = k (class notes)."""
-        check_operands("direct_spectral", self.grid, f, self.backend)
-        xp, backend = self.backend.xp, self.backend
-        total = float(self.grid.n_modes) ** self.grid.dimension
-        spectrum = backend.fftn(f)
-        f_hat = spectrum[self._fft_index] * self._sign / total
-        q_hat = xp.einsum("km,km,m->k", self._weights, f_hat[self._l_index], f_hat)
-        out_spectrum = xp.zeros(self.grid.shape, dtype=xp.complex128)
-        out_spectrum[self._fft_index] = q_hat * self._sign * total
-        q = xp.real(backend.ifftn(out_spectrum))
-        factor = energy_factor(self.kernel, self.grid, f, xp)
-        return q * factor if factor != 1.0 else q
+        r"""Q_I(f_b, f_b) on the grid for each distribution f_b of f, shape
+        (..., *grid.shape): the Galerkin sum over l + m = k (class notes),
+        Qhat_{b,k} = E(f_b)^gamma sum_m G(k - m, m) fhat_{b,k-m} fhat_{b,m}."""
+        stack, batch_shape = check_operands(self.name, self.grid, f, self.backend)
+        xp, backend, grid = self.backend.xp, self.backend, self.grid
+        count, d = stack.shape[0], grid.dimension
+        if count > 1:
+            needed = self.estimate_memory(grid, self.kernel, self.restitution, backend,
+                                          radial_points=self.radial_points,
+                                          angular_degree=self.angular_degree,
+                                          distributions=count)
+            if needed > self.memory_budget:
+                check.reject(self.name, "f", f"a stack of {count} distributions",
+                             f"is too large: it needs {memory.gib(needed)} GiB, over the "
+                             f"memory_budget of {memory.gib(self.memory_budget)} GiB; "
+                             "evaluate smaller stacks")
+        axes = tuple(range(1, d + 1))
+        total = float(grid.n_modes) ** d
+        spectrum = backend.fftn(stack, axes=axes)
+        f_hat = spectrum[(slice(None),) + self._fft_index] * self._sign / total   # (B, M)
+        q_hat = xp.einsum("km,bkm,bm->bk", self._weights, f_hat[:, self._l_index], f_hat)
+        out_spectrum = xp.zeros(stack.shape, dtype=xp.complex128)
+        out_spectrum[(slice(None),) + self._fft_index] = q_hat * self._sign * total
+        q = xp.real(backend.ifftn(out_spectrum, axes=axes))
+        factors = energy_factor(self.kernel, grid, stack, backend)
+        if numpy.any(factors != 1.0):
+            q = q * backend.asarray(factors).reshape((count,) + (1,) * d)
+        return q.reshape(batch_shape + grid.shape)

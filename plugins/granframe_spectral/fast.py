@@ -47,15 +47,19 @@ class FastSpectral(CollisionOperator):
         Rule for the sigma-integral when b(cos theta) is not constant
         (ignored for isotropic kernels, whose sigma-integral is exact).
     batch : int or None
-        Pairs (rho, ghat) transformed together; ``None`` chooses from the grid size and
-        the backend's ``batch_bytes`` (a few MiB on a CPU, hundreds on a GPU).
+        Pairs (rho, ghat) transformed together for one distribution; ``None`` chooses
+        from the grid size and the backend's ``batch_bytes`` (a few MiB on a CPU,
+        hundreds on a GPU). A stack of D distributions transforms D x max(1, batch // D)
+        grids per call (:meth:`stack_transforms`).
     memory_budget : int or None
         Bytes the operator may hold: its tables, work buffers and the transients of
         its precomputation. The default is ``GRANFRAME_MEMORY_BUDGET`` when that
         environment variable is set, else 2 GiB (:mod:`granframe.memory`). The batch
         shrinks to fit it; a problem that does not fit with one pair per pipeline is
         refused before anything large is allocated, with the memory it needs
-        (:meth:`estimate_memory`).
+        (:meth:`estimate_memory`). The buffers of a stack of distributions are sized on
+        the first call with that stack size (and kept until a call with another size);
+        a stack that does not fit the budget is refused then, naming ``f``.
     precision : {"float64", "float32"}
         Arithmetic of the evaluation: transforms, phase tables, weights and
         accumulators. The tables are computed in float64 and rounded once. In
@@ -84,6 +88,11 @@ class FastSpectral(CollisionOperator):
     term f(v) L(f)(v) uses the same (rho, ghat) rule,
     G_loss(m) = sum w_rho w_ghat rho^{d-1} F(0, rho, ghat) e^{-i pi rho m.ghat/L},
     so that Qhat_0 = 0 to round-off.
+
+    f may hold a stack of distributions, shape (..., *grid.shape); each gets its own
+    Q (and its own E(f)^gamma), all of them in the same transforms: a pipeline's FFT
+    call covers every distribution times a block of pairs, and the phase factors and
+    angular weights of a pair are formed once for the whole stack.
     """
 
     name = "fast_spectral"
@@ -93,8 +102,8 @@ class FastSpectral(CollisionOperator):
     def __init__(self, grid, kernel, restitution, backend, *, radial_points=None, sphere=None,
                  sigma=None, batch=None, memory_budget=None, precision="float64"):
         super().__init__(grid, kernel, restitution, backend)
-        plan = _plan(grid, kernel, backend, radial_points, sphere, sigma, batch, memory_budget,
-                     precision)
+        self._options = (radial_points, sphere, sigma, batch, memory_budget, precision)
+        plan = _plan(grid, kernel, backend, *self._options)
         self.precision = precision
         self._real_dtype, self._complex_dtype = PRECISIONS[precision]
         self._itemsize = numpy.dtype(self._real_dtype).itemsize
@@ -105,15 +114,18 @@ class FastSpectral(CollisionOperator):
     @classmethod
     def estimate_memory(cls, grid, kernel, restitution, backend, *, radial_points=None,
                         sphere=None, sigma=None, batch=None, memory_budget=None,
-                        precision="float64") -> int:
-        """Bytes the operator would hold for these arguments, found without allocating.
+                        precision="float64", distributions=1) -> int:
+        """Bytes the operator would hold for these arguments, evaluating stacks of
+        ``distributions`` distributions, found without allocating.
 
         Raises the operator's own errors: invalid options, and a ``memory_budget``
-        too small for one pair per pipeline.
+        too small for one pair per pipeline (or for the stack).
         """
         check_arguments(cls.name, grid, kernel, restitution, backend)
+        if not check.is_integer(distributions) or distributions < 1:
+            check.reject(cls.name, "distributions", distributions, "must be an integer >= 1")
         return _plan(grid, kernel, backend, radial_points, sphere, sigma, batch, memory_budget,
-                     precision).memory_bytes
+                     precision, int(distributions)).memory_bytes
 
     # -- precomputation -------------------------------------------------------------------
     def _build(self, plan):
@@ -173,17 +185,34 @@ class FastSpectral(CollisionOperator):
         pipelines = plan.pipelines
         self.batch = plan.batch
         self._tables = _PhaseTables(self, plan.precompute_tables)
-        bounds = numpy.linspace(0, len(rho), pipelines + 1).round().astype(int)
-        self._pipelines = [_Pipeline(self, (int(bounds[p]), int(bounds[p + 1])))
-                           for p in range(pipelines)]
+        self._bounds = numpy.linspace(0, len(rho), pipelines + 1).round().astype(int)
         self._executor = (concurrent.futures.ThreadPoolExecutor(pipelines, "granframe-fast")
                           if pipelines > 1 else None)
+        self._stack = None
+        self._size_stack(1)
+
+    def _size_stack(self, distributions: int):
+        """Transforms and buffers for stacks of ``distributions`` (the last size asked
+        for is kept); a stack whose buffers exceed the memory budget is refused."""
+        if self._stack == distributions:
+            return
+        grid, backend, d = self.grid, self.backend, self.grid.dimension
+        plan = _plan(grid, self.kernel, backend, *self._options, distributions)
+        self.memory_bytes = plan.memory_bytes
+        self._pipelines = [_Pipeline(self, (int(self._bounds[p]), int(self._bounds[p + 1])),
+                                     distributions) for p in range(plan.pipelines)]
         # The operator's own few transforms are single-threaded when pipelines run: FFTW's
         # OpenMP workers keep spinning after a threaded transform and took a core from the
         # pipelines (3D N = 16: 7.8 ms per evaluation instead of 4.3 ms).
-        self._fft = backend.real_fft(grid.shape, tuple(range(d)),
-                                     threads=1 if pipelines > 1 else backend.concurrency,
+        self._fft = backend.real_fft((distributions,) + grid.shape, tuple(range(1, d + 1)),
+                                     threads=1 if plan.pipelines > 1 else backend.concurrency,
                                      precision=self.precision)
+        self._stack = distributions
+
+    def stack_transforms(self, distributions: int) -> int:
+        """Grids transformed per FFT call of a pipeline for a stack of ``distributions``:
+        D p_D with p_D = max(1, batch // D) pairs per block."""
+        return distributions * max(1, self.batch // distributions)
 
     @property
     def transform_pairs(self) -> int:
@@ -192,11 +221,13 @@ class FastSpectral(CollisionOperator):
 
     # -- evaluation -----------------------------------------------------------------------
     def __call__(self, f):
-        """Q_I(f, f) on the grid (see the class notes for the discrete formula)."""
-        check_operands("fast_spectral", self.grid, f, self.backend)
-        xp = self.backend.xp
+        r"""Q_I(f_b, f_b) on the grid for each distribution f_b of f (see the class notes
+        for the discrete formula); f of shape (..., *grid.shape), Q of f's shape."""
+        stack, batch_shape = check_operands(self.name, self.grid, f, self.backend)
+        count = stack.shape[0]
+        self._size_stack(count)
         fft = self._fft
-        fft.real[...] = f
+        fft.real[...] = stack
         spectrum = fft.forward() * self._keep                      # Nyquist-free DFT of f
         fft.spectrum[...] = spectrum
         inverse_count = 1.0 / float(self.grid.n_modes) ** self.grid.dimension
@@ -218,9 +249,14 @@ class FastSpectral(CollisionOperator):
         total = gain - fft.forward()
         total *= self._keep
         fft.spectrum[...] = total
-        # a Python float keeps float32 results in float32 (NumPy's scalar promotion)
-        return fft.inverse() * float(energy_factor(self.kernel, self.grid, f_n, xp)
-                                     * inverse_count)
+        factors = energy_factor(self.kernel, self.grid, f_n, self.backend) * inverse_count
+        if numpy.all(factors == factors[0]):
+            # a Python float keeps float32 results in float32 (NumPy's scalar promotion)
+            q = fft.inverse() * float(factors[0])
+        else:
+            scale = self.backend.asarray(factors.astype(self._real_dtype))
+            q = fft.inverse() * scale.reshape((count,) + (1,) * self.grid.dimension)
+        return q.reshape(batch_shape + self.grid.shape)
 
     def close(self):
         """Stop the worker threads (also done when the operator is garbage collected)."""
@@ -249,18 +285,22 @@ class _Plan:
 
 
 def _plan(grid, kernel, backend, radial_points, sphere, sigma, batch, memory_budget,
-          precision) -> _Plan:
-    """Validate the options and size everything the operator will allocate.
+          precision, distributions=1) -> _Plan:
+    """Validate the options and size everything the operator will allocate for stacks of
+    D = ``distributions`` distributions.
 
     Counted, in bytes (r and c the real and complex item sizes, h the points of the half
     spectrum, N_rho radial points, P pairs): the radial weights, loss multiplier,
-    accumulators and the operator's own transform, c h (N_rho + 4 + 2 pipelines); per pair
-    of a batch, a real grid, its spectrum and the weighted spectrum of the generic
-    ``lowrank_accumulate``, r N^d + 2 c h; the phase tables, precomputed when they fit in a
-    quarter of the budget, else one block per pipeline; and the transients of the
-    precomputation (|k|, the loss multiplier and its terms), 56 h. The batch shrinks until
-    the tables and buffers fit ``memory_budget``; what still does not fit is refused here,
-    before anything of the grid's size is allocated.
+    accumulators and the operator's own transform, c h (N_rho + 4 + 2 pipelines), of
+    which c h (3 + 2 pipelines) again for each further distribution; per grid of a
+    pipeline's transform
+    (D max(1, batch // D) of them), a real grid, its spectrum and the weighted spectrum of
+    the generic ``lowrank_accumulate``, r N^d + 2 c h; the phase tables, precomputed when
+    they fit in a quarter of the budget, else one block per pipeline; and the transients
+    of the precomputation (|k|, the loss multiplier and its terms), 56 h. The pair batch
+    (for D = 1) shrinks until the tables and buffers fit ``memory_budget``; what still
+    does not fit is refused here, before anything of the grid's size is allocated (a
+    stack, D > 1, that does not fit is refused naming ``f``).
     """
     owner, d = "fast_spectral", grid.dimension
     radial_points = DEFAULT_RADIAL[d] if radial_points is None else radial_points
@@ -291,6 +331,7 @@ def _plan(grid, kernel, backend, radial_points, sphere, sigma, batch, memory_bud
     half, total = math.prod(half_shape), grid.n_modes ** d
     pipelines = max(1, min(backend.concurrency, radial_points))
     fixed = complex_ * half * (radial_points + 4 + 2 * pipelines)
+    per_distribution = complex_ * half * (3 + 2 * pipelines)
     per_pair = real * total + 2 * complex_ * half
     table_per_pair = complex_ * (half_shape[0] + half // half_shape[0]) * (1 + terms)
     tables = table_per_pair * radial_points * n_pairs
@@ -311,6 +352,16 @@ def _plan(grid, kernel, backend, radial_points, sphere, sigma, batch, memory_bud
     if not precompute:      # a block holds the pairs of whole rho values
         steady += pipelines * max(0, n_pairs - batch) * table_per_pair
     memory_bytes = steady + 56 * half
+    if distributions > 1:
+        grids = distributions * max(1, int(batch) // distributions)
+        memory_bytes += ((distributions - 1) * per_distribution
+                         + pipelines * (grids - int(batch)) * per_pair)
+        if memory_bytes > budget:
+            check.reject(owner, "f", f"a stack of {distributions} distributions",
+                         f"is too large: it needs {memory.gib(memory_bytes)} GiB, over the "
+                         f"memory_budget of {memory.gib(budget)} GiB (d = {d}, "
+                         f"N = {grid.n_modes}); evaluate smaller stacks, or raise "
+                         "memory_budget")
     if memory_bytes > budget:
         check.reject(owner, "memory_budget", memory_budget,
                      f"is too small: the operator needs {memory.gib(memory_bytes)} GiB (d = {d}, "
@@ -415,30 +466,34 @@ class _PhaseTables:
 class _Pipeline:
     """One worker's transforms and buffers; sums the gain over its rho values.
 
-    Per batch of pairs (rho, +-ghat) it forms X = DFT(f) e^{-i pi rho k.ghat/L}
-    (the separable phase as the product of its axis-0 factor and the factor
-    over the other axes, :meth:`ArrayBackend.separable_product`), s =
-    IDFT(X) f_N, P = DFT(s), and adds E * P to the accumulator of its rho,
-    where E = sum_t c_t e^{i eta_t.k} is the sum of the pair's separable
-    angular terms (:meth:`ArrayBackend.lowrank_accumulate`).
+    For a stack of D distributions f_d and per block of pairs (rho, +-ghat) it forms
+    X_d = DFT(f_d) e^{-i pi rho k.ghat/L} (the separable phase as the product of its
+    axis-0 factor and the factor over the other axes, formed once for all d,
+    :meth:`ArrayBackend.separable_product`), s_d = IDFT(X_d) f_{N,d}, P_d = DFT(s_d), and
+    adds E * P_d to the accumulator of its rho and distribution, where
+    E = sum_t c_t e^{i eta_t.k} is the sum of the pair's separable angular terms
+    (:meth:`ArrayBackend.lowrank_accumulate`). The D x p grids of a block (p pairs) go
+    through one FFT call; the block holds p = max(1, batch // D) pairs.
     """
 
-    def __init__(self, op: FastSpectral, rho_range):
+    def __init__(self, op: FastSpectral, rho_range, distributions: int):
         backend, grid = op.backend, op.grid
-        self.op, self.rho_range = op, rho_range
+        self.op, self.rho_range, self.distributions = op, rho_range, distributions
         d = grid.dimension
-        self.batch = op.batch
-        self.fft = backend.real_fft((op.batch,) + grid.shape, tuple(range(1, d + 1)),
-                                    threads=1, precision=op.precision)
+        self.batch = max(1, op.batch // distributions)
+        self.fft = backend.real_fft((distributions * self.batch,) + grid.shape,
+                                    tuple(range(1, d + 1)), threads=1, precision=op.precision)
         self._n0, self._rest = op._half_shape[0], int(numpy.prod(op._half_shape[1:]))
         self.radial_weights = op._radial_weights.reshape(-1, self._n0, self._rest)
 
     def run(self, spectrum, f_n):
         op, backend = self.op, self.op.backend
         xp = backend.xp
-        n0, rest = self._n0, self._rest
-        gain = xp.zeros((n0, rest), dtype=op._complex_dtype)
-        spec2 = spectrum.reshape(n0, rest)
+        n0, rest, dists = self._n0, self._rest, self.distributions
+        gain = xp.zeros((dists, n0, rest), dtype=op._complex_dtype)
+        spec2 = spectrum.reshape(dists, n0, rest)
+        f_n = f_n[:, None]                                 # (D, 1, *grid.shape)
+        grid_shape = op.grid.shape
         n_pairs = op.n_pairs
         # blocks of q rho values x p pairs: all pairs of several rho at once (small grids),
         # or a few pairs of one rho (large grids)
@@ -449,23 +504,26 @@ class _Pipeline:
             rhos = slice(r0, min(r0 + q, r_last))
             nq = rhos.stop - rhos.start
             shift_head, shift_tail, angular_head, angular_tail = op._tables(rhos)
-            acc = xp.zeros((nq, n0, rest), dtype=op._complex_dtype)
+            acc = xp.zeros((dists, nq, n0, rest), dtype=op._complex_dtype)
             for start in range(0, n_pairs, p):
                 pairs = slice(start, min(start + p, n_pairs))
                 count = nq * (pairs.stop - pairs.start)
-                # s = f(v - rho ghat) f_N(v): shift the spectrum, transform, multiply
-                backend.separable_product(self.fft.spectrum[:count].reshape(count, n0, rest),
+                used = dists * count            # the first D x count grids of the buffers
+                # s = f(v - rho ghat) f_N(v): shift the spectra, transform, multiply
+                backend.separable_product(self.fft.spectrum[:used].reshape(dists, count, n0,
+                                                                           rest),
                                           spec2, shift_head[:, pairs].reshape(count, n0),
                                           shift_tail[:, pairs].reshape(count, rest))
                 # s f_N written straight into the forward transform's input: one pass, in
                 # place where the inverse returned that buffer (FFTW), else no extra copy
                 real = self.fft.real
-                xp.multiply(self.fft.inverse()[:count], f_n, out=real[:count])
-                if count < self.batch:
-                    real[count:] = 0.0
-                p_hat = self.fft.forward()[:count].reshape(count, n0, rest)
+                xp.multiply(self.fft.inverse()[:used].reshape((dists, count) + grid_shape),
+                            f_n, out=real[:used].reshape((dists, count) + grid_shape))
+                if used < len(real):
+                    real[used:] = 0.0
+                p_hat = self.fft.forward()[:used].reshape(dists, count, n0, rest)
                 backend.lowrank_accumulate(acc, angular_head[:, pairs].reshape(count, n0, -1),
                                            angular_tail[:, pairs].reshape(count, -1, rest), p_hat)
             acc *= self.radial_weights[rhos]
-            gain += acc[0] if nq == 1 else acc.sum(axis=0)
-        return gain.reshape(op._half_shape)
+            gain += acc[:, 0] if nq == 1 else acc.sum(axis=1)
+        return gain.reshape((dists,) + op._half_shape)
