@@ -403,3 +403,24 @@ class CollisionOperator(abc.ABC):
     def __call__(self, f):
         """Return Q_I(f, f) sampled on the grid, an array like ``f`` in ``backend.xp``."""
 
+
+# -- the stiff parts of an equation ---------------------------------------------------------
+import enum  # noqa: E402  (this section is appended after the contracts that use its names)
+
+
+class Part(enum.StrEnum):
+    """The names of an equation's stiff parts (:meth:`Equation.stiffness`,
+    :attr:`TimeIntegrator.explicit_parts`, :mod:`granframe.stepping.stability`).
+
+    A :class:`enum.StrEnum`: each member is its string (``Part.LINEAR == "linear"``, and it
+    formats and is stored as ``"linear"``), so plain strings of the names keep working.
+    """
+
+    #: the heat bath tau Delta_v
+    LINEAR = "linear"
+    #: the collision term Q/eps
+    NONLINEAR = "nonlinear"
+    #: the energy dissipation of Q/eps (a part of the collision term)
+    DISSIPATION = "dissipation"
+    #: the drift of the rescaled formulation (an imaginary spectrum)
+    DRIFT = "drift"

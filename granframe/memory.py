@@ -64,8 +64,11 @@ def integrator_copies(integrator) -> int:
 RUN_COPIES = 2 + 3 + 1 + 3
 
 
-def run_memory(description) -> dict:
+def run_memory(description, backend=None) -> dict:
     """Estimated bytes of a run of ``description``, found without allocating anything large.
+
+    ``backend`` is the run's array backend when it is built already (else the estimate
+    builds the description's, for the operator's estimate only).
 
     Returns ``f`` (bytes of one float64 copy of f), ``copies`` (:func:`integrator_copies`
     + :data:`RUN_COPIES`), ``operator`` (the operator's
@@ -84,14 +87,16 @@ def run_memory(description) -> dict:
         estimate = getattr(factory, "estimate_memory", None)
         if estimate is not None:
             need["operator"] = estimate(d.grid, d.build("kernel"), d.build("restitution"),
-                                        d.build("backend"), **d._operator_options()) or 0
+                                        d.build("backend") if backend is None else backend,
+                                        **d.operator_options()) or 0
             need["total"] += need["operator"]
     return need
 
 
-def check_run_memory(description) -> None:
-    """Refuse a run whose :func:`run_memory` exceeds :func:`budget`, with the estimate."""
-    need, limit = run_memory(description), budget()
+def check_run_memory(description, backend=None) -> None:
+    """Refuse a run whose :func:`run_memory` exceeds :func:`budget`, with the estimate
+    (``backend``: as in :func:`run_memory`)."""
+    need, limit = run_memory(description, backend), budget()
     if need["total"] > limit:
         grid = description.grid
         operator = (f"operator {gib(need['operator'])} GiB + " if need["operator"] else "")

@@ -6,6 +6,7 @@ import math
 
 import numpy
 
+from granframe.abc import Part
 from granframe.velocity.heatbath import HeatBath
 from granframe.stepping.integrators import Equation
 
@@ -92,10 +93,10 @@ class HomogeneousBoltzmann(Equation):
         frequency = self._frequency_constant * density * cut * factor
         speeds = numpy.linspace(0.0, grid.truncation_radius, 257)
         e_min = float(numpy.min(self.operator.restitution(speeds)))
-        rates = {"nonlinear": frequency / self.knudsen,
-                 "dissipation": (1.0 - e_min ** 2) * frequency / (4.0 * self.knudsen)}
+        rates = {Part.NONLINEAR: frequency / self.knudsen,
+                 Part.DISSIPATION: (1.0 - e_min ** 2) * frequency / (4.0 * self.knudsen)}
         if self.heat.tau:
-            rates["linear"] = self.heat.spectral_radius
+            rates[Part.LINEAR] = self.heat.spectral_radius
         return rates
 
     def relaxation(self, f):

@@ -43,6 +43,7 @@ import attrs
 import numpy
 
 from granframe import validators as check
+from granframe.abc import Part
 from granframe.equations.homogeneous import HomogeneousBoltzmann
 
 
@@ -228,4 +229,4 @@ class RescaledBoltzmann(HomogeneousBoltzmann):
     def stiffness(self, g) -> dict:
         """The rates of :class:`HomogeneousBoltzmann` and the drift's, a_0 sum_j max|chi (xi_j -
         u_j)| k_max, a bound on the (imaginary) spectrum of the discrete drift term."""
-        return {**super().stiffness(g), "drift": self._drift_radius}
+        return {**super().stiffness(g), Part.DRIFT: self._drift_radius}

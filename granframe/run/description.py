@@ -49,7 +49,6 @@ import numpy
 import tomli_w
 
 from granframe import validators as check
-from granframe.errors import BackendUnavailableError
 from granframe.abc import PRECISIONS
 from granframe.backends import AUTO, resolve_backend
 from granframe.velocity.grid import VelocityGrid
@@ -141,11 +140,13 @@ class Component:
         return {"name": self.name, **_plain(owner, owner, self.params)}
 
 
-def _component(value):
+def coerce_component(value):
+    """:meth:`Component.coerce` for an attrs converter: a value it cannot take is returned
+    as it is, for the field's validator (:func:`instance_of`) to report against the field."""
     try:
         return Component.coerce(value)
     except (TypeError, ValueError):
-        return value  # the validator reports it against the right parameter
+        return value
 
 
 @attrs.frozen(kw_only=True)
@@ -214,17 +215,82 @@ def _table(cls):
     return convert
 
 
-def _instance_of(cls, what):
+def instance_of(cls, what, owner="RunDescription"):
+    """An attrs validator refusing a value that is not a ``cls`` (``what`` says so in words)."""
     def validate(instance, attribute, value):
         if not isinstance(value, cls):
-            check.reject("RunDescription", attribute.name, value, f"must be {what}",
-                         error=TypeError)
+            check.reject(owner, attribute.name, value, f"must be {what}", error=TypeError)
     return validate
 
 
-_FAMILIES = {"kernel": "collision_kernels", "restitution": "restitution_laws",
-             "initial": "initial_conditions", "operator": "collision_operators",
-             "integrator": "time_integrators", "backend": "array_backends"}
+def component_field(**kwargs):
+    """An attrs field holding a :class:`Component`, given as one, a name or a table."""
+    return attrs.field(converter=coerce_component,
+                       validator=instance_of(Component, "a name or a table"), **kwargs)
+
+
+#: The registry family (:mod:`granframe.registry`) of each component of a description.
+COMPONENT_FAMILIES = {"kernel": "collision_kernels", "restitution": "restitution_laws",
+                      "initial": "initial_conditions", "operator": "collision_operators",
+                      "integrator": "time_integrators", "backend": "array_backends"}
+
+#: The components a description builds to validate them: small value objects (their
+#: attrs validators are the checks). The operator and the backend are only checked
+#: (:func:`check_component`); :class:`~granframe.run.runner.Simulation` builds them.
+LIGHT_COMPONENTS = ("kernel", "restitution", "initial", "integrator")
+
+
+def check_component(family: str, component: Component, owner: str = "RunDescription",
+                    **arguments) -> None:
+    """Check ``component`` against its registered factory without calling it.
+
+    The name must be registered in ``family``; the parameters (with ``arguments``, the
+    ones the caller passes besides them) must bind to the factory's signature; and for an
+    attrs class each parameter goes through its converter and validators (as in
+    ``__init__``, but without ``__attrs_post_init__``, where a backend imports its array
+    module). Nothing is built: a description naming a backend that this machine lacks
+    (``cupy``) is valid here.
+    """
+    entry = default_registries().get(family, component.name)   # unknown names: clear error
+    params = {**arguments, **component.params}
+    try:
+        signature = inspect.signature(entry.factory)
+    except (TypeError, ValueError):   # builtins without a signature: nothing to check here
+        return
+    try:
+        signature.bind(**params)
+    except TypeError as exc:
+        if family == "collision_operators":
+            check.reject(owner, "operator", component.params, f"has an unknown option ({exc})",
+                         error=TypeError)
+        accepted = [p for p in signature.parameters if not p.startswith("_")]
+        raise TypeError(f"{family} '{component.name}': {exc}; accepted parameters: "
+                        f"{', '.join(accepted) or 'none'}") from None
+    if isinstance(entry.factory, type) and attrs.has(entry.factory):
+        _check_fields(entry.factory, params)
+
+
+def _check_fields(cls, params: dict) -> None:
+    """Run the converters and validators of the attrs class ``cls`` on ``params`` on an
+    instance that is never initialised (so that the validators name ``cls``)."""
+    stub = object.__new__(cls)
+    for field in attrs.fields(cls):
+        if not field.init:
+            continue
+        key = field.alias or field.name
+        if key in params:
+            value = params[key]
+        elif isinstance(field.default, attrs.Factory):
+            value = (field.default.factory(stub) if field.default.takes_self
+                     else field.default.factory())
+        else:
+            value = field.default
+        if field.converter is not None:
+            value = field.converter(value)
+        object.__setattr__(stub, field.name, value)
+    for field in attrs.fields(cls):
+        if field.init and field.validator is not None:
+            field.validator(stub, field, getattr(stub, field.name))
 
 
 @attrs.frozen(kw_only=True)
@@ -266,21 +332,15 @@ class RunDescription:
     """
 
     grid: VelocityGrid = attrs.field(converter=_table(VelocityGrid),
-                                     validator=_instance_of(VelocityGrid, "a VelocityGrid"))
+                                     validator=instance_of(VelocityGrid, "a VelocityGrid"))
     final_time: float = attrs.field(converter=check.to_float,
                                     validator=check.real(0.0, math.inf, lower_open=True))
-    kernel: Component = attrs.field(converter=_component,
-                                    validator=_instance_of(Component, "a name or a table"))
-    restitution: Component = attrs.field(converter=_component,
-                                         validator=_instance_of(Component, "a name or a table"))
-    initial: Component = attrs.field(converter=_component,
-                                     validator=_instance_of(Component, "a name or a table"))
-    operator: Component = attrs.field(default=Component("fast_spectral"), converter=_component,
-                                      validator=_instance_of(Component, "a name or a table"))
-    backend: Component = attrs.field(default=Component(AUTO), converter=_component,
-                                     validator=_instance_of(Component, "a name or a table"))
-    integrator: Component = attrs.field(default=Component("rk4"), converter=_component,
-                                        validator=_instance_of(Component, "a name or a table"))
+    kernel: Component = component_field()
+    restitution: Component = component_field()
+    initial: Component = component_field()
+    operator: Component = component_field(default=Component("fast_spectral"))
+    backend: Component = component_field(default=Component(AUTO))
+    integrator: Component = component_field(default=Component("rk4"))
     time_step: float | None = attrs.field(default=None, converter=check.to_float,
                                           validator=check.optional_positive)
     tolerance: float | None = attrs.field(default=None, converter=check.to_float,
@@ -291,37 +351,31 @@ class RunDescription:
                                  validator=check.real(0.0, math.inf, lower_open=True))
     rescaled: bool = attrs.field(default=False, validator=check.boolean)
     output: Output = attrs.field(factory=Output, converter=_table(Output),
-                                 validator=_instance_of(Output, "an Output table"))
+                                 validator=instance_of(Output, "an Output table"))
     health: Health = attrs.field(factory=Health, converter=_table(Health),
-                                 validator=_instance_of(Health, "a Health table"))
-    title: str = attrs.field(default="", validator=_instance_of(str, "a string"))
+                                 validator=instance_of(Health, "a Health table"))
+    title: str = attrs.field(default="", validator=instance_of(str, "a string"))
+    #: what validating built: the light components (:data:`LIGHT_COMPONENTS`), which
+    #: :meth:`build` hands out instead of building them again, and the operator's options
+    #: (:meth:`operator_options`)
+    _light: dict = attrs.field(init=False, factory=dict, eq=False, repr=False)
 
     def __attrs_post_init__(self):
-        registries = default_registries()
-        for field, family in _FAMILIES.items():
-            component = getattr(self, field)
-            if field == "backend" and component.name == AUTO:
-                continue
-            entry = registries.get(family, component.name)  # unknown names: clear error
-            if field == "operator":
-                params = {"grid": None, "kernel": None, "restitution": None, "backend": None,
-                          **component.params}
-                try:
-                    inspect.signature(entry.factory).bind(**params)
-                except TypeError as exc:
-                    check.reject("RunDescription", "operator", component.params,
-                                 f"has an unknown option ({exc})", error=TypeError)
-        kernel, restitution = self.build("kernel"), self.build("restitution")
-        self.build("initial")
+        check_component("collision_operators", self.operator, grid=None, kernel=None,
+                        restitution=None, backend=None)
+        check_component("array_backends", Component(resolve_backend(self.backend.name),
+                                                    self.backend.params))
+        for field in LIGHT_COMPONENTS:
+            self._light[field] = self._create(field)
         if self.rescaled:
-            check_rescalable(kernel, restitution, self.heat_bath, "RunDescription")
-        try:
-            self.build("backend")
-        except BackendUnavailableError:
-            pass    # valid, but not on this machine: a store of it is still read here
-        self._operator_options()   # quadratures given as tables are built (cheap)
-        integrator = self.build("integrator")
-        self._check_time_stepping(integrator.adaptive)
+            check_rescalable(self._light["kernel"], self._light["restitution"],
+                             self.heat_bath, "RunDescription")
+        # quadratures given as tables are built (cheap), once
+        self._light["operator_options"] = {
+            key: (default_registries().create("quadratures", **value)
+                  if isinstance(value, dict) and "name" in value else value)
+            for key, value in self.operator.params.items()}
+        self._check_time_stepping(self._light["integrator"].adaptive)
         self.to_dict()  # everything can be written to TOML and a store
 
     def _check_time_stepping(self, adaptive: bool):
@@ -371,23 +425,33 @@ class RunDescription:
 
     # -- building ---------------------------------------------------------------------
     def build(self, field: str, **extra):
-        """Build the registered implementation of ``field`` (kernel, restitution, initial, ...)."""
+        """The registered implementation of ``field`` (kernel, restitution, initial, ...).
+
+        The light components (:data:`LIGHT_COMPONENTS`) were built while validating and
+        are handed out as they are (they are immutable); the operator and the backend are
+        built by each call (:class:`~granframe.run.runner.Simulation` makes the one call).
+        """
+        if field in self._light and not extra:
+            return self._light[field]
+        return self._create(field, **extra)
+
+    def _create(self, field: str, **extra):
         component = getattr(self, field)
         params = dict(component.params)
         if field == "kernel" and isinstance(params.get("angular"), str):
             params["angular"] = resolve_callable("kernel", "angular", params["angular"])
         if field == "operator":
-            params = self._operator_options()
+            params = self.operator_options()
         if field == "backend":
             return default_registries().create("array_backends",
                                                resolve_backend(component.name), **params)
-        return default_registries().create(_FAMILIES[field], component.name, **params, **extra)
+        return default_registries().create(COMPONENT_FAMILIES[field], component.name, **params,
+                                           **extra)
 
-    def _operator_options(self) -> dict:
-        """The operator's options, tables with a ``name`` built as registered quadratures."""
-        return {key: (default_registries().create("quadratures", **value)
-                      if isinstance(value, dict) and "name" in value else value)
-                for key, value in self.operator.params.items()}
+    def operator_options(self) -> dict:
+        """The operator's options, tables with a ``name`` as the registered quadratures
+        built while validating."""
+        return dict(self._light["operator_options"])
 
     # -- TOML / dict ------------------------------------------------------------------
     def to_dict(self) -> dict:
@@ -396,7 +460,7 @@ class RunDescription:
                 "tolerance": self.tolerance, "heat_bath": self.heat_bath,
                 "knudsen": self.knudsen, "rescaled": self.rescaled or None,
                 "grid": attrs.asdict(self.grid),
-                **{field: getattr(self, field).to_dict(field) for field in _FAMILIES},
+                **{field: getattr(self, field).to_dict(field) for field in COMPONENT_FAMILIES},
                 "output": attrs.asdict(self.output), "health": attrs.asdict(self.health)}
         return json.loads(json.dumps(_plain("RunDescription", "description", data)))
 

@@ -1,16 +1,19 @@
 """Run a :class:`~granframe.run.description.RunDescription` into a store.
 
 :class:`Simulation` builds every object once (operator precomputation
-included) and checks f0 against the grid; :meth:`Simulation.run` steps to
-``final_time``, computes the moments after every step, checks the health
-limits, and commits a snapshot of f with the pending moment records on the
-output schedule (see :mod:`granframe.run.storage` for why a stop at any moment
+included) and checks f0 against the grid; :meth:`Simulation.run` is a loop over
+the steps a :class:`Stepper` yields (fixed or adaptive, from a fresh or a resumed
+state) and a list of :class:`Observer` objects, each on its schedule: the moments
+after every step (one fused pass, :meth:`VelocityGrid.moments`), the health
+limits, the progress bar, and at the output points a commit of f with the pending
+moment records (see :mod:`granframe.run.storage` for why a stop at any moment
 leaves a valid store). ``resume=True`` continues from the last committed
 snapshot; the result equals that of an uninterrupted run to round-off.
 """
 
 from __future__ import annotations
 
+import enum
 import importlib.util
 import math
 import re
@@ -28,7 +31,7 @@ import zarr
 
 from granframe._version import __version__
 from granframe.backends import available_cpus
-from granframe.run.description import _FAMILIES, RunDescription
+from granframe.run.description import COMPONENT_FAMILIES, RunDescription
 from granframe.equations.homogeneous import HomogeneousBoltzmann
 from granframe.errors import NonFiniteError
 from granframe.model.initial import check_fits, check_projection
@@ -146,26 +149,14 @@ class HealthError(RuntimeError):
     """A run stopped by a health check; the message says which check, when and by how much."""
 
 
-def _safe(function) -> float:
-    try:
-        return float(function())
-    except (ZeroDivisionError, OverflowError, ValueError):
-        return math.nan
-
-
 def moments(grid, f, xp) -> dict:
-    """Mass, momentum, temperature, energy, min f, negative-mass share, kurtosis, a2 of f."""
-    absolute = float(xp.sum(xp.abs(f)))
-    return {
-        "mass": _safe(lambda: grid.mass(f, xp)),
-        "momentum": grid.momentum(f, xp),
-        "temperature": _safe(lambda: grid.temperature(f, xp)),
-        "kinetic_energy": _safe(lambda: grid.kinetic_energy(f, xp)),
-        "min_f": float(xp.min(f)),
-        "negative_mass_fraction": _safe(lambda: float(xp.sum(xp.maximum(-f, 0.0))) / absolute),
-        "kurtosis": _safe(lambda: grid.kurtosis(f, xp)),
-        "sonine_a2": _safe(lambda: grid.sonine_a2(f, xp)),
-    }
+    """Mass, momentum, temperature, energy, min f, negative-mass share, kurtosis, a2 of f.
+
+    One fused pass over f and one transfer to the host (:meth:`VelocityGrid.moments`);
+    NaN where a moment is undefined (a zero mass).
+    """
+    fused = grid.moments(f, xp)
+    return {name: fused[name] for name in ("momentum",) + SCALAR_MOMENTS}
 
 
 def health_problem(record: dict, mass0: float, health) -> str | None:
@@ -220,6 +211,214 @@ class _Records:
         return taken
 
 
+@attrs.define
+class RunState:
+    """Where a run stands: f at step ``step`` and time ``t``, and what a commit records.
+
+    The :class:`Stepper` advances it in place; the observers read it (the
+    :class:`MomentsObserver` leaves the step's moments in ``record``).
+    """
+
+    f: object
+    t: float
+    step: int
+    mass0: float
+    #: the step size proposed next (an adaptive scheme's trial step; time_step otherwise)
+    dt_next: float | None
+    #: the steps a run was resumed at, and the commits it rolled back past
+    resumes: list
+    rollbacks: list
+    #: wall seconds of the earlier sessions of a resumed run
+    wall_before: float = 0.0
+    started: float = attrs.field(factory=time.perf_counter)
+    #: the size of the last step, and its moments
+    dt: float = 0.0
+    record: dict | None = None
+
+    def progress(self, status: str, **extra) -> dict:
+        """The progress entry of a commit made now."""
+        return {"status": status, "step": self.step, "time": self.t, "mass0": self.mass0,
+                "dt_next": self.dt_next, "resumes": self.resumes,
+                **({"rollbacks": self.rollbacks} if self.rollbacks else {}),
+                "wall_seconds": self.wall_before + time.perf_counter() - self.started, **extra}
+
+
+class Stopped(Exception):
+    """A step or a health check stopped the run; the message says why (see :class:`HealthError`)."""
+
+
+class Reached(enum.Enum):
+    """What a step reached: nothing to write, an output point, or the last one."""
+
+    STEP = "step"
+    OUTPUT = "output"
+    FINAL = "final"
+
+
+class Stepper:
+    """The steps of a run from a :class:`RunState` (a fresh or a resumed one) to its end.
+
+    Fixed steps land on the step indices of the output points; an adaptive scheme's
+    :class:`StepController` shortens the step that would pass an output time. Fixed
+    steps put t = step * time_step (not a sum), so a resumed run takes exactly the
+    steps of an uninterrupted one.
+
+    Parameters
+    ----------
+    integrator : TimeIntegrator
+    equation : Equation
+    targets : list
+        The output points after t = 0 (:meth:`Simulation.output_points`): step indices for
+        fixed steps, times for adaptive ones.
+    time_step : float or None
+        dt of a fixed-step scheme.
+    tolerance : float or None
+        Error tolerance of an adaptive scheme.
+    xp : module
+        The backend's array namespace.
+    """
+
+    def __init__(self, integrator, equation, targets, time_step, tolerance, xp):
+        self.integrator, self.equation, self.xp = integrator, equation, xp
+        self.adaptive = integrator.adaptive
+        self.targets, self.time_step = targets, time_step
+        self.controller = StepController(tolerance) if self.adaptive else None
+
+    def _before(self, state: RunState, target) -> bool:
+        return state.t < target if self.adaptive else state.step < target
+
+    def steps(self, state: RunState):
+        """Advance ``state`` step by step, yielding what each step :class:`Reached`.
+
+        Raises :class:`Stopped` when a stage is not finite or the adaptive step size
+        falls to round-off (``state`` is then the last step's).
+        """
+        remaining = [x for x in self.targets if self._before(state, x)]
+        for target in remaining:
+            while self._before(state, target):
+                self._advance(state, target)
+                if self._before(state, target):
+                    yield Reached.STEP
+                else:
+                    yield Reached.FINAL if target == remaining[-1] else Reached.OUTPUT
+
+    def _advance(self, state: RunState, target) -> None:
+        try:
+            if self.adaptive:
+                state.f, state.t, state.dt, state.dt_next = self.controller.advance(
+                    self.integrator, self.equation, state.t, state.f, state.dt_next, target,
+                    self.xp)
+            else:
+                state.f = self.integrator.step(self.equation, state.t, state.f, self.time_step)
+        except (NonFiniteError, StepSizeError) as exc:   # a stage blew up, or dt fell to
+            problem = (exc if isinstance(exc, StepSizeError)   # round-off
+                       else "f is not finite (NaN or Inf) within the step")
+            raise Stopped(f"health check failed at step {state.step + 1}, t = {state.t:.6g}: "
+                          f"{problem}") from exc
+        state.step += 1
+        if not self.adaptive:
+            state.dt, state.t = self.time_step, state.step * self.time_step
+
+
+class Observer:
+    """What a run does besides stepping, each on its own schedule.
+
+    The run loop (:meth:`Simulation.run`) calls every observer's :meth:`after_step`
+    after each step, in order, then :meth:`at_output` at each output point, and
+    :meth:`close` when the run ends however it ends.
+    """
+
+    def after_step(self, state: RunState) -> None:
+        """Called after every step."""
+
+    def at_output(self, state: RunState, final: bool) -> None:
+        """Called at every output point (``final``: the last of the run)."""
+
+    def close(self) -> None:
+        """Called once, when the run ends (finished, stopped or interrupted)."""
+
+
+class MomentsObserver(Observer):
+    """After every step: the moments of f (one fused pass, :func:`moments`) into
+    ``state.record`` and the records waiting for the next commit."""
+
+    def __init__(self, grid, xp, records: "_Records"):
+        self.grid, self.xp, self.records = grid, xp, records
+
+    def after_step(self, state):
+        state.record = moments(self.grid, state.f, self.xp)
+        self.records.add(state.step, state.t, state.dt, state.record)
+
+
+class HealthObserver(Observer):
+    """After every step: the health limits (:func:`health_problem`) on the step's moments."""
+
+    def __init__(self, health):
+        self.health = health
+
+    def after_step(self, state):
+        problem = health_problem(state.record, state.mass0, self.health)
+        if problem is not None:
+            raise Stopped(f"health check failed at step {state.step}, t = {state.t:.6g}: "
+                          f"{problem}")
+
+
+class ProgressObserver(Observer):
+    """After every step: the progress bar (t, step, T and the mass drift).
+
+    ``show`` None shows it on a terminal only.
+    """
+
+    def __init__(self, state: RunState, final_time: float, show: bool | None):
+        self.bar = tqdm.tqdm(total=final_time, initial=state.t,
+                             disable=None if show is None else not show, unit="t",
+                             dynamic_ncols=True,
+                             bar_format="{l_bar}{bar}| t={n:.4g}/{total:.4g} "
+                                        "[{elapsed}<{remaining}]{postfix}")
+
+    def after_step(self, state):
+        self.bar.update(state.t - self.bar.n)
+        self.bar.set_postfix_str(f"step {state.step}, T={state.record['temperature']:.6g}, "
+                                 f"mass drift {state.record['mass'] / state.mass0 - 1:+.1e}",
+                                 refresh=False)
+
+    def close(self):
+        self.bar.close()
+
+
+class StorageObserver(Observer):
+    """At every output point: a commit of f with the pending moment records.
+
+    It also writes how a run ends otherwise: :meth:`fail` (a health check) and
+    :meth:`interrupt` (a Ctrl-C); :meth:`close` closes the store.
+    """
+
+    def __init__(self, store: RunStore, records: "_Records", backend):
+        self.store, self.records, self.backend = store, records, backend
+
+    def at_output(self, state, final):
+        self.store.commit([(state.t, self.backend.to_numpy(state.f))], self.records.take(),
+                          state.progress("finished" if final else "running"))
+
+    def fail(self, state: RunState, stop: Stopped):
+        """Write the moments up to the failing step, mark the store failed, raise HealthError.
+
+        The snapshots stay the last healthy states; the moments show how it failed.
+        """
+        message = str(stop)
+        self.store.commit([], self.records.take(), state.progress("failed", message=message))
+        raise HealthError(message) from stop.__cause__
+
+    def interrupt(self):
+        """After a Ctrl-C: the last commit stays what a resume continues from; only its
+        status changes (a commit that already said finished or failed stays so)."""
+        if self.store.progress.get("status") == "running":
+            self.store.mark("interrupted")
+
+    def close(self):
+        self.store.close()
+
+
 class Simulation:
     """Everything a run needs, built once from a description.
 
@@ -233,8 +432,8 @@ class Simulation:
                             "must be a RunDescription")
         self.description = d = description
         self.grid = d.grid
-        check_run_memory(d)   # before anything of the grid's size is allocated
         self.backend = d.build("backend")
+        check_run_memory(d, self.backend)   # before anything of the grid's size is allocated
         self.operator = d.build("operator", grid=d.grid, kernel=d.build("kernel"),
                                 restitution=d.build("restitution"), backend=self.backend)
         self.integrator = d.build("integrator")
@@ -263,7 +462,7 @@ class Simulation:
         """Versions and plugins behind this run (stored with it)."""
         registries = default_registries()
         plugins = {}
-        for field, family in _FAMILIES.items():
+        for field, family in COMPONENT_FAMILIES.items():
             name = (self.backend.name if field == "backend"
                     else getattr(self.description, field).name)
             plugins[field] = f"{name} ({registries.get(family, name).source})"
@@ -272,7 +471,7 @@ class Simulation:
                 "zarr": zarr.__version__, "host": platform.node(), "cpus": available_cpus()}
 
     # -- schedule ---------------------------------------------------------------------
-    def _targets(self):
+    def output_points(self):
         """Output points after t = 0: step indices (fixed step) or times (adaptive)."""
         d = self.description
         interval = d.output.snapshot_interval
@@ -294,114 +493,92 @@ class Simulation:
         replaces a granframe store at ``out`` (never anything else, nor a store holding a
         path of ``protect``). ``progress`` None shows a progress bar on a terminal only.
         A Ctrl-C leaves the store with status 'interrupted', ready to resume.
+
+        The :class:`Stepper` yields the steps; the observers (moments, health, progress
+        bar, storage) act on them, each on its schedule.
         """
         check_run_modes(resume, overwrite)
-        d, grid, backend = self.description, self.grid, self.backend
-        xp = backend.xp
-        start_wall = time.perf_counter()
+        started = time.perf_counter()
+        store, state = self._open(out, resume, overwrite, rollback, protect, started)
+        if state is None:
+            progress_entry = store.progress
+            store.close()
+            return RunResult(str(out), "already finished", progress_entry["step"],
+                             progress_entry["time"], store.snapshot_count,
+                             progress_entry.get("wall_seconds", 0.0))
+        d = self.description
+        stepper = Stepper(self.integrator, self.equation, self.output_points(), d.time_step,
+                          d.tolerance, self.backend.xp)
+        records = _Records()
+        storage = StorageObserver(store, records, self.backend)
+        observers = [MomentsObserver(self.grid, self.backend.xp, records),
+                     HealthObserver(d.health), ProgressObserver(state, d.final_time, progress),
+                     storage]
+        try:
+            try:
+                for reached in stepper.steps(state):
+                    for observer in observers:
+                        observer.after_step(state)
+                    if reached is not Reached.STEP:
+                        for observer in observers:
+                            observer.at_output(state, reached is Reached.FINAL)
+            except Stopped as stop:
+                storage.fail(state, stop)
+        except KeyboardInterrupt:
+            storage.interrupt()
+            raise
+        finally:
+            for observer in observers:
+                observer.close()
+        return RunResult(str(out), "finished", state.step, state.t, store.snapshot_count,
+                         store.progress["wall_seconds"])
+
+    def _open(self, out, resume, overwrite, rollback, protect, started):
+        """The store of the run and the state it starts from: a new store with the moments
+        of f0 committed, or the store being resumed and its last snapshot. The state is
+        None when the resumed run is already finished."""
+        d = self.description
         description = d.to_dict()
         store = None
         if not (resume and RunStore.exists(out)):
             rescaling = getattr(self.equation, "rescaling", None)
             try:
                 store = RunStore.create(
-                    out, description, d.to_toml(), grid, self.provenance(), overwrite=overwrite,
-                    protect=protect, projection=self.projection,
+                    out, description, d.to_toml(), self.grid, self.provenance(),
+                    overwrite=overwrite, protect=protect, projection=self.projection,
                     rescaling=None if rescaling is None else rescaling.to_dict())
             except StoreExistsError:
                 if not resume:
                     raise         # else: another writer made it meanwhile; continue it
-        if store is None:
-            store = RunStore.resume(out, description, rollback=rollback)
-            state = store.progress
-            if state["status"] == "finished":
-                store.close()
-                return RunResult(str(out), "already finished", state["step"], state["time"],
-                                 store.snapshot_count, state.get("wall_seconds", 0.0))
-            f_host, t = store.last_snapshot()
-            f, step, mass0 = backend.asarray(f_host), int(state["step"]), float(state["mass0"])
-            dt_next = state.get("dt_next")
-            resumes = state.get("resumes", []) + [step]
-            rollbacks = state.get("rollbacks", [])
-            wall_before = float(state.get("wall_seconds", 0.0))
-        else:
-            f, t, step = backend.asarray(self.f0), 0.0, 0
-            try:
-                record = moments(grid, f, xp)
-                # adaptive schemes without a first trial step start from 1% of the run
-                mass0, dt_next = record["mass"], d.time_step or d.final_time / 100
-                resumes, rollbacks, wall_before = [], [], 0.0
-                first = _Records()
-                first.add(0, 0.0, 0.0, record)
-                store.commit([(0.0, self.f0)], first.columns,
-                             {"status": "running", "step": 0, "time": 0.0, "mass0": mass0,
-                              "dt_next": dt_next, "resumes": resumes})
-                store.publish()
-            except BaseException:
-                store.discard()      # never in place: the path holds what it held before
-                raise
+            else:
+                return store, self._first_commit(store, started)
+        store = RunStore.resume(out, description, rollback=rollback)
+        entry = store.progress
+        if entry["status"] == "finished":
+            return store, None
+        f_host, t = store.last_snapshot()
+        return store, RunState(self.backend.asarray(f_host), t, int(entry["step"]),
+                               float(entry["mass0"]), entry.get("dt_next"),
+                               entry.get("resumes", []) + [int(entry["step"])],
+                               entry.get("rollbacks", []),
+                               float(entry.get("wall_seconds", 0.0)), started)
 
-        def state(status, **extra):
-            """The progress entry of a commit made now."""
-            return {"status": status, "step": step, "time": t, "mass0": mass0,
-                    "dt_next": dt_next, "resumes": resumes,
-                    **({"rollbacks": rollbacks} if rollbacks else {}),
-                    "wall_seconds": wall_before + time.perf_counter() - start_wall, **extra}
-
-        adaptive = self.integrator.adaptive
-        targets = [x for x in self._targets() if (x > step if not adaptive else x > t)]
-        controller = StepController(d.tolerance) if adaptive else None
-        records = _Records()
-        bar = tqdm.tqdm(total=d.final_time, initial=t, disable=None if progress is None
-                        else not progress, unit="t", dynamic_ncols=True,
-                        bar_format="{l_bar}{bar}| t={n:.4g}/{total:.4g} [{elapsed}<{remaining}]"
-                                   "{postfix}")
+    def _first_commit(self, store, started) -> RunState:
+        """Commit f0 and its moments to a new store and publish it; the state at t = 0."""
+        d = self.description
         try:
-            for target in targets:
-                while (step < target) if not adaptive else (t < target):
-                    try:
-                        if adaptive:
-                            f, t, dt, dt_next = controller.advance(
-                                self.integrator, self.equation, t, f, dt_next, target, xp)
-                        else:
-                            f = self.integrator.step(self.equation, t, f, d.time_step)
-                    except (NonFiniteError, StepSizeError) as exc:   # a stage blew up, or
-                        problem = (exc if isinstance(exc, StepSizeError)   # dt fell to round-off
-                                   else "f is not finite (NaN or Inf) within the step")
-                        self._fail(store, records, state, f"health check failed at step "
-                                   f"{step + 1}, t = {t:.6g}: {problem}")
-                    step += 1
-                    if not adaptive:
-                        dt, t = d.time_step, step * d.time_step
-                    record = moments(grid, f, xp)
-                    records.add(step, t, dt, record)
-                    problem = health_problem(record, mass0, d.health)
-                    if problem is not None:
-                        self._fail(store, records, state,
-                                   f"health check failed at step {step}, t = {t:.6g}: {problem}")
-                    bar.update(t - bar.n)
-                    bar.set_postfix_str(f"step {step}, T={record['temperature']:.6g}, mass drift "
-                                        f"{record['mass'] / mass0 - 1:+.1e}", refresh=False)
-                done = target == targets[-1]
-                store.commit([(t, backend.to_numpy(f))], records.take(),
-                             state("finished" if done else "running"))
-        except KeyboardInterrupt:
-            # the last commit stays what a resume continues from; only its status changes
-            # (a commit that already said finished or failed stays so)
-            if store.progress.get("status") == "running":
-                store.mark("interrupted")
+            f = self.backend.asarray(self.f0)
+            record = moments(self.grid, f, self.backend.xp)
+            # adaptive schemes without a first trial step start from 1% of the run
+            state = RunState(f, 0.0, 0, record["mass"], d.time_step or d.final_time / 100,
+                             [], [], 0.0, started)
+            first = _Records()
+            first.add(0, 0.0, 0.0, record)
+            store.commit([(0.0, self.f0)], first.columns,
+                         {"status": "running", "step": 0, "time": 0.0, "mass0": state.mass0,
+                          "dt_next": state.dt_next, "resumes": state.resumes})
+            store.publish()
+        except BaseException:
+            store.discard()      # never in place: the path holds what it held before
             raise
-        finally:
-            bar.close()
-            store.close()
-        return RunResult(str(out), "finished", step, t, store.snapshot_count,
-                         store.progress["wall_seconds"])
-
-    @staticmethod
-    def _fail(store, records, state, message):
-        """Write the moments up to the failing step, mark the store failed, raise HealthError.
-
-        The snapshots stay the last healthy states; the moments show how it failed.
-        """
-        store.commit([], records.take(), state("failed", message=message))
-        raise HealthError(message)
+        return state

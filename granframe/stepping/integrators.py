@@ -16,7 +16,7 @@ from fractions import Fraction
 from typing import ClassVar
 
 import attrs
-from granframe.abc import AdaptiveIntegrator, Equation, TimeIntegrator
+from granframe.abc import AdaptiveIntegrator, Equation, Part, TimeIntegrator
 
 
 def _fractions(rows):
@@ -116,7 +116,7 @@ class IntegratingFactorRK4(TimeIntegrator):
     """
 
     order = 4
-    explicit_parts = frozenset({"nonlinear", "drift"})
+    explicit_parts = frozenset({Part.NONLINEAR, Part.DRIFT})
     stability_interval = 2.7853
     imaginary_interval = 2.0 * math.sqrt(2.0)
     tableau = RK4_TABLEAU
@@ -221,7 +221,7 @@ class PenalisedIMEX(TimeIntegrator):
     # relaxation is implicit and the heat bath exact: only the energy dissipation, which the
     # penalisation conserves, is explicit (forward Euler / the ARS explicit part: [-2, 0]),
     # and a drift term (neither is stable on the imaginary axis)
-    explicit_parts = frozenset({"dissipation", "drift"})
+    explicit_parts = frozenset({Part.DISSIPATION, Part.DRIFT})
     stability_interval = 2.0
 
     def _imex(self, equation, t, f, dt):

@@ -24,16 +24,17 @@ from __future__ import annotations
 import attrs
 
 from granframe import validators as check
+from granframe.abc import Part
 
-PART_NAMES = {"linear": "the heat bath tau Delta_v",
-              "nonlinear": "the collision term Q/eps",
-              "dissipation": "the energy dissipation of Q/eps",
-              "drift": "the drift of the rescaled formulation"}
+PART_NAMES = {Part.LINEAR: "the heat bath tau Delta_v",
+              Part.NONLINEAR: "the collision term Q/eps",
+              Part.DISSIPATION: "the energy dissipation of Q/eps",
+              Part.DRIFT: "the drift of the rescaled formulation"}
 
 
 #: the energy dissipation is a part of the collision term: a scheme explicit in the
 #: collisions is explicit in it too
-_CONTAINED_IN = {"dissipation": "nonlinear"}
+_CONTAINED_IN = {Part.DISSIPATION: Part.NONLINEAR}
 
 
 def treats_explicitly(scheme, part: str) -> bool:
@@ -76,12 +77,12 @@ def step_limit(integrator, equation, f) -> StepLimit | None:
     rates = equation.stiffness(f)
     parts = {part: float(rate) for part, rate in rates.items()
              if treats_explicitly(integrator, part)}
-    if "nonlinear" in parts:
-        parts.pop("dissipation", None)        # contained in the collision term
+    if Part.NONLINEAR in parts:
+        parts.pop(Part.DISSIPATION, None)        # contained in the collision term
     if not parts:
         return None
     interval = integrator.stability_interval
-    if "drift" in parts:
+    if Part.DRIFT in parts:
         interval = min(interval, getattr(integrator, "imaginary_interval", 0.0))
     return StepLimit(parts, interval)
 

@@ -53,8 +53,8 @@ import scipy.integrate
 import scipy.special
 
 from granframe import validators as check
-from granframe.run.description import (_FAMILIES, Component, Health, RunDescription, _component,
-                                   _instance_of)
+from granframe.run.description import (COMPONENT_FAMILIES, Component, Health, RunDescription,
+                                       component_field)
 from granframe.equations.homogeneous import collision_frequency
 from granframe.velocity.estimators import mass_beyond, pair_share_beyond, spectral_tail
 from granframe.model.exact import heated_maxwell_law
@@ -84,10 +84,6 @@ CONSISTENCY = 0.1
 FLOAT32_TOLERANCE = 1e-4
 
 
-def _component_field():
-    return attrs.field(converter=_component, validator=_instance_of(Component, "a name or a table"))
-
-
 @attrs.frozen(kw_only=True)
 class Scene:
     r"""What is to be computed: the physics, the quantity and the tolerance.
@@ -110,9 +106,9 @@ class Scene:
     """
 
     dimension: int = attrs.field(converter=check.to_int, validator=check.integer(choices=(2, 3)))
-    kernel: Component = _component_field()
-    restitution: Component = _component_field()
-    initial: Component = _component_field()
+    kernel: Component = component_field()
+    restitution: Component = component_field()
+    initial: Component = component_field()
     final_time: float = attrs.field(converter=check.to_float,
                                     validator=check.real(0.0, math.inf, lower_open=True))
     quantity: str = attrs.field(validator=attrs.validators.instance_of(str))
@@ -135,7 +131,8 @@ class Scene:
     def build(self, field: str):
         """The registered kernel, restitution law or initial condition."""
         component = getattr(self, field)
-        return default_registries().create(_FAMILIES[field], component.name, **component.params)
+        return default_registries().create(COMPONENT_FAMILIES[field], component.name,
+                                           **component.params)
 
     @classmethod
     def from_dict(cls, data: dict) -> "Scene":

@@ -46,8 +46,6 @@ THREADS, MAX_BLOCKS = 256, 8192
 
 
 def _import(module: str):
-    if module not in MODULES:
-        check.reject("CuPyBackend", "module", module, f"must be one of {', '.join(MODULES)}")
     try:
         return tuple(importlib.import_module(name) for name in MODULES[module])
     except ImportError as exc:
@@ -104,6 +102,12 @@ class CuPyBackend(SciPyFFTBackend):
     fused: bool = attrs.field(default=True, validator=check.boolean)
     xp = attrs.field(init=False, repr=False, eq=False)
     fft = attrs.field(init=False, repr=False, eq=False)
+
+    @module.validator
+    def _check_module(self, attribute, value):
+        """Checked as a field (not when importing it), so a description is checked unbuilt."""
+        if value not in MODULES:
+            check.reject("CuPyBackend", "module", value, f"must be one of {', '.join(MODULES)}")
 
     @memory_limit.validator
     def _check_limit(self, attribute, value):
