@@ -49,8 +49,10 @@ class FastSpectral(CollisionOperator):
     batch : int or None
         Pairs (rho, ghat) transformed together for one distribution; ``None`` chooses
         from the grid size and the backend's ``batch_bytes`` (a few MiB on a CPU,
-        hundreds on a GPU). A stack of D distributions transforms D x max(1, batch // D)
-        grids per call (:meth:`stack_transforms`).
+        hundreds on a GPU). A stack of D distributions is cut into chunks of
+        C = min(D, batch) distributions, each transformed with blocks of
+        max(1, batch // C) pairs: about ``batch`` grids per FFT call whatever D
+        (:meth:`stack_transforms`), so the buffers stay the size that fits the cache.
     memory_budget : int or None
         Bytes the operator may hold: its tables, work buffers and the transients of
         its precomputation. The default is ``GRANFRAME_MEMORY_BUDGET`` when that
@@ -210,9 +212,10 @@ class FastSpectral(CollisionOperator):
         self._stack = distributions
 
     def stack_transforms(self, distributions: int) -> int:
-        """Grids transformed per FFT call of a pipeline for a stack of ``distributions``:
-        D p_D with p_D = max(1, batch // D) pairs per block."""
-        return distributions * max(1, self.batch // distributions)
+        """Grids transformed per FFT call of a pipeline for a stack of D = ``distributions``:
+        C p with C = min(D, batch) distributions per chunk and p = max(1, batch // C)
+        pairs per block."""
+        return _stack_transforms(self.batch, distributions)
 
     @property
     def transform_pairs(self) -> int:
@@ -293,9 +296,9 @@ def _plan(grid, kernel, backend, radial_points, sphere, sigma, batch, memory_bud
     spectrum, N_rho radial points, P pairs): the radial weights, loss multiplier,
     accumulators and the operator's own transform, c h (N_rho + 4 + 2 pipelines), of
     which c h (3 + 2 pipelines) again for each further distribution; per grid of a
-    pipeline's transform
-    (D max(1, batch // D) of them), a real grid, its spectrum and the weighted spectrum of
-    the generic ``lowrank_accumulate``, r N^d + 2 c h; the phase tables, precomputed when
+    pipeline's transform (:func:`_stack_transforms` of them), a real grid, its spectrum
+    and the weighted spectrum of the generic ``lowrank_accumulate``, r N^d + 2 c h; the
+    phase tables, precomputed when
     they fit in a quarter of the budget, else one block per pipeline; and the transients
     of the precomputation (|k|, the loss multiplier and its terms), 56 h. The pair batch
     (for D = 1) shrinks until the tables and buffers fit ``memory_budget``; what still
@@ -353,7 +356,7 @@ def _plan(grid, kernel, backend, radial_points, sphere, sigma, batch, memory_bud
         steady += pipelines * max(0, n_pairs - batch) * table_per_pair
     memory_bytes = steady + 56 * half
     if distributions > 1:
-        grids = distributions * max(1, int(batch) // distributions)
+        grids = _stack_transforms(int(batch), distributions)
         memory_bytes += ((distributions - 1) * per_distribution
                          + pipelines * (grids - int(batch)) * per_pair)
         if memory_bytes > budget:
@@ -388,6 +391,12 @@ def _default_batch(spectrum_bytes: int, n_pairs: int, rho_per_pipeline: int,
         rhos = min(batch // n_pairs, rho_per_pipeline)
         return _ceil_div(rho_per_pipeline, _ceil_div(rho_per_pipeline, rhos)) * n_pairs
     return _ceil_div(n_pairs, _ceil_div(n_pairs, batch))
+
+
+def _stack_transforms(batch: int, distributions: int) -> int:
+    """Grids per FFT call for a stack: C max(1, batch // C) with C = min(D, batch)."""
+    chunk = min(distributions, batch)
+    return chunk * max(1, batch // chunk)
 
 
 def _ceil_div(a: int, b: int) -> int:
@@ -472,16 +481,18 @@ class _Pipeline:
     :meth:`ArrayBackend.separable_product`), s_d = IDFT(X_d) f_{N,d}, P_d = DFT(s_d), and
     adds E * P_d to the accumulator of its rho and distribution, where
     E = sum_t c_t e^{i eta_t.k} is the sum of the pair's separable angular terms
-    (:meth:`ArrayBackend.lowrank_accumulate`). The D x p grids of a block (p pairs) go
-    through one FFT call; the block holds p = max(1, batch // D) pairs.
+    (:meth:`ArrayBackend.lowrank_accumulate`). The stack goes in chunks of
+    C = min(D, batch) distributions; the C x p grids of a chunk and a block of
+    p = max(1, batch // C) pairs go through one FFT call.
     """
 
     def __init__(self, op: FastSpectral, rho_range, distributions: int):
         backend, grid = op.backend, op.grid
         self.op, self.rho_range, self.distributions = op, rho_range, distributions
         d = grid.dimension
-        self.batch = max(1, op.batch // distributions)
-        self.fft = backend.real_fft((distributions * self.batch,) + grid.shape,
+        self.chunk = min(distributions, op.batch)
+        self.batch = max(1, op.batch // self.chunk)
+        self.fft = backend.real_fft((self.chunk * self.batch,) + grid.shape,
                                     tuple(range(1, d + 1)), threads=1, precision=op.precision)
         self._n0, self._rest = op._half_shape[0], int(numpy.prod(op._half_shape[1:]))
         self.radial_weights = op._radial_weights.reshape(-1, self._n0, self._rest)
@@ -505,25 +516,30 @@ class _Pipeline:
             nq = rhos.stop - rhos.start
             shift_head, shift_tail, angular_head, angular_tail = op._tables(rhos)
             acc = xp.zeros((dists, nq, n0, rest), dtype=op._complex_dtype)
-            for start in range(0, n_pairs, p):
-                pairs = slice(start, min(start + p, n_pairs))
-                count = nq * (pairs.stop - pairs.start)
-                used = dists * count            # the first D x count grids of the buffers
-                # s = f(v - rho ghat) f_N(v): shift the spectra, transform, multiply
-                backend.separable_product(self.fft.spectrum[:used].reshape(dists, count, n0,
-                                                                           rest),
-                                          spec2, shift_head[:, pairs].reshape(count, n0),
-                                          shift_tail[:, pairs].reshape(count, rest))
-                # s f_N written straight into the forward transform's input: one pass, in
-                # place where the inverse returned that buffer (FFTW), else no extra copy
-                real = self.fft.real
-                xp.multiply(self.fft.inverse()[:used].reshape((dists, count) + grid_shape),
-                            f_n, out=real[:used].reshape((dists, count) + grid_shape))
-                if used < len(real):
-                    real[used:] = 0.0
-                p_hat = self.fft.forward()[:used].reshape(dists, count, n0, rest)
-                backend.lowrank_accumulate(acc, angular_head[:, pairs].reshape(count, n0, -1),
-                                           angular_tail[:, pairs].reshape(count, -1, rest), p_hat)
+            for c0 in range(0, dists, self.chunk):
+                chunk = slice(c0, min(c0 + self.chunk, dists))
+                nc = chunk.stop - chunk.start
+                for start in range(0, n_pairs, p):
+                    pairs = slice(start, min(start + p, n_pairs))
+                    count = nq * (pairs.stop - pairs.start)
+                    used = nc * count           # the first C x count grids of the buffers
+                    # s = f(v - rho ghat) f_N(v): shift the spectra, transform, multiply
+                    backend.separable_product(
+                        self.fft.spectrum[:used].reshape(nc, count, n0, rest), spec2[chunk],
+                        shift_head[:, pairs].reshape(count, n0),
+                        shift_tail[:, pairs].reshape(count, rest))
+                    # s f_N written straight into the forward transform's input: one pass, in
+                    # place where the inverse returned that buffer (FFTW), else no extra copy
+                    real = self.fft.real
+                    xp.multiply(self.fft.inverse()[:used].reshape((nc, count) + grid_shape),
+                                f_n[chunk], out=real[:used].reshape((nc, count) + grid_shape))
+                    if used < len(real):
+                        real[used:] = 0.0
+                    p_hat = self.fft.forward()[:used].reshape(nc, count, n0, rest)
+                    backend.lowrank_accumulate(acc[chunk],
+                                               angular_head[:, pairs].reshape(count, n0, -1),
+                                               angular_tail[:, pairs].reshape(count, -1, rest),
+                                               p_hat)
             acc *= self.radial_weights[rhos]
             gain += acc[:, 0] if nq == 1 else acc.sum(axis=1)
         return gain.reshape((dists,) + op._half_shape)
