@@ -27,6 +27,7 @@ _EXPORTS = {
     "Lebedev": "granframe.velocity.quadratures", "Quadrature": "granframe.velocity.quadratures",
     "SphereProduct": "granframe.velocity.quadratures", "FAMILIES": "granframe.registry",
     "default_registries": "granframe.registry", "RestitutionLaw": "granframe.model.restitution",
+    "CollisionKernel": "granframe.abc",
 }
 
 
@@ -92,5 +93,5 @@ __all__ = [
     "CollisionOperator", "Quadrature", "GaussLegendre", "CircleTrapezoid", "Lebedev",
     "SphereProduct", "FAMILIES", "default_registries", "RestitutionLaw", "collision_kernel",
     "restitution_law", "quadrature", "array_backend", "time_integrator", "initial_condition",
-    "collision_operator",
+    "collision_operator", "CollisionKernel",
 ]

@@ -4,6 +4,8 @@ This module is a plugin like any third-party one (see docs/plugins.md); the
 plugin manager registers it under the name ``builtin``.
 """
 
+import numpy
+
 from granframe import backends
 from granframe.model import initial, kernels, restitution
 from granframe.stepping import integrators
@@ -11,33 +13,54 @@ from granframe.velocity import quadratures
 from granframe.hookspecs import hookimpl
 
 
+def _forward_peaked(cos_theta):
+    """b(cos theta) = 1 + cos(theta)/2: the anisotropic angular part of the kernels' examples."""
+    return 1.0 + 0.5 * cos_theta
+
+
+def _gaussian(*velocity):
+    """exp(-|v|^2/2): the callable initial condition's example."""
+    return numpy.exp(-0.5 * sum(v * v for v in velocity))
+
+
 @hookimpl
 def granframe_register_collision_kernels(registry):
     registry.add("vhs", kernels.VariableHardSpheres,
-                 description="variable hard spheres B = C |g|^lambda b(cos theta) E^gamma")
-    registry.add("maxwell", kernels.maxwell_molecules)
+                 description="variable hard spheres B = C |g|^lambda b(cos theta) E^gamma",
+                 examples=[{}, {"exponent": 0.5, "angular": _forward_peaked,
+                                "energy_exponent": 0.5, "constant": 0.2}])
+    registry.add("maxwell", kernels.maxwell_molecules,
+                 examples=[{}, {"angular": _forward_peaked}])
     registry.add("hard_spheres", kernels.hard_spheres)
 
 
 @hookimpl
 def granframe_register_restitution_laws(registry):
-    registry.add("constant", restitution.Constant)
-    registry.add("toscani", restitution.Toscani)
-    registry.add("viscoelastic", restitution.Viscoelastic)
+    registry.add("constant", restitution.Constant,
+                 examples=[{"value": 0.0}, {"value": 0.5}, {"value": 1.0}])
+    registry.add("toscani", restitution.Toscani,
+                 examples=[{"strength": 0.5, "exponent": 0.5}, {"strength": 0.0, "exponent": -1.0}])
+    registry.add("viscoelastic", restitution.Viscoelastic, examples=[{"strength": 0.2}])
     registry.add("tanh", restitution.Tanh,
-                 description="e(r) = (e0-1)/2 tanh((r-centre)/width) + (e0+1)/2 (review, Test 3)")
-    registry.add("threshold", restitution.Threshold)
+                 description="e(r) = (e0-1)/2 tanh((r-centre)/width) + (e0+1)/2 (review, Test 3)",
+                 examples=[{"asymptotic_value": 0.2, "centre": 1.5, "width": 0.5}])
+    registry.add("threshold", restitution.Threshold,
+                 examples=[{"threshold": 1.0, "value": 0.5}])
 
 
 @hookimpl
 def granframe_register_quadratures(registry):
-    registry.add("gauss_legendre", quadratures.GaussLegendre)
+    registry.add("gauss_legendre", quadratures.GaussLegendre,
+                 examples=[{"n_points": 1}, {"n_points": 12}])
     registry.add("circle_trapezoid", quadratures.CircleTrapezoid,
-                 description="equispaced rule on the circle S^1, exact for degree M - 1")
+                 description="equispaced rule on the circle S^1, exact for degree M - 1",
+                 examples=[{"n_points": 16}, {"n_points": 7, "phase": 0.3}])
     registry.add("lebedev", quadratures.Lebedev,
-                 description="Lebedev-Laikov rule on S^2 (scipy.integrate.lebedev_rule)")
+                 description="Lebedev-Laikov rule on S^2 (scipy.integrate.lebedev_rule)",
+                 examples=[{"order": 7}, {"order": 11}])
     registry.add("sphere_product", quadratures.SphereProduct,
-                 description="Gauss-Legendre x equispaced product rule on S^2, exact for degree 2n - 1")
+                 description="Gauss-Legendre x equispaced product rule on S^2, exact for degree 2n - 1",
+                 examples=[{"n_polar": 4}])
 
 
 @hookimpl
@@ -67,7 +90,11 @@ def granframe_register_time_integrators(registry):
 def granframe_register_initial_conditions(registry):
     registry.add("maxwellian", initial.Maxwellian)
     registry.add("box", initial.Box,
-                 description="flat profile on a cube, cell-averaged (the review's flat data)")
-    registry.add("bkw", initial.BKWProfile)
-    registry.add("gaussian_mixture", initial.GaussianMixture)
-    registry.add("callable", initial.FromCallable)
+                 description="flat profile on a cube, cell-averaged (the review's flat data)",
+                 examples=[{"half_width": 1.5}, {"half_width": 0.8}])
+    registry.add("bkw", initial.BKWProfile, examples=[{"time": 6.0}])
+    registry.add("gaussian_mixture", initial.GaussianMixture,
+                 examples=[{"components": [{"density": 0.5, "temperature": 0.5},
+                                           {"density": 0.5, "temperature": 1.5}]}])
+    registry.add("callable", initial.FromCallable,
+                 examples=[{"function": _gaussian, "mass": None}])

@@ -175,8 +175,16 @@ class RealFFT:
 
 # -- Restitution laws ----------------------------------------------------------------------
 
-class RestitutionLaw:
-    """Interface: ``law(speed) -> e`` with values in [0, 1] and ``law.is_constant``."""
+class RestitutionLaw(abc.ABC):
+    """A restitution coefficient e(r) of the relative speed r = |v - v_*|.
+
+    An implementation provides :meth:`_evaluate`, vectorised over a NumPy array of speeds,
+    with values in [0, 1] of the array's shape, and sets ``is_constant`` when e does not
+    depend on r (operators then evaluate it once). :meth:`__call__` refuses speeds that
+    are negative or not finite before calling it. The framework checks a law where it is
+    built by name (values in [0, 1], finite, of the input's shape, at zero, small and
+    large speeds) and where an operator receives it (:class:`CollisionOperator`).
+    """
 
     is_constant: bool = False
 
@@ -188,14 +196,22 @@ class RestitutionLaw:
         with numpy.errstate(divide="ignore", over="ignore", invalid="ignore"):
             return self._evaluate(speed)
 
+    @abc.abstractmethod
     def _evaluate(self, speed):
-        raise NotImplementedError
+        """e at the speeds ``speed`` (a float array, finite and >= 0), an array of its shape."""
 
 
 # -- Quadratures ---------------------------------------------------------------------------
 
-class Quadrature:
-    """Interface shared by all rules.
+class Quadrature(abc.ABC):
+    """A quadrature rule; radial rules provide ``rule(radius)``, surface rules subclass
+    :class:`SurfaceQuadrature`.
+
+    An implementation provides ``kind``, :attr:`degree` and :attr:`n_points`; a radial
+    rule (``kind = "radial"``) provides ``rule(radius)``, the nodes and weights on
+    [0, radius]. The framework checks a rule where it is built by name: finite nodes and
+    weights, ``n_points`` of them, and for surface rules unit nodes and weights summing
+    to |S^{d-1}|.
 
     Attributes
     ----------
@@ -210,16 +226,22 @@ class Quadrature:
     kind: ClassVar[str]
 
     @property
+    @abc.abstractmethod
     def degree(self) -> int:
-        raise NotImplementedError
+        """Highest total degree of polynomials the rule integrates exactly."""
 
     @property
+    @abc.abstractmethod
     def n_points(self) -> int:
-        raise NotImplementedError
+        """Number of nodes."""
 
 
 class SurfaceQuadrature(Quadrature):
-    """A rule on the unit sphere S^{d-1}: ``nodes()`` (M, d), ``weights()`` (M,)."""
+    """A rule on the unit sphere S^{d-1}: ``nodes()`` (M, d), ``weights()`` (M,).
+
+    An implementation provides ``dimension`` and :meth:`_rule`, returning unit nodes of
+    shape (M, d) and weights of shape (M,) that sum to |S^{d-1}| (2 pi, 4 pi).
+    """
 
     #: Dimension d of the ambient space (2 for the circle, 3 for the sphere).
     dimension: ClassVar[int]
@@ -238,8 +260,9 @@ class SurfaceQuadrature(Quadrature):
         _, w_plus, w_minus = antipodal_pairs(*self._rule())
         return bool(numpy.allclose(w_plus, w_minus, rtol=1e-12, atol=0.0))
 
+    @abc.abstractmethod
     def _rule(self):
-        raise NotImplementedError
+        """``(nodes, weights)``: unit nodes (M, d) and weights (M,) summing to |S^{d-1}|."""
 
 
 # -- Initial conditions --------------------------------------------------------------------
@@ -350,26 +373,147 @@ class AdaptiveIntegrator(TimeIntegrator):
         return self.attempt(equation, t, f, dt)[0]
 
 
+# -- Collision kernels ---------------------------------------------------------------------
+
+class CollisionKernel(abc.ABC):
+    r"""A collision kernel B(|g|, cos theta, E) = C s(|g|) b(cos theta) phi(E).
+
+    C is :meth:`prefactor`, s the speed part, b the angular part and phi the energy
+    factor of the kinetic energy E = int |v|^2/2 f dv. The operators, the step limits
+    and the run planner read a kernel only through these members.
+
+    An implementation must provide :meth:`prefactor`, :meth:`speed_part` (finite and
+    >= 0, vectorised in any array namespace ``xp``) and :attr:`speed_exponent`, an upper
+    bound lambda of its growth: s(r) <= s_1 max(1, r)^lambda for some constant s_1
+    (the power of a power law; growth and cost estimates use it). The other members
+    have defaults: isotropic scattering (b = 1), no energy dependence, not Maxwell
+    molecules, and numerical angular integrals, maxima and Maxwellian averages of s. A
+    kernel with an angular part overrides :meth:`angular_part` and sets
+    ``is_isotropic`` False; one whose speed part is constant sets ``is_maxwellian``.
+    The framework checks a kernel where it is built by name: positive finite values of
+    the speed and angular parts and of the prefactor, and an isotropy flag that agrees
+    with the angular part; operators accept only instances of this class.
+
+    Attributes
+    ----------
+    is_isotropic : bool
+        True when b is constant (operators then skip the angular quadrature).
+    is_maxwellian : bool
+        True when s is constant (Maxwell pseudo-molecules; exact laws exist).
+    energy_exponent : float
+        gamma of phi(E) = E^gamma (0: no energy dependence); :meth:`energy_factor`
+        computes phi.
+    """
+
+    is_isotropic: bool = True
+    is_maxwellian: bool = False
+    energy_exponent: float = 0.0
+
+    @abc.abstractmethod
+    def prefactor(self, dimension: int) -> float:
+        """The constant C used in dimension ``dimension`` (2 or 3), > 0."""
+
+    @abc.abstractmethod
+    def speed_part(self, speed, xp=numpy):
+        """s(|g|) at the speeds ``speed`` (an array of ``xp``), an array of its shape."""
+
+    @property
+    @abc.abstractmethod
+    def speed_exponent(self) -> float:
+        """An upper bound lambda of the growth of s: s(r) <= s_1 max(1, r)^lambda."""
+
+    def angular_part(self, cos_theta):
+        """b(cos theta) for a NumPy array of cos theta in [-1, 1]; 1 by default."""
+        return numpy.ones_like(numpy.asarray(cos_theta, dtype=float))
+
+    def angular_integral(self, dimension: int, weight=None) -> float:
+        """int_{S^{d-1}} b(cos theta) w(cos theta) dsigma (w = 1 when ``weight`` is None).
+
+        In 2D the trapezoidal rule on 2048 equispaced angles (the largest
+        :class:`~granframe.velocity.quadratures.CircleTrapezoid`; spectral for smooth b); in
+        3D 2 pi times the 200-point Gauss-Legendre rule in cos theta. |S^{d-1}| for b = 1.
+        """
+        from granframe.velocity.quadratures import CircleTrapezoid, GaussLegendre
+
+        if dimension == 2:
+            rule = CircleTrapezoid(2048)
+            t, w = rule.nodes()[:, 0], rule.weights()
+        else:
+            nodes, w = GaussLegendre(200).rule(2.0)
+            t, w = nodes - 1.0, 2 * math.pi * w
+        values = self.angular_part(t) * (1.0 if weight is None else weight(t))
+        return float(w @ values)
+
+    def largest_speed_part(self, radius: float) -> float:
+        """max s(r) over r in [0, ``radius``] (relative speeds are cut at the grid's R);
+        by default the largest of 257 equispaced samples."""
+        return float(numpy.max(self.speed_part(numpy.linspace(0.0, radius, 257))))
+
+    def mean_speed_part(self, dimension: int, temperature: float) -> float:
+        r"""<s(|g|)> over the relative velocities g of two particles of a Maxwellian at
+        ``temperature``: g is Maxwellian at 2T, |g| has the density proportional to
+        r^{d-1} exp(-r^2/(4T)). By default a 64-point Gauss-Legendre rule on
+        [0, 18 sqrt(T)] (the density is below e^-80 beyond)."""
+        from granframe.velocity.quadratures import GaussLegendre
+
+        r, w = GaussLegendre(64).rule(18.0 * math.sqrt(temperature))
+        density = w * r ** (dimension - 1) * numpy.exp(-r * r / (4.0 * temperature))
+        return float(density @ self.speed_part(r) / density.sum())
+
+    def energy_factor(self, energy: float) -> float:
+        """phi(E) = E^gamma for the kinetic energy E = int |v|^2/2 f dv."""
+        if self.energy_exponent == 0.0:
+            return 1.0
+        if not (energy > 0.0 and math.isfinite(energy)):
+            check.reject(type(self).__name__, "energy", energy,
+                         "must be positive and finite when energy_exponent != 0")
+        return energy ** self.energy_exponent
+
+    def __call__(self, speed, cos_theta, energy: float = 1.0, *, dimension: int):
+        """B(|g|, cos theta, E) = C s(|g|) b(cos theta) phi(E)."""
+        return (self.prefactor(dimension) * self.speed_part(numpy.asarray(speed, dtype=float))
+                * self.angular_part(cos_theta) * self.energy_factor(energy))
+
+
 # -- Collision operators -------------------------------------------------------------------
 
 def check_arguments(owner: str, grid, kernel, restitution, backend) -> None:
     """Refuse arguments of the wrong kind (a kernel's name, None for the grid, ...), naming
     the parameter, before an operator uses them. A kernel is accepted by what it offers
-    (docs/plugins.md: "an object like VariableHardSpheres")."""
+    (the kernel against :class:`CollisionKernel`, the restitution law by
+    :func:`check_restitution`)."""
     from granframe.velocity.grid import VelocityGrid
 
     if not isinstance(grid, VelocityGrid):
         check.reject(owner, "grid", grid, "must be a granframe.VelocityGrid", error=TypeError)
-    if not all(hasattr(kernel, a) for a in ("prefactor", "speed_part", "is_isotropic")):
-        check.reject(owner, "kernel", kernel, "must be a collision kernel like "
-                     "granframe.VariableHardSpheres, e.g. collision_kernel('maxwell')",
-                     error=TypeError)
+    if not isinstance(kernel, CollisionKernel):
+        check.reject(owner, "kernel", kernel, "must be a collision kernel (a "
+                     "granframe.CollisionKernel), e.g. collision_kernel('maxwell')", error=TypeError)
     if not isinstance(restitution, RestitutionLaw):
         check.reject(owner, "restitution", restitution, "must be a granframe.RestitutionLaw, "
                      "e.g. restitution_law('constant', value=0.5)", error=TypeError)
     if not isinstance(backend, ArrayBackend):
         check.reject(owner, "backend", backend, "must be a granframe.ArrayBackend, e.g. "
                      "array_backend('numpy')", error=TypeError)
+    check_restitution(owner, restitution, grid.truncation_radius)
+
+
+def check_restitution(owner: str, restitution: RestitutionLaw, radius: float) -> None:
+    """Refuse a restitution law whose values at a few speeds on [0, ``radius``] (the
+    relative speeds an operator meets) are not finite, outside [0, 1] or not of the
+    speeds' shape (e.g. a scalar), naming the law and the first bad value."""
+    speeds = numpy.linspace(0.0, radius, 9)
+    values = numpy.asarray(restitution(speeds))
+    name = type(restitution).__name__
+    if values.shape != speeds.shape:
+        check.reject(owner, "restitution", restitution,
+                     f"{name} must return an array of the speeds' shape {speeds.shape}, "
+                     f"got shape {values.shape}")
+    bad = ~(numpy.isfinite(values) & (values >= 0.0) & (values <= 1.0))
+    if numpy.any(bad):
+        i = int(numpy.argmax(bad))
+        check.reject(owner, "restitution", restitution,
+                     f"{name} must take values in [0, 1]; e({speeds[i]:.4g}) = {float(values[i])!r}")
 
 
 class CollisionOperator(abc.ABC):
@@ -402,6 +546,7 @@ class CollisionOperator(abc.ABC):
     @abc.abstractmethod
     def __call__(self, f):
         """Return Q_I(f, f) sampled on the grid, an array like ``f`` in ``backend.xp``."""
+
 
 
 # -- the stiff parts of an equation ---------------------------------------------------------

@@ -20,8 +20,8 @@ hookimpl = pluggy.HookimplMarker(PROJECT)
 def granframe_register_collision_kernels(registry):
     """Add collision kernels B(|g|, cos theta, E).
 
-    A factory returns an object with the interface of
-    :class:`granframe.model.kernels.VariableHardSpheres`.
+    A factory returns a :class:`granframe.abc.CollisionKernel` (e.g.
+    :class:`granframe.model.kernels.VariableHardSpheres`).
     """
 
 

@@ -24,7 +24,7 @@ from typing import Any, Callable
 import attrs
 import pluggy
 
-from granframe import hookspecs
+from granframe import boundary, hookspecs
 from granframe._version import __version__
 from granframe.errors import PluginError, UnknownNameError
 
@@ -69,9 +69,39 @@ class Entry:
     factory: Callable = attrs.field(repr=False)
     description: str
     source: Source
+    #: Parameter sets the conformance kit builds it with (:meth:`example_parameters`).
+    examples: tuple | None = attrs.field(default=None, repr=False)
+
+    def example_parameters(self) -> tuple | None:
+        """The parameter sets the conformance kit (:mod:`granframe.testing.conformance`)
+        builds this implementation with: the ``examples`` given to
+        :meth:`FamilyRegistry.add`, else the factory's attribute ``conformance_examples``,
+        else ``({},)`` when every parameter has a default (for collision operators:
+        every one after grid, kernel, restitution and backend); None when none are known.
+        """
+        if self.examples is not None:
+            return self.examples
+        declared = getattr(self.factory, "conformance_examples", None)
+        if declared is not None:
+            return tuple(dict(p) for p in declared)
+        try:
+            parameters = list(inspect.signature(self.factory).parameters.values())
+        except (TypeError, ValueError):
+            return None
+        if self.family == "collision_operators":
+            parameters = parameters[4:]
+        required = [p for p in parameters if p.default is inspect.Parameter.empty
+                    and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
+        return None if required else ({},)
 
     def create(self, **params) -> Any:
-        """Call the factory, turning a wrong parameter name into a clear ``TypeError``."""
+        """Call the factory and check its product against the family's contract
+        (:func:`granframe.boundary.check_product`).
+
+        A wrong parameter name becomes a clear ``TypeError``; a product that breaks the
+        contract a :class:`PluginError` naming the plugin, the implementation and what is
+        wrong.
+        """
         try:
             signature = inspect.signature(self.factory)
         except (TypeError, ValueError):  # builtins without a signature: let the call decide
@@ -83,11 +113,21 @@ class Entry:
                 accepted = [p for p in signature.parameters if not p.startswith("_")]
                 raise TypeError(f"{self.family} '{self.name}': {exc}; accepted parameters: "
                                 f"{', '.join(accepted) or 'none'}") from None
-        return self.factory(**params)
+        product = self.factory(**params)
+        try:
+            boundary.check_product(self.family, product)
+        except boundary.ContractViolation as exc:
+            raise PluginError(f"{self.source}: {self.family} '{self.name}' "
+                              f"({_qualname(self.factory)}) breaks its contract: {exc}") from None
+        return product
 
     def to_dict(self) -> dict:
         return {"name": self.name, "description": self.description,
                 "source": attrs.asdict(self.source)}
+
+
+def _qualname(factory) -> str:
+    return f"{getattr(factory, '__module__', '?')}.{getattr(factory, '__qualname__', repr(factory))}"
 
 
 def _first_line(text: str | None) -> str:
@@ -98,25 +138,35 @@ def _first_line(text: str | None) -> str:
 
 
 class FamilyRegistry:
-    """What a hook implementation receives: ``registry.add(name, factory, description=None)``."""
+    """What a hook implementation receives:
+    ``registry.add(name, factory, description=None, examples=None)``."""
 
     def __init__(self, registries: Registries, family: str, source: Source):
         self._registries = registries
         self.family = family
         self.source = source
 
-    def add(self, name: str, factory: Callable, *, description: str | None = None) -> None:
+    def add(self, name: str, factory: Callable, *, description: str | None = None,
+            examples=None) -> None:
         """Register ``factory`` under ``name`` (snake_case, unique within the family).
 
         ``description`` defaults to the first line of the factory's docstring.
+        ``examples`` is a sequence of parameter dicts the conformance kit builds the
+        implementation with (:meth:`Entry.example_parameters`); a factory with required
+        parameters and no examples fails the conformance suite.
         """
         if not isinstance(name, str) or not _NAME.match(name):
             raise PluginError(f"{self.source}: {self.family} name {name!r} is invalid; "
                               "names are snake_case: a lowercase letter then [a-z0-9_]")
         if not callable(factory):
             raise PluginError(f"{self.source}: factory for {self.family} '{name}' is not callable")
+        if examples is not None:
+            if isinstance(examples, dict) or not all(isinstance(p, dict) for p in examples):
+                raise PluginError(f"{self.source}: examples for {self.family} '{name}' must "
+                                  f"be a sequence of parameter dicts, got {examples!r}")
+            examples = tuple(dict(p) for p in examples)
         text = description if description is not None else _first_line(factory.__doc__)
-        self._registries._add(Entry(self.family, name, factory, text, self.source))
+        self._registries._add(Entry(self.family, name, factory, text, self.source, examples))
 
 
 class Registries:

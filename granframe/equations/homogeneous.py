@@ -13,18 +13,18 @@ from granframe.stepping.integrators import Equation
 
 def collision_frequency(kernel, dimension: int, density: float, temperature: float,
                         energy: float, angular: float | None = None) -> float:
-    r"""Mean loss frequency of a Maxwellian: nu = C int b dsigma rho <|g|^lambda> E^gamma.
+    r"""Mean loss frequency of a Maxwellian: nu = C int b dsigma rho <s(|g|)> phi(E).
 
     The relative velocity of two particles of a Maxwellian at temperature T is
-    Maxwellian at 2T, so <|g|^lambda> = (4T)^{lambda/2} Gamma((d+lambda)/2) /
-    Gamma(d/2); exact for Maxwell molecules (nu = C |S^{d-1}| rho). ``angular`` is
-    C int b dsigma when already known.
+    Maxwellian at 2T; <s(|g|)> is the kernel's
+    :meth:`~granframe.abc.CollisionKernel.mean_speed_part` ((4T)^{lambda/2}
+    Gamma((d+lambda)/2) / Gamma(d/2) for |g|^lambda); exact for Maxwell molecules
+    (nu = C |S^{d-1}| rho). ``angular`` is C int b dsigma when already known.
     """
-    d, lam = dimension, kernel.exponent
+    d = dimension
     if angular is None:
         angular = kernel.prefactor(d) * kernel.angular_integral(d)
-    speed = (4.0 * temperature) ** (lam / 2) * math.exp(
-        math.lgamma((d + lam) / 2) - math.lgamma(d / 2))
+    speed = kernel.mean_speed_part(d, temperature)
     return angular * density * speed * kernel.energy_factor(energy)
 
 
@@ -76,7 +76,8 @@ class HomogeneousBoltzmann(Equation):
 
         - ``linear``: the heat bath, tau max |k|^2 (pi/L)^2 over the evolved modes;
         - ``nonlinear``: the collisions, nu_max / eps with the largest loss frequency
-          nu_max = C int b dsigma rho R^lambda E^gamma (relative speeds are cut at R);
+          nu_max = C int b dsigma rho max s(|g|) phi(E), the maximum over |g| <= R
+          (relative speeds are cut at R; R^lambda for |g|^lambda);
           for Maxwell molecules nu_max = nu, and RK4's observed boundary lies on
           2.7853 eps / nu within the resolution of the stability map (docs/stability.md);
         - ``dissipation``: the energy loss, (1 - e_min^2) nu_max / (4 eps) with e_min the
@@ -88,7 +89,7 @@ class HomogeneousBoltzmann(Equation):
         density = grid.mass(f, xp)
         energy = grid.kinetic_energy(f, xp)
         kernel = self.operator.kernel
-        cut = grid.truncation_radius ** kernel.exponent
+        cut = kernel.largest_speed_part(grid.truncation_radius)
         factor = kernel.energy_factor(energy) if energy > 0 else 1.0
         frequency = self._frequency_constant * density * cut * factor
         speeds = numpy.linspace(0.0, grid.truncation_radius, 257)

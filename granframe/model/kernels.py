@@ -16,6 +16,7 @@ import attrs
 import numpy
 
 from granframe import validators as check
+from granframe.abc import CollisionKernel
 
 #: Constant C of the review's numerical section: 1/(2 pi) in 2D, 1/(4 pi) in 3D
 #: (C_0 = 1/(2 pi) in Test 1; |g|/(4 pi) for 3D hard spheres).
@@ -49,7 +50,7 @@ _LARGEST_CONSTANT = 1e100
 
 
 @attrs.frozen
-class VariableHardSpheres:
+class VariableHardSpheres(CollisionKernel):
     """Variable hard-sphere kernel B = C |g|^lambda b(cos theta) E^gamma.
 
     Parameters
@@ -110,33 +111,17 @@ class VariableHardSpheres:
         return numpy.broadcast_to(numpy.asarray(self.angular(cos_theta), dtype=float),
                                   numpy.shape(cos_theta))
 
-    def angular_integral(self, dimension: int, weight: Callable | None = None) -> float:
-        """int_{S^{d-1}} b(cos theta) w(cos theta) dsigma (w = 1 when ``weight`` is None).
+    @property
+    def speed_exponent(self) -> float:
+        """lambda: the speed part is the power law |g|^lambda."""
+        return self.exponent
 
-        In 2D the trapezoidal rule on 4096 equispaced angles (spectral for smooth b); in
-        3D 2 pi times the 200-point Gauss-Legendre rule in cos theta. |S^{d-1}| for b = 1.
-        """
-        if dimension == 2:
-            t = numpy.cos(numpy.linspace(0, 2 * math.pi, 4097)[:-1])
-            values = self.angular_part(t) * (1.0 if weight is None else weight(t))
-            return 2 * math.pi * float(numpy.mean(values))
-        t, w = numpy.polynomial.legendre.leggauss(200)
-        values = self.angular_part(t) * (1.0 if weight is None else weight(t))
-        return 2 * math.pi * float(w @ values)
-
-    def energy_factor(self, energy: float) -> float:
-        """E^gamma for the kinetic energy E = int |v|^2/2 f dv."""
-        if self.energy_exponent == 0.0:
-            return 1.0
-        if not (energy > 0.0 and math.isfinite(energy)):
-            check.reject(type(self).__name__, "energy", energy,
-                         "must be positive and finite when energy_exponent != 0")
-        return energy ** self.energy_exponent
-
-    def __call__(self, speed, cos_theta, energy: float = 1.0, *, dimension: int):
-        """B(|g|, cos theta, E) = C |g|^lambda b(cos theta) E^gamma."""
-        return (self.prefactor(dimension) * self.speed_part(numpy.asarray(speed, dtype=float))
-                * self.angular_part(cos_theta) * self.energy_factor(energy))
+    def mean_speed_part(self, dimension: int, temperature: float) -> float:
+        """<|g|^lambda> = (4T)^{lambda/2} Gamma((d+lambda)/2) / Gamma(d/2) for the relative
+        speeds of a Maxwellian at temperature T (Maxwellian at 2T)."""
+        lam = self.exponent
+        return (4.0 * temperature) ** (lam / 2) * math.exp(
+            math.lgamma((dimension + lam) / 2) - math.lgamma(dimension / 2))
 
 
 def maxwell_molecules(angular=None, energy_exponent=0.0, constant=None) -> VariableHardSpheres:

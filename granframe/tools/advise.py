@@ -214,7 +214,7 @@ class _Probe:
         self.d = scene.dimension
         self.kernel, self.law, self.initial = (scene.build(f) for f in
                                                ("kernel", "restitution", "initial"))
-        self.degree = self.kernel.exponent + 2.0 * self.kernel.energy_exponent
+        self.degree = self.kernel.speed_exponent + 2.0 * self.kernel.energy_exponent
         self._sample_initial()
 
     def _sample_initial(self):
@@ -291,7 +291,7 @@ def _support(probe, hottest: float, budget: float, amplification: float,
     cooling state of a rescaled run. Returns (S, predicted error: the largest share times
     ``amplification``).
     """
-    power = probe.kernel.exponent + (2.0 if probe.scene.quantity == "temperature" else 0.0)
+    power = probe.kernel.speed_exponent + (2.0 if probe.scene.quantity == "temperature" else 0.0)
     allowed = budget / max(amplification, 1e-300)
     scale = math.sqrt(max(hottest, probe.t0))
     for multiple in numpy.arange(2.0, 12.01, 0.25):

@@ -224,4 +224,5 @@ def gpu_available() -> bool:
 def granframe_register_array_backends(registry):
     registry.add("cupy", CuPyBackend,
                  description="CuPy arrays and cuFFT on a CUDA GPU (module='numpy': the same "
-                             "code path on the host)")
+                             "code path on the host)",
+                 examples=[{}, {"module": "numpy"}, {"module": "numpy", "fused": False}])

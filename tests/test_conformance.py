@@ -1,0 +1,294 @@
+"""The conformance kit over every registered implementation, and what it catches.
+
+The cases are discovered from the process's registries: a new built-in or installed
+plugin is tested by being registered, with the parameter sets it declares
+(:meth:`granframe.registry.Entry.example_parameters`).
+"""
+
+import attrs
+import numpy
+import pytest
+
+import granframe as gf
+from granframe.abc import CollisionOperator
+from granframe.backends import NumpyBackend
+from granframe.equations.homogeneous import HomogeneousBoltzmann
+from granframe.errors import BackendUnavailableError, PluginError
+from granframe.model.kernels import VariableHardSpheres
+from granframe.model.restitution import RestitutionLaw
+from granframe.registry import Entry, Source, default_registries
+from granframe.stepping.integrators import ForwardEuler
+from granframe.testing import conformance as kit
+from granframe.velocity.quadratures import CircleTrapezoid
+
+from conftest import FAKE_SITE
+
+
+def _cases():
+    registries = default_registries()
+    for family in registries._entries:
+        for entry in registries.entries(family):
+            examples = entry.example_parameters()
+            if examples is None:
+                yield pytest.param(family, entry.name, None, id=f"{family}-{entry.name}")
+                continue
+            for i, params in enumerate(examples):
+                yield pytest.param(family, entry.name, params, id=f"{family}-{entry.name}-{i}")
+
+
+def examples_or_fail(entry: Entry, params):
+    """``params``, or a failure naming the implementation that declares no examples."""
+    if params is None:
+        pytest.fail(f"{entry.family} '{entry.name}' of {entry.source} has required parameters "
+                    "and no examples: register it with registry.add(..., examples=[{...}]) or "
+                    "give the factory a 'conformance_examples' attribute", pytrace=False)
+    return params
+
+
+def _backend_or_skip(name, params):
+    try:
+        return default_registries().create("array_backends", name, **params)
+    except BackendUnavailableError as exc:
+        pytest.skip(f"array backend '{name}' {params} cannot be built here: {exc}")
+
+
+@pytest.mark.parametrize("family,name,params", list(_cases()))
+def test_registered_implementation_conforms(family, name, params):
+    registries = default_registries()
+    entry = registries.get(family, name)
+    params = examples_or_fail(entry, params)
+    if family == "collision_operators":
+        for check in (kit.check_operator_mass, kit.check_operator_energy_dissipation,
+                      kit.check_operator_against_direct, kit.check_operator_batching,
+                      kit.check_operator_refuses_bad_restitution):
+            check(entry.factory, params)
+        return
+    if family == "array_backends":
+        backend = _backend_or_skip(name, params)
+        kit.check_backend_transforms(backend)
+        kit.check_backend_elementwise(backend)
+        for operator in registries.entries("collision_operators"):
+            kit.check_backend_parity(backend, operator.factory)
+        return
+    product = registries.create(family, name, **params)   # the registry's boundary check
+    {"restitution_laws": kit.check_restitution_law,
+     "collision_kernels": kit.check_collision_kernel,
+     "quadratures": kit.check_quadrature,
+     "time_integrators": kit.check_integrator_order,
+     "initial_conditions": kit.check_initial_condition}[family](product)
+
+
+def test_implementation_without_examples_fails_the_suite():
+    def law(value, slope):
+        """A factory with required parameters."""
+
+    entry = Entry("restitution_laws", "sloped", law, "", Source("thirdparty"))
+    assert entry.example_parameters() is None
+    with pytest.raises(pytest.fail.Exception,
+                       match=r"restitution_laws 'sloped' of plugin 'thirdparty' has required "
+                             r"parameters and no examples"):
+        examples_or_fail(entry, entry.example_parameters())
+
+
+def test_examples_come_from_the_registration_or_a_class_attribute():
+    class Declared:
+        conformance_examples = [{"value": 0.5}]
+
+        def __init__(self, value):
+            self.value = value
+
+    assert Entry("restitution_laws", "declared", Declared, "", Source("p")).example_parameters() \
+        == ({"value": 0.5},)
+    assert Entry("restitution_laws", "given", Declared, "", Source("p"),
+                 ({"value": 0.1},)).example_parameters() == ({"value": 0.1},)
+
+
+# -- the kit's catches: deliberately broken implementations ---------------------------------
+
+class TooElastic(RestitutionLaw):
+    """e = 1.5 at every speed."""
+
+    def _evaluate(self, speed):
+        return numpy.full_like(speed, 1.5)
+
+
+@attrs.frozen
+class LyingIsotropy(VariableHardSpheres):
+    """An anisotropic b flagged isotropic."""
+
+    @property
+    def is_isotropic(self):
+        return True
+
+
+class UnnormalisedInverse(NumpyBackend):
+    """irfftn without the 1/n of numpy's convention."""
+
+    def irfftn(self, a, s, axes=None):
+        return super().irfftn(a, s, axes) * numpy.prod(s)
+
+
+class ConjugatedInverse(NumpyBackend):
+    """ifftn computed as a forward transform (the conjugate kernel)."""
+
+    def ifftn(self, a, axes=None):
+        return super().fftn(a, axes) / numpy.prod([a.shape[i] for i in axes])
+
+
+class SecondOrderEuler(ForwardEuler):
+    """Forward Euler declaring order 2."""
+
+    order = 2
+
+
+@attrs.frozen
+class Overpromising(CircleTrapezoid):
+    """The equispaced circle rule claiming one more degree than it has."""
+
+    @property
+    def degree(self):
+        return self.n_points
+
+
+def test_kit_catches_a_law_returning_1_5():
+    with pytest.raises(AssertionError, match=r"e\(r\) must lie in \[0, 1\], got e\(0\) = 1.5"):
+        kit.check_restitution_law(TooElastic())
+
+
+def test_kit_catches_a_lying_isotropy_flag():
+    kernel = LyingIsotropy(angular=lambda c: 1.0 + 0.5 * c)
+    with pytest.raises(AssertionError, match="is_isotropic is True but angular_part is not "
+                                             "constant"):
+        kit.check_collision_kernel(kernel)
+
+
+def test_kit_catches_an_inverse_fft_without_normalisation():
+    with pytest.raises(AssertionError, match=r"UnnormalisedInverse.irfftn differs from "
+                                             r"numpy.fft.irfftn"):
+        kit.check_backend_transforms(UnnormalisedInverse())
+
+
+def test_kit_catches_a_conjugated_inverse_fft():
+    with pytest.raises(AssertionError, match=r"ConjugatedInverse.ifftn differs from "
+                                             r"numpy.fft.ifftn"):
+        kit.check_backend_transforms(ConjugatedInverse())
+
+
+def test_kit_catches_an_overstated_order_and_degree():
+    with pytest.raises(AssertionError, match="declared order 2, observed 1.0"):
+        kit.check_integrator_order(SecondOrderEuler())
+    with pytest.raises(AssertionError, match="declared degree 8, but the monomial"):
+        kit.check_quadrature(Overpromising(8))
+
+
+class Leaky(CollisionOperator):
+    """The fast spectral operator plus 1e-6 f: mass is not conserved."""
+
+    name = "leaky"
+
+    def __init__(self, grid, kernel, restitution, backend):
+        super().__init__(grid, kernel, restitution, backend)
+        self._fast = gf.collision_operator("fast_spectral", grid, kernel, restitution,
+                                           backend=backend)
+
+    def __call__(self, f):
+        return self._fast(f) + 1e-6 * f
+
+
+def test_kit_catches_an_operator_losing_mass():
+    with pytest.raises(AssertionError, match="mass of Q.f. is .* not round-off"):
+        kit.check_operator_mass(Leaky, {})
+
+
+def test_operators_refuse_bad_restitution_laws():
+    grid = gf.VelocityGrid(2, 16, 1.5)
+    for name in ("fast_spectral", "direct_spectral"):
+        with pytest.raises(ValueError, match=rf"{name}: parameter 'restitution' = .* is "
+                                             r"invalid; TooElastic must take values in \[0, 1\]"):
+            gf.collision_operator(name, grid, gf.collision_kernel("maxwell"), TooElastic())
+        kit.check_operator_refuses_bad_restitution(
+            default_registries().get("collision_operators", name).factory, {})
+
+
+def test_registry_names_the_plugin_whose_product_breaks_its_contract(make_distribution,
+                                                                      fresh_registries):
+    make_distribution("granframe-broken-laws", "granframe_broken_laws", """
+        import numpy
+        import granframe
+        from granframe.model.kernels import VariableHardSpheres
+        from granframe.model.restitution import RestitutionLaw
+
+        class TooElastic(RestitutionLaw):
+            def _evaluate(self, speed):
+                return numpy.full_like(speed, 1.5)
+
+        class Scalar(RestitutionLaw):
+            def _evaluate(self, speed):
+                return 0.5
+
+        class Lying(VariableHardSpheres):
+            # b = 1 + cos(theta)/2, flagged isotropic
+
+            def __init__(self):
+                super().__init__(angular=lambda c: 1.0 + 0.5 * c)
+
+            is_isotropic = True
+
+        @granframe.hookimpl
+        def granframe_register_restitution_laws(registry):
+            registry.add("too_elastic", TooElastic)
+            registry.add("scalar_law", Scalar)
+
+        @granframe.hookimpl
+        def granframe_register_collision_kernels(registry):
+            registry.add("lying", Lying)
+            registry.add("not_a_kernel", lambda: "maxwell")
+    """)
+    registries = fresh_registries()
+    source = r"plugin 'granframe_broken_laws' of granframe-broken-laws 0.1"
+    with pytest.raises(PluginError, match=source + r": restitution_laws 'too_elastic' "
+                       r"\(granframe_broken_laws.TooElastic\) breaks its contract: e\(r\) must "
+                       r"lie in \[0, 1\], got e\(0\) = 1.5"):
+        registries.create("restitution_laws", "too_elastic")
+    with pytest.raises(PluginError, match=r"'scalar_law' .* must have the input's shape \(10,\), "
+                                          r"got shape \(\)"):
+        registries.create("restitution_laws", "scalar_law")
+    with pytest.raises(PluginError, match=source + r": collision_kernels 'lying' .* "
+                                          r"is_isotropic is True but angular_part is not"):
+        registries.create("collision_kernels", "lying")
+    with pytest.raises(PluginError, match=r"'not_a_kernel' .* must build a "
+                                          r"granframe.abc.CollisionKernel, got builtins.str"):
+        registries.create("collision_kernels", "not_a_kernel")
+
+
+# -- a plugin author's use of the kit: the example plugin of docs/plugins.md ----------------
+
+@pytest.fixture
+def example_plugin(monkeypatch):
+    monkeypatch.syspath_prepend(str(FAKE_SITE))
+    import granframe_example_plugin
+    return granframe_example_plugin
+
+
+def test_the_documented_plugin_passes_the_kit(example_plugin):
+    class TestExponentialDecay(kit.RestitutionLawTests):
+        factory = example_plugin.ExponentialDecay
+        examples = [{"minimum": 0.4}, {"minimum": 0.0, "scale": 3.0}]
+
+    class TestSoftenedHardSpheres(kit.CollisionKernelTests):
+        factory = example_plugin.SoftenedHardSpheres
+        examples = [{}, {"exponent": 2.0, "speed_scale": 0.5}]
+
+    TestExponentialDecay().test_restitution_law()
+    TestSoftenedHardSpheres().test_collision_kernel()
+
+
+def test_a_non_power_law_kernel_runs_in_the_operators(example_plugin):
+    kernel = example_plugin.SoftenedHardSpheres(exponent=1.0, speed_scale=2.0)
+    grid = gf.VelocityGrid(2, 16, 1.5)
+    law = gf.restitution_law("constant", value=0.5)
+    for name in ("fast_spectral", "direct_spectral"):
+        operator = gf.collision_operator(name, grid, kernel, law)
+        kit.check_mass_of(operator, grid.maxwellian(temperature=0.5))
+    rates = HomogeneousBoltzmann(operator).stiffness(grid.maxwellian(temperature=0.5))
+    assert numpy.isfinite(rates["nonlinear"]) and rates["nonlinear"] > 0.0
