@@ -61,9 +61,9 @@ def maxwell_energy_dissipation(grid, f, restitution: float, kernel) -> float:
     heated temperature laws.
     """
     d = grid.dimension
-    if kernel.exponent != 0.0:
-        check.reject("maxwell_energy_dissipation", "kernel.exponent", kernel.exponent,
-                     "must be 0 (Maxwell molecules)")
+    if not kernel.is_maxwellian:
+        check.reject("maxwell_energy_dissipation", "kernel", kernel,
+                     "must be a Maxwell-molecule kernel (constant speed part)")
     beta = kernel.angular_integral(d, lambda t: 1 - t)
     rho = grid.mass(f)
     second = 2.0 * grid.kinetic_energy(f)
@@ -96,9 +96,11 @@ def heated_maxwell_law(kernel, restitution, heat_bath: float, knudsen: float = 1
     :func:`heated_maxwell_temperature` with density rho/eps (Haff's exponential
     law when tau = 0).
     """
+    from granframe.model.kernels import VariableHardSpheres
     from granframe.model.restitution import Constant
 
-    if (kernel.exponent != 0.0 or not kernel.is_isotropic or kernel.energy_exponent != 0.0
+    if (not isinstance(kernel, VariableHardSpheres) or not kernel.is_maxwellian
+            or not kernel.is_isotropic or kernel.energy_exponent != 0.0
             or kernel.constant is not None or not isinstance(restitution, Constant)):
         return None
 

@@ -1,7 +1,10 @@
 """Accuracy checks shared by granframe's tests, its studies and plugin authors' tests.
 
 Like ``zarr.testing``: a plugin that adds a collision operator can run the
-same physics checks granframe runs on its own.
+same physics checks granframe runs on its own. :mod:`granframe.testing.conformance` holds
+the conformance kit (a pytest test class per family to subclass, and the check functions
+behind them); :mod:`granframe.testing.strategies` the Hypothesis strategies of valid
+distributions it uses.
 """
 
 from __future__ import annotations
