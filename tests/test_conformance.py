@@ -58,7 +58,8 @@ def test_registered_implementation_conforms(family, name, params):
     entry = registries.get(family, name)
     params = examples_or_fail(entry, params)
     if family == "collision_operators":
-        for check in (kit.check_operator_mass, kit.check_operator_energy_dissipation,
+        for check in (kit.check_operator_mass, kit.check_operator_mass_on_generated,
+                      kit.check_operator_energy_dissipation,
                       kit.check_operator_against_direct, kit.check_operator_batching,
                       kit.check_operator_refuses_bad_restitution):
             check(entry.factory, params)
@@ -292,3 +293,19 @@ def test_a_non_power_law_kernel_runs_in_the_operators(example_plugin):
         kit.check_mass_of(operator, grid.maxwellian(temperature=0.5))
     rates = HomogeneousBoltzmann(operator).stiffness(grid.maxwellian(temperature=0.5))
     assert numpy.isfinite(rates["nonlinear"]) and rates["nonlinear"] > 0.0
+
+
+# -- the test classes, subclassed the way a plugin author does ------------------------------
+
+class TestFastSpectralThroughTheKit(kit.CollisionOperatorTests):
+    factory = default_registries().get("collision_operators", "fast_spectral").factory
+    examples = [{}, {"radial_points": 24}]
+
+
+class TestNumpyBackendThroughTheKit(kit.ArrayBackendTests):
+    factory = NumpyBackend
+    operators = [default_registries().get("collision_operators", "fast_spectral").factory]
+
+
+class TestRK4ThroughTheKit(kit.TimeIntegratorTests):
+    factory = default_registries().get("time_integrators", "rk4").factory
