@@ -13,7 +13,8 @@ subclasses (the way ``zarr.testing.StoreTests`` is subclassed by a store)::
 ``factory`` builds the implementation from each parameter dict of ``examples`` (for
 collision operators the dicts are the options after grid, kernel, restitution and
 backend). The grids are small (2D N = 16, 3D N = 8; N = 32 in 2D where an exact rate is
-compared), so that a family's suite runs in seconds.
+compared), so that a family's suite runs in seconds. The kit needs pytest and Hypothesis
+(the ``test`` extra).
 """
 
 from __future__ import annotations
