@@ -24,7 +24,7 @@ from typing import Any, Callable
 import attrs
 import pluggy
 
-from granframe import boundary, hookspecs
+from granframe import contract_checks, hookspecs
 from granframe._version import __version__
 from granframe.errors import PluginError, UnknownNameError
 
@@ -96,7 +96,7 @@ class Entry:
 
     def create(self, **params) -> Any:
         """Call the factory and check its product against the family's contract
-        (:func:`granframe.boundary.check_product`).
+        (:func:`granframe.contract_checks.check_product`).
 
         A wrong parameter name becomes a clear ``TypeError``; a product that breaks the
         contract a :class:`PluginError` naming the plugin, the implementation and what is
@@ -115,8 +115,8 @@ class Entry:
                                 f"{', '.join(accepted) or 'none'}") from None
         product = self.factory(**params)
         try:
-            boundary.check_product(self.family, product)
-        except boundary.ContractViolation as exc:
+            contract_checks.check_product(self.family, product)
+        except contract_checks.ContractViolation as exc:
             raise PluginError(f"{self.source}: {self.family} '{self.name}' "
                               f"({_qualname(self.factory)}) breaks its contract: {exc}") from None
         return product

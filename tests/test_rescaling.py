@@ -183,3 +183,20 @@ def test_plots_of_a_rescaled_run_are_in_physical_time_and_temperature(tmp_path):
     assert numpy.max(numpy.abs(run.moments["temperature"] / exact - 1)) < 1e-3
     assert "rescaled" in run.title
     assert len(plot(tmp_path / "run.zarr", tmp_path / "figures")) >= 1
+
+
+def test_a_kernel_that_is_not_a_power_law_is_refused_by_name():
+    from granframe.abc import CollisionKernel
+    from granframe.equations.rescaled import check_rescalable
+
+    class Softened(CollisionKernel):
+        speed_exponent = 1.0
+
+        def prefactor(self, dimension):
+            return 1.0
+
+        def speed_part(self, speed, xp=numpy):
+            return xp.abs(speed) / (1.0 + xp.abs(speed))
+
+    with pytest.raises(ValueError, match="parameter 'kernel' = 'Softened'.*power law"):
+        check_rescalable(Softened(), gf.restitution_law("constant", value=0.5), 0.0, "rescaled")

@@ -127,7 +127,8 @@ def check_rescalable(kernel, restitution, heat_bath: float, owner: str) -> float
     r"""Refuse a scene the rescaled formulation does not hold for; return \kappa = \lambda + 2\gamma.
 
     It needs free cooling (no heat bath), a restitution coefficient independent of the
-    relative speed (e is then the same at every scale \omega), and \kappa >= 0.
+    relative speed (e is then the same at every scale \omega), a power-law kernel and
+    \kappa >= 0.
     """
     if heat_bath != 0.0:
         check.reject(owner, "heat_bath", heat_bath,
@@ -138,6 +139,13 @@ def check_rescalable(kernel, restitution, heat_bath: float, owner: str) -> float
                      "must not depend on the relative speed in a rescaled run (e would "
                      "change with the scale omega); use a constant law, or run the "
                      "unscaled equation")
+    from granframe.model.kernels import VariableHardSpheres
+
+    if not isinstance(kernel, VariableHardSpheres):
+        check.reject(owner, "kernel", type(kernel).__name__,
+                     "must be a power law C |g|^lambda b E^gamma (VariableHardSpheres) in a "
+                     "rescaled run: the self-similar scaling needs the exact power lambda, "
+                     "which a general CollisionKernel does not have")
     degree = kernel.exponent + 2.0 * kernel.energy_exponent
     if degree < 0.0:
         check.reject(owner, "kernel", kernel,

@@ -25,7 +25,7 @@ import math
 import hypothesis
 import numpy
 
-from granframe import boundary
+from granframe import contract_checks
 from granframe.abc import (AdaptiveIntegrator, ArrayBackend, CollisionKernel,
                            CollisionOperator, Equation, InitialCondition, Quadrature,
                            RestitutionLaw, SurfaceQuadrature, TimeIntegrator)
@@ -43,8 +43,8 @@ def _require(condition, message: str) -> None:
 
 def _contract(family: str, product) -> None:
     try:
-        boundary.check_product(family, product)
-    except boundary.ContractViolation as exc:
+        contract_checks.check_product(family, product)
+    except contract_checks.ContractViolation as exc:
         raise AssertionError(f"{type(product).__name__}: {exc}") from None
 
 
@@ -56,7 +56,7 @@ def check_restitution_law(law) -> None:
     true to the values; negative speeds refused with a ValueError."""
     _require(isinstance(law, RestitutionLaw), f"{law!r} is not a granframe.RestitutionLaw")
     _contract("restitution_laws", law)
-    speeds = boundary.SPEEDS
+    speeds = contract_checks.SPEEDS
     together = numpy.asarray(law(speeds))
     alone = numpy.array([numpy.asarray(law(numpy.array([s])))[0] for s in speeds])
     _require(numpy.array_equal(together, alone),
@@ -79,7 +79,7 @@ def check_collision_kernel(kernel) -> None:
     _require(isinstance(kernel, CollisionKernel), f"{kernel!r} is not a granframe.CollisionKernel")
     _contract("collision_kernels", kernel)
     name = type(kernel).__name__
-    speeds, cosines = boundary.SPEEDS, boundary.COSINES[::20]
+    speeds, cosines = contract_checks.SPEEDS, contract_checks.COSINES[::20]
     for d in (2, 3):
         full = kernel(speeds[:, None], cosines[None, :], 1.0, dimension=d)
         parts = (kernel.prefactor(d) * kernel.speed_part(speeds)[:, None]
@@ -87,7 +87,7 @@ def check_collision_kernel(kernel) -> None:
         _require(numpy.allclose(full, parts, rtol=1e-14, atol=0.0),
                  f"{name}: B(|g|, cos theta) differs from C s(|g|) b(cos theta)")
         b_mean = kernel.angular_integral(d) / (2 * math.pi ** (d / 2) / math.gamma(d / 2))
-        b = kernel.angular_part(boundary.COSINES)
+        b = kernel.angular_part(contract_checks.COSINES)
         _require(b.min() * (1 - 1e-12) <= b_mean <= b.max() * (1 + 1e-12),
                  f"{name}: angular_integral({d}) / |S^{d - 1}| = {b_mean!r} is not a mean of b")
         mean = kernel.mean_speed_part(d, 0.7)
