@@ -10,6 +10,7 @@ plugins; :mod:`granframe.testing` checks an implementation against its contract.
 from __future__ import annotations
 
 import abc
+import enum
 import math
 import time
 from types import ModuleType
@@ -18,6 +19,27 @@ from typing import ClassVar
 import numpy
 
 from granframe import validators as check
+
+
+# -- The stiff parts of an equation ---------------------------------------------------------
+
+
+class Part(enum.StrEnum):
+    """The names of an equation's stiff parts (:meth:`Equation.stiffness`,
+    :attr:`TimeIntegrator.explicit_parts`, :mod:`granframe.stepping.stability`).
+
+    A :class:`enum.StrEnum`: each member is its string (``Part.LINEAR == "linear"``, and it
+    formats and is stored as ``"linear"``), so plain strings of the names keep working.
+    """
+
+    #: the heat bath tau Delta_v
+    LINEAR = "linear"
+    #: the collision term Q/eps
+    NONLINEAR = "nonlinear"
+    #: the energy dissipation of Q/eps (a part of the collision term)
+    DISSIPATION = "dissipation"
+    #: the drift of the rescaled formulation (an imaginary spectrum)
+    DRIFT = "drift"
 
 
 # -- Array backends and their transforms ---------------------------------------------------
@@ -344,7 +366,7 @@ class TimeIntegrator(abc.ABC):
 
     order: ClassVar[int]
     adaptive: ClassVar[bool] = False
-    explicit_parts: ClassVar[frozenset] = frozenset({"linear", "nonlinear", "drift"})
+    explicit_parts: ClassVar[frozenset] = frozenset({Part.LINEAR, Part.NONLINEAR, Part.DRIFT})
     stability_interval: ClassVar[float] = math.inf
     imaginary_interval: ClassVar[float] = 0.0
 
@@ -546,26 +568,3 @@ class CollisionOperator(abc.ABC):
     @abc.abstractmethod
     def __call__(self, f):
         """Return Q_I(f, f) sampled on the grid, an array like ``f`` in ``backend.xp``."""
-
-
-
-# -- the stiff parts of an equation ---------------------------------------------------------
-import enum  # noqa: E402  (this section is appended after the contracts that use its names)
-
-
-class Part(enum.StrEnum):
-    """The names of an equation's stiff parts (:meth:`Equation.stiffness`,
-    :attr:`TimeIntegrator.explicit_parts`, :mod:`granframe.stepping.stability`).
-
-    A :class:`enum.StrEnum`: each member is its string (``Part.LINEAR == "linear"``, and it
-    formats and is stored as ``"linear"``), so plain strings of the names keep working.
-    """
-
-    #: the heat bath tau Delta_v
-    LINEAR = "linear"
-    #: the collision term Q/eps
-    NONLINEAR = "nonlinear"
-    #: the energy dissipation of Q/eps (a part of the collision term)
-    DISSIPATION = "dissipation"
-    #: the drift of the rescaled formulation (an imaginary spectrum)
-    DRIFT = "drift"

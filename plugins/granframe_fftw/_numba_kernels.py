@@ -1,7 +1,7 @@
 """Fused element-wise kernels (numba) for :class:`granframe_fftw.PyFFTWBackend`.
 
-They implement :meth:`granframe.backends.ArrayBackend.separable_product` and
-:meth:`~granframe.backends.ArrayBackend.lowrank_accumulate` in one pass over
+They implement :meth:`granframe.abc.ArrayBackend.separable_product` and
+:meth:`~granframe.abc.ArrayBackend.lowrank_accumulate` in one pass over
 memory each, where NumPy needs three to four (a temporary per operation).
 They release the GIL, so the fast operator's pipelines run them side by
 side. Compiled on first use and cached on disk (``cache=True``).

@@ -379,7 +379,7 @@ _BLAS = threadpoolctl.ThreadpoolController()
 def _default_batch(spectrum_bytes: int, n_pairs: int, rho_per_pipeline: int,
                    batch_bytes: int) -> int:
     """Pairs per batch for about ``batch_bytes`` of spectra (the backend's
-    :attr:`~granframe.backends.ArrayBackend.batch_bytes`).
+    :attr:`~granframe.abc.ArrayBackend.batch_bytes`).
 
     When the pairs of one rho fit, a batch holds whole rho values and a pipeline's
     ``rho_per_pipeline`` values are split into equal blocks, so that no batch transforms
