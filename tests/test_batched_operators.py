@@ -78,14 +78,17 @@ def test_stack_equals_separate_calls(backend, method, dimension, kernel):
     assert numpy.all(numpy.abs(masses) <= 1e-12 * gains)
 
 
+@pytest.mark.parametrize("batch", [12, 3])
 @pytest.mark.parametrize("dimension", [2, 3])
-def test_fast_stack_in_chunks_equals_separate_calls(backend, dimension):
-    """A stack larger than the pair batch goes in chunks of min(D, batch) distributions
-    (here 3, 3, 1) with part-filled blocks of pairs."""
-    op = _operator("fast_spectral", backend, dimension, "anisotropic", batch=3)
+def test_fast_stack_in_chunks_equals_separate_calls(backend, dimension, batch):
+    """A stack goes in chunks of min(D, max(1, batch // P)) distributions, P = 4 pairs per
+    rho here: batch 12 gives chunks of 3, 3, 1 distributions; batch 3 chunks of one
+    with part-filled blocks of pairs (3, 1)."""
+    op = _operator("fast_spectral", backend, dimension, "anisotropic", batch=batch)
     host = _distributions(op.grid, 7, seed=1)
     separate = numpy.stack([backend.to_numpy(op(backend.asarray(f))) for f in host])
     stacked = backend.to_numpy(op(backend.asarray(host)))
+    assert op._pipelines[0].chunk == {12: 3, 3: 1}[batch]
     numpy.testing.assert_allclose(stacked, separate, rtol=0,
                                   atol=TOLERANCE * numpy.abs(separate).max())
 
@@ -112,7 +115,7 @@ def test_fast_stack_memory_is_counted_and_a_stack_over_the_budget_is_refused():
     assert many > one
     op(_distributions(op.grid, 64))
     assert op.memory_bytes == many
-    # chunks of min(D, batch) distributions: about batch grids per FFT call
+    # chunks of min(D, max(1, batch // P)) distributions: about batch grids per FFT call
     assert op.stack_transforms(64) == 4 and op.stack_transforms(2) == 4
     small = _operator("fast_spectral", backend, 2, "isotropic", batch=4,
                       memory_budget=(one + many) // 2)

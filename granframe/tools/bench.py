@@ -16,6 +16,10 @@ and the floor of the same batched transforms: the median time of one forward + i
 transform of the T = D max(1, B / D) grids of one pipeline call
 (:meth:`~granframe_spectral.FastSpectral.stack_transforms`), times D P / T calls, / D,
 i.e. ``fft_batch_s * P / T``. D = 1 is the floor above (T = B).
+
+Evaluations and floor are timed in alternating rounds (one evaluation, then the floor's
+ceil(D P / T) transform calls), so that a machine whose speed drifts between minutes
+moves both medians together instead of the ratio.
 """
 
 from __future__ import annotations
@@ -98,21 +102,30 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
     else:       # distinct distributions: temperatures 0.8 to 1.2
         f = array_backend.asarray(numpy.stack([
             grid.maxwellian(temperature=t) for t in numpy.linspace(0.8, 1.2, distributions)]))
-    operator(f)
-    array_backend.synchronize()
-    evaluation = median_time(lambda: operator(f), repeats, array_backend) / distributions
-    batch = operator.batch
     transforms = operator.stack_transforms(distributions)
     fft = array_backend.real_fft((transforms,) + grid.shape, tuple(range(1, dimension + 1)),
                                  threads=threads, precision=precision)
     fft.real[...] = f.reshape((-1,) + grid.shape)[:1]
+    # the floor's calls per round: as many transforms as one evaluation makes (at least one)
+    calls = max(1, math.ceil(distributions * operator.transform_pairs / transforms))
 
-    def pair():
-        fft.forward()
-        fft.inverse()
+    def floor_round():
+        for _ in range(calls):
+            fft.forward()
+            fft.inverse()
 
-    pair()
-    single = median_time(pair, max(20, 3 * repeats), array_backend)
+    operator(f)
+    floor_round()
+    array_backend.synchronize()
+    # interleaved: each round times one evaluation, then the floor's transforms, so that both
+    # medians come from the same minutes of a machine whose speed drifts
+    evaluations, pair_times = [], []
+    for _ in range(repeats):
+        evaluations.append(array_backend.elapsed(lambda: operator(f)) / distributions)
+        pair_times.append(array_backend.elapsed(floor_round) / calls)
+    evaluation = float(numpy.median(evaluations))
+    single = float(numpy.median(pair_times))
+    batch = operator.batch
     floor = single * operator.transform_pairs / transforms
     peak = peak_rss_kib()
     device = array_backend.device_memory()
