@@ -187,6 +187,13 @@ class Health:
         the Nyquist checkerboard is as large as anywhere, and moves 30 to 100 times more
         than T: 0.55 for that box, 0.32 for review_test3's 3D Maxwellian on the review's
         grid (S = 4); the default 1 lets them run.
+    resolution_tolerance : float
+        Largest value of each resolution indicator of f at an output point before the run
+        warns (:func:`granframe.velocity.estimators.resolution_report`): the error the
+        spectral tail predicts, the negative mass share and the share of pairs whose
+        relative speed is beyond 2S (the operators cut those off). A warning does not stop
+        the run; it is printed when the run ends, kept with each commit and shown by
+        ``granframe info``, naming the grid parameter to raise.
     step_limit : bool
         Refuse, before the first step, a fixed time step above the integrator's
         explicit stability limit (:mod:`granframe.stepping.stability`). Set it false only to
@@ -201,6 +208,8 @@ class Health:
                                         validator=check.real(0.0, 1.0))
     initial_mass_tolerance: float = attrs.field(default=1e-6, converter=check.to_float,
                                                 validator=check.real(0.0, 1.0, lower_open=True))
+    resolution_tolerance: float = attrs.field(default=1e-3, converter=check.to_float,
+                                              validator=check.real(0.0, 1.0, lower_open=True))
     projection_tolerance: float = attrs.field(default=2e-2, converter=check.to_float,
                                               validator=check.real(0.0, math.inf, lower_open=True))
     projection_kurtosis_tolerance: float = attrs.field(

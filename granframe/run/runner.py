@@ -42,6 +42,7 @@ from granframe.registry import default_registries
 from granframe.equations.rescaled import RescaledBoltzmann
 from granframe.run.storage import SCALAR_MOMENTS, RunStore, StoreExistsError
 from granframe.validators import reject
+from granframe.velocity.estimators import resolution_report
 
 _RUN_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 
@@ -187,6 +188,9 @@ class RunResult:
     time: float
     snapshots: int
     wall_seconds: float
+    #: the resolution warnings of the last output point
+    #: (:func:`granframe.velocity.estimators.resolution_report`)
+    warnings: tuple = ()
 
 
 class _Records:
@@ -234,12 +238,15 @@ class RunState:
     #: the size of the last step, and its moments
     dt: float = 0.0
     record: dict | None = None
+    #: the resolution indicators of f at the last output point
+    resolution: dict | None = None
 
     def progress(self, status: str, **extra) -> dict:
         """The progress entry of a commit made now."""
         return {"status": status, "step": self.step, "time": self.t, "mass0": self.mass0,
                 "dt_next": self.dt_next, "resumes": self.resumes,
                 **({"rollbacks": self.rollbacks} if self.rollbacks else {}),
+                **({"resolution": self.resolution} if self.resolution else {}),
                 "wall_seconds": self.wall_before + time.perf_counter() - self.started, **extra}
 
 
@@ -361,6 +368,20 @@ class HealthObserver(Observer):
         if problem is not None:
             raise Stopped(f"health check failed at step {state.step}, t = {state.t:.6g}: "
                           f"{problem}")
+
+
+class ResolutionObserver(Observer):
+    """At every output point: the resolution indicators of f
+    (:func:`~granframe.velocity.estimators.resolution_report`: one FFT and two sums) into
+    ``state.resolution``, which the next commit keeps."""
+
+    def __init__(self, grid, xp, tolerance: float):
+        self.grid, self.xp, self.tolerance = grid, xp, tolerance
+
+    def at_output(self, state, final):
+        state.resolution = resolution_report(self.grid, state.f,
+                                             state.record["negative_mass_fraction"],
+                                             self.tolerance, self.xp)
 
 
 class ProgressObserver(Observer):
@@ -513,6 +534,8 @@ class Simulation:
         storage = StorageObserver(store, records, self.backend)
         observers = [MomentsObserver(self.grid, self.backend.xp, records),
                      HealthObserver(d.health), ProgressObserver(state, d.final_time, progress),
+                     ResolutionObserver(self.grid, self.backend.xp,
+                                        d.health.resolution_tolerance),
                      storage]
         try:
             try:
@@ -531,7 +554,8 @@ class Simulation:
             for observer in observers:
                 observer.close()
         return RunResult(str(out), "finished", state.step, state.t, store.snapshot_count,
-                         store.progress["wall_seconds"])
+                         store.progress["wall_seconds"],
+                         tuple(store.progress.get("resolution", {}).get("warnings", ())))
 
     def _open(self, out, resume, overwrite, rollback, protect, started):
         """The store of the run and the state it starts from: a new store with the moments

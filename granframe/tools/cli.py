@@ -183,6 +183,9 @@ def _run_one(description, out, args) -> int:
         return 130
     print(f"{out}: finished, {result.steps} steps to t = {result.time:g} in "
           f"{result.wall_seconds:.1f} s, {result.snapshots} snapshots")
+    for warning in result.warnings:
+        print(f"granframe: warning: f at t = {result.time:g} is under-resolved: {warning}",
+              file=sys.stderr)
     return 0
 
 

@@ -94,3 +94,40 @@ def pair_share_beyond(grid, f, radius: float, power: float = 0.0, xp=numpy) -> f
     beyond = xp.asarray(distance > float(radius) ** 2)
     weighted = correlation * weight
     return float(xp.sum(weighted * beyond)) / float(xp.sum(weighted))
+
+
+#: Estimated error per unit of spectral tail: in studies/free_cooling.py a temperature error
+#: of 1e-3 came with a tail of 3.5e-4, so error ~ 3 x tail (the factor granframe advise uses).
+TAIL_ERROR_FACTOR = 3.0
+
+
+def resolution_report(grid, f, negative_share: float, tolerance: float, xp=numpy) -> dict:
+    r"""The resolution indicators of f and what to raise when one exceeds ``tolerance``.
+
+    Returns ``spectral_tail`` (:func:`spectral_tail`, outermost shell), ``tail_error``
+    (``TAIL_ERROR_FACTOR`` times it: the error it predicts), ``pairs_beyond_support``
+    (:func:`pair_share_beyond` at R = 2S, unweighted: the share of pairs whose relative
+    speed the operators cut off), ``negative_mass_fraction`` (``negative_share``, from the
+    moments) and ``warnings``: one sentence per indicator above ``tolerance``, naming the
+    grid parameter to raise (``grid.n_modes`` for the tail and the negative share,
+    ``grid.support_radius`` for the pairs beyond 2S). An f that N does not resolve spreads
+    |f| over the whole box through its oscillations, so the pairs beyond 2S then also
+    point at N first.
+    """
+    tail = spectral_tail(grid, f, xp=xp)
+    beyond = pair_share_beyond(grid, f, 2.0 * grid.support_radius, xp=xp)
+    error = TAIL_ERROR_FACTOR * tail
+    setting = f"health.resolution_tolerance = {tolerance:g}"
+    warnings = []
+    if error > tolerance:
+        warnings.append(f"velocity resolution: spectral tail {tail:.3g}, estimated error "
+                        f"{error:.3g} > {setting}; raise grid.n_modes (N = {grid.n_modes})")
+    if negative_share > tolerance:
+        warnings.append(f"positivity: negative mass share {negative_share:.3g} > {setting}; "
+                        f"f oscillates, raise grid.n_modes (N = {grid.n_modes})")
+    if beyond > tolerance:
+        warnings.append(f"support: share {beyond:.3g} of pairs with relative speed beyond "
+                        f"R = 2S = {2.0 * grid.support_radius:g} > {setting}; raise "
+                        "grid.support_radius" + (" once N resolves f" if warnings else ""))
+    return {"spectral_tail": tail, "tail_error": error, "pairs_beyond_support": beyond,
+            "negative_mass_fraction": float(negative_share), "warnings": warnings}
