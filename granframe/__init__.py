@@ -28,6 +28,7 @@ _EXPORTS = {
     "SphereProduct": "granframe.velocity.quadratures", "FAMILIES": "granframe.registry",
     "default_registries": "granframe.registry", "RestitutionLaw": "granframe.model.restitution",
     "CollisionKernel": "granframe.abc",
+    "open_run": "granframe.run.dataset",
 }
 
 
@@ -94,4 +95,5 @@ __all__ = [
     "SphereProduct", "FAMILIES", "default_registries", "RestitutionLaw", "collision_kernel",
     "restitution_law", "quadrature", "array_backend", "time_integrator", "initial_condition",
     "collision_operator", "CollisionKernel",
+    "open_run",
 ]

@@ -1,7 +1,9 @@
 """One run, one zarr (v3) store: snapshots of f, moments every step, full metadata.
 
-Layout (every array carries ``dimension_names``, so ``xarray.open_zarr`` gives a
-labelled dataset):
+Layout (every array carries ``dimension_names`` and the CF attributes ``long_name`` and
+``units``, the root the flat CF attributes of :func:`root_attributes` beside granframe's
+own ``granframe`` entry, so ``xarray.open_zarr`` gives a labelled dataset;
+:func:`granframe.open_run` gives it checked and cut to the last commit):
 
 =====================  ===========================  ===================================
 array                  dimensions                   contents
@@ -70,6 +72,7 @@ import numpy
 import zarr
 
 from granframe._version import __version__
+from granframe.validators import is_real
 
 SCHEMA = "granframe.run/2"
 SWEEP_SCHEMA_KEY = "granframe_sweep"
@@ -90,6 +93,33 @@ _LONG_NAMES = {
     "sonine_a2": "second Sonine coefficient d/(d+2) kurtosis - 1",
     "momentum": "momentum int v f dv",
 }
+#: CF version whose attribute names the stores and :func:`granframe.open_run` use
+CONVENTIONS = "CF-1.10"
+#: what every quantity is measured in; all are dimensionless (CF's units "1")
+NONDIMENSIONALISATION = (
+    "All quantities are dimensionless (units 1): granframe solves "
+    "d_t f = Q_I(f, f)/eps + tau Delta_v f in reduced variables. Velocities (v1 ... vd) "
+    "are in units of a reference thermal speed v0 = sqrt(k_B T_ref / m), so that the "
+    "temperature T = int |v-u|^2 f dv / (d rho) is in units of T_ref; f is in units of "
+    "n0 / v0^d, so that its mass int f dv is the number density in units of a reference "
+    "density n0 (the initial condition sets it, 1 by default); time (time, step_time, dt) "
+    "is in units of the collision time in which the kernel reads "
+    "B = C |g|^lambda b(cos theta) E^gamma with the constant C of the run's kernel, by "
+    "default the review's convention C = 1/(2 pi) in 2D and 1/(4 pi) in 3D (Maxwell "
+    "molecules B = 1/(2 pi) in 2D, hard spheres B = |g|/(4 pi) in 3D). The heat bath tau "
+    "and the Knudsen number eps are in these units too.")
+#: added to :data:`NONDIMENSIONALISATION` for a run in self-similar variables
+RESCALED_NOTE = (
+    " This run is rescaled (free cooling in self-similar variables, "
+    "granframe.equations.rescaled): time and step_time are the rescaled time s, v1 ... vd "
+    "the velocities xi and f the profile g(s, xi), with f(t, v) = omega^d g(s, u + omega "
+    "(v - u)), omega = exp(rescaling_rate s) and dt/ds = omega^rescaling_degree.")
+REFERENCES = (
+    "J. A. Carrillo, J. Hu, Z. Ma, T. Rey, Recent development in kinetic theory of "
+    "granular materials: analysis and numerical methods, arXiv:2001.11206 (the review); "
+    "F. Filbet, L. Pareschi, G. Toscani, J. Comput. Phys. 202 (2005) 216-235; "
+    "J. Hu, Z. Ma, J. Comput. Phys. 385 (2019) 119-134")
+
 MOMENT_CHUNK = 4096
 SNAPSHOT_CHUNK = 1024
 #: statuses of a run that may be continued
@@ -139,6 +169,59 @@ def consolidate(path) -> None:
 
 def _now() -> str:
     return datetime.datetime.now(datetime.timezone.utc).isoformat()
+
+
+def array_attributes(name: str) -> dict:
+    """The CF attributes of the array ``name`` of a run store: ``long_name`` and ``units``."""
+    long_name = _LONG_NAMES.get(name, f"velocity component {name}")
+    return {"long_name": long_name, "units": "1"}
+
+
+def flat_attributes(prefix: str, value) -> dict:
+    """``value`` as attributes netCDF accepts: nested dicts become ``prefix_key`` names.
+
+    Strings and numbers are kept (a bool as 0 or 1), a list of numbers or of strings
+    stays a list, any other list becomes its JSON text; None and empty lists are left
+    out (no attribute).
+    """
+    if isinstance(value, dict):
+        flat = {}
+        for key, item in value.items():
+            flat.update(flat_attributes(f"{prefix}_{key}", item))
+        return flat
+    if value is None or (isinstance(value, list) and not value):
+        return {}
+    if isinstance(value, bool):
+        return {prefix: int(value)}
+    if isinstance(value, list):
+        alike = all(isinstance(v, str) for v in value) or all(map(is_real, value))
+        return {prefix: value if alike else json.dumps(value)}
+    return {prefix: value}
+
+
+def root_attributes(meta: dict) -> dict:
+    """The flat CF attributes of a run store's root, from its ``granframe`` metadata.
+
+    ``title``, ``source``, ``history``, ``Conventions``, ``references``,
+    ``nondimensionalisation``, ``granframe_schema``, ``description_toml``, and the
+    provenance, the rescaling and the f0 projection as ``provenance_*``,
+    ``rescaling_*`` and ``f0_projection_*`` scalars. The same for every store of one
+    description; what changes with each commit (``progress``) is not among them.
+    """
+    description = meta["description"]
+    note = NONDIMENSIONALISATION + (RESCALED_NOTE if "rescaling" in meta else "")
+    return {
+        "title": description.get("title") or "granframe run",
+        "source": f"granframe {meta['version']}",
+        "history": f"{meta['created']} created by granframe run (granframe "
+                   f"{meta['version']}, store schema {meta['schema']})",
+        "Conventions": CONVENTIONS, "references": REFERENCES,
+        "nondimensionalisation": note, "granframe_schema": meta["schema"],
+        "description_toml": meta["description_toml"],
+        **flat_attributes("provenance", meta.get("provenance", {})),
+        **flat_attributes("rescaling", meta.get("rescaling")),
+        **flat_attributes("f0_projection", meta.get("f0_projection")),
+    }
 
 
 # -- what a path holds ----------------------------------------------------------------------
@@ -433,7 +516,6 @@ class RunStore:
             points = grid.points()
             for name in axes:
                 _create(group, name, points.shape, points.shape, "f8", [name])[:] = points
-                group[name].attrs["long_name"] = f"velocity component {name}"
             _create(group, "f", (0,) + grid.shape, (1,) + grid.shape, "f8", ["time"] + axes)
             for name, dtype in (("time", "f8"), ("snapshot_step", "i8"),
                                 ("snapshot_dt_next", "f8")):
@@ -442,9 +524,7 @@ class RunStore:
                     (m, "f8") for m in SCALAR_MOMENTS):
                 _create(group, name, (0,), (MOMENT_CHUNK,), dtype, ["step_time"])
             _create(group, "momentum", (0, d), (MOMENT_CHUNK, d), "f8", ["step_time", "axis"])
-            for name, text in _LONG_NAMES.items():
-                group[name].attrs["long_name"] = text
-            group.attrs["granframe"] = {
+            meta = {
                 "schema": SCHEMA, "version": __version__, "description": description,
                 "description_toml": description_toml, "provenance": provenance,
                 "created": _now(),
@@ -452,6 +532,7 @@ class RunStore:
                 **({} if rescaling is None else {"rescaling": rescaling}),
                 **({} if projection is None else {"f0_projection": projection}),
             }
+            group.attrs.put({**root_attributes(meta), "granframe": meta})   # one write
         except BaseException:
             if staging is not None:
                 shutil.rmtree(staging, ignore_errors=True)
@@ -752,7 +833,7 @@ def _check_creatable(path: pathlib.Path, overwrite: bool, protect) -> None:
 def _create(group, name, shape, chunks, dtype, dimension_names):
     return group.create_array(name, shape=shape, chunks=chunks, dtype=dtype,
                               fill_value=fill_value(dtype), dimension_names=dimension_names,
-                              **codecs())
+                              attributes=array_attributes(name), **codecs())
 
 
 def _problem(name, array, index, kind, detail="") -> dict:
