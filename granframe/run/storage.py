@@ -932,6 +932,14 @@ def describe(path) -> str:
         for name in ("mass", "temperature", "kurtosis", "min_f"):
             values = group[name][[0, n - 1]]
             lines.append(f"  {name:<12s}{values[0]:.10g} -> {values[1]:.10g}")
+    resolution = progress.get("resolution")
+    if resolution:
+        lines.append(f"resolution  at t = {progress['time']:g} (the last commit): spectral tail "
+                     f"{resolution['spectral_tail']:.3g} (estimated error "
+                     f"{resolution['tail_error']:.3g}), negative mass share "
+                     f"{resolution['negative_mass_fraction']:.3g}, share of pairs beyond 2S "
+                     f"{resolution['pairs_beyond_support']:.3g}")
+        lines.extend(f"  warning: {warning}" for warning in resolution["warnings"])
     if meta.get("f0_projection"):
         lines.append("f0 projection (moments before -> after; the run starts after)")
         for name, m in meta["f0_projection"].items():
