@@ -29,6 +29,7 @@ _EXPORTS = {
     "default_registries": "granframe.registry", "RestitutionLaw": "granframe.model.restitution",
     "CollisionKernel": "granframe.abc",
     "open_run": "granframe.run.dataset",
+    "open_sweep": "granframe.run.sweep",
 }
 
 
@@ -96,4 +97,5 @@ __all__ = [
     "restitution_law", "quadrature", "array_backend", "time_integrator", "initial_condition",
     "collision_operator", "CollisionKernel",
     "open_run",
+    "open_sweep",
 ]

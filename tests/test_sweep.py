@@ -203,3 +203,222 @@ def test_rerunning_a_sweep_resumes_a_run_cut_short_and_records_a_health_stop(clu
     table = read_table(out)
     assert list(table["status"]) == ["finished", "failed"]
     assert "mass drift" in str(table["message"][1])
+
+
+# -- the gridded dataset, the store's conventions ------------------------------------------
+SHORT = {**BASE, "final_time": 0.1, "output": {}}
+
+
+@pytest.fixture(scope="module")
+def gridded(cluster, tmp_path_factory):
+    """A product x zip sweep store with one refused value of the product axis (N = 6)."""
+    sweep = Sweep(SHORT, product={"grid.n_modes": [24, 6]},
+                  zip={"restitution.value": [0.3, 0.7], "heat_bath": [0.1, 0.05]})
+    out = tmp_path_factory.mktemp("gridded") / "s.zarr"
+    result = run_sweep(sweep, out, client=cluster, progress=False)
+    assert (result.finished, result.failed) == (2, 2)
+    return out
+
+
+def test_open_sweep_puts_the_results_on_the_grid_of_the_axes(gridded):
+    from granframe import open_sweep
+
+    ds = open_sweep(gridded)
+    assert dict(ds.sizes) == {"grid_n_modes": 2, "restitution_value": 2}
+    assert ds.grid_n_modes.dtype == numpy.int64 and list(ds.grid_n_modes.values) == [24, 6]
+    assert ds.restitution_value.dtype == numpy.float64
+    assert ds.heat_bath.dims == ("restitution_value",)          # zipped: the same dimension
+    assert list(ds.heat_bath.values) == [0.1, 0.05]
+    assert set(ds.indexes) == {"grid_n_modes", "restitution_value"}
+    assert ds.grid_n_modes.attrs["parameter"] == "grid.n_modes"
+    assert ds.heat_bath.attrs == {"long_name": "sweep parameter heat_bath (zip axis)",
+                                  "parameter": "heat_bath", "units": "1"}
+    assert ds.steps.dtype == numpy.int64 and ds.status.dtype.kind == "U"
+    for name in ("temperature", "kurtosis", "time", "steps"):
+        assert ds[name].dims == ("grid_n_modes", "restitution_value")
+        assert ds[name].attrs["units"] == "1" and ds[name].attrs["long_name"]
+    assert ds.wall_seconds.attrs["units"] == "s"
+
+    table = read_table(gridded)
+    row = list(table["name"]).index(ds.run.sel(grid_n_modes=24, restitution_value=0.7).item())
+    point = ds.sel(grid_n_modes=24, restitution_value=0.7)
+    assert point.status.item() == "finished" and point.message.item() == ""
+    assert point.temperature.item() == table["temperature"][row]
+    assert point.heat_bath.item() == 0.05 and point.steps.item() == 5
+    assert RunStore.open(gridded / "runs" / point.run.item()).progress["status"] == "finished"
+
+    refused = ds.sel(grid_n_modes=6)                              # N = 6 cannot hold f0
+    assert list(refused.status.values) == ["failed", "failed"]
+    assert all(m.startswith("refused: ") for m in refused.message.values)
+    assert numpy.isnan(refused.temperature).all() and numpy.isnan(refused.kurtosis).all()
+    assert numpy.isfinite(ds.temperature.sel(grid_n_modes=24)).all()
+
+    assert ds.attrs["Conventions"] == "CF-1.10" and "granframe" in ds.attrs["source"]
+    assert "created by granframe sweep" in ds.attrs["history"]
+    assert Sweep.from_toml(ds.attrs["sweep_toml"]).points() == Sweep(
+        SHORT, product={"grid.n_modes": [24, 6]},
+        zip={"restitution.value": [0.3, 0.7], "heat_bath": [0.1, 0.05]}).points()
+
+
+def test_open_sweep_writes_to_netcdf_and_reads_back_the_same(gridded, tmp_path):
+    import xarray
+
+    from granframe import open_sweep
+
+    pytest.importorskip("netCDF4")
+    ds = open_sweep(gridded)
+    ds.to_netcdf(tmp_path / "s.nc", engine="netcdf4")
+    with xarray.open_dataset(tmp_path / "s.nc", engine="netcdf4") as back:
+        xarray.testing.assert_identical(back.load(), ds)
+        assert back.grid_n_modes.dtype == numpy.int64 and back.steps.dtype == numpy.int64
+
+
+def test_open_sweep_and_info_refuse_what_is_not_a_sweep_store(tmp_path, capsys):
+    from granframe import open_sweep
+    from granframe.tools.cli import main
+
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("mine\n")
+    with pytest.raises(ValueError, match="parameter 'path'.*must be a sweep store"):
+        open_sweep(tmp_path / "mine")
+    assert main(["info", str(tmp_path / "mine")]) == 2
+    assert "Traceback" not in capsys.readouterr().err
+
+
+def test_info_on_a_sweep_store_says_what_is_in_it(gridded, capsys):
+    from granframe.tools.cli import main
+
+    assert main(["info", str(gridded)]) == 0
+    out = capsys.readouterr().out
+    assert f"sweep store {gridded}" in out
+    assert "grid_n_modes (product, 2 values): grid.n_modes = 24, 6" in out
+    assert ("restitution_value (zip, 2 values): restitution.value = 0.3, 0.7; "
+            "heat_bath = 0.1, 0.05") in out
+    assert "points      4: 2 finished, 2 failed (2 refused for their parameters)" in out
+    assert "failed    grid.n_modes-6__restitution.value-0.3__heat_bath-0.1: refused: " in out
+    assert "grid_n_modes 2 x restitution_value 2: granframe.open_sweep(" in out
+    assert "base (TOML)" in out and "final_time = 0.1" in out
+
+
+def test_a_sweep_store_is_extended_by_new_axis_values_and_runs_only_them(cluster, tmp_path):
+    sweep = Sweep(SHORT, product={"restitution.value": [0.3, 0.7]})
+    out = tmp_path / "s.zarr"
+    assert run_sweep(sweep, out, client=cluster, progress=False).finished == 2
+    before = {p.name: (p / "zarr.json").read_bytes() for p in (out / "runs").iterdir()}
+
+    wider = Sweep(SHORT, product={"restitution.value": [0.3, 0.5, 0.7]})
+    result = run_sweep(wider, out, client=cluster, progress=False)
+    assert (result.finished, result.failed, result.skipped) == (3, 0, 2)
+    assert {p.name: (p / "zarr.json").read_bytes() for p in (out / "runs").iterdir()
+            if p.name in before} == before                  # the ended runs untouched
+    assert list(read_table(out)["restitution.value"]) == [0.3, 0.5, 0.7]
+    from granframe import open_sweep
+
+    ds = open_sweep(out)
+    assert list(ds.restitution_value.values) == [0.3, 0.5, 0.7]
+    assert list(ds.status.values) == ["finished"] * 3
+
+    other = Sweep({**SHORT, "final_time": 0.2}, product={"restitution.value": [0.3, 0.9]})
+    with pytest.raises(ValueError, match="holds another sweep: its base differs at final_time"):
+        run_sweep(other, out, client=cluster, progress=False)
+    narrower = Sweep(SHORT, product={"restitution.value": [0.3]})
+    with pytest.raises(ValueError, match="2 of its 3 runs are not points of this one"):
+        run_sweep(narrower, out, client=cluster, progress=False)
+
+
+def test_refused_points_are_not_retried_unless_asked(cluster, tmp_path):
+    """A point the description refuses is recorded once (it has no run store) and a
+    rerun skips it; retry_failed submits it again."""
+    import zarr
+
+    refused = Sweep(SHORT, product={"grid.n_modes": [6]})
+    out = tmp_path / "r.zarr"
+    first = run_sweep(refused, out, client=cluster, progress=False)
+    assert (first.failed, first.skipped, first.refused) == (1, 0, 0)
+    again = run_sweep(refused, out, client=cluster, progress=False)
+    assert (again.failed, again.skipped, again.refused) == (1, 0, 1)
+    retried = run_sweep(refused, out, client=cluster, progress=False, retry_failed=True)
+    assert (retried.failed, retried.skipped, retried.refused) == (1, 0, 0)
+    name = run_name(refused.points()[0])
+    recorded = zarr.open_group(str(tmp_path / "r.zarr"), mode="r").attrs["granframe_sweep"]
+    assert recorded["refused"][name].startswith("refused: ")
+    assert "refused: " in read_table(tmp_path / "r.zarr")["message"][0]
+    assert not (tmp_path / "r.zarr" / "runs" / name).exists()
+
+
+def test_a_health_stop_is_run_again_from_the_start_only_when_asked(cluster, tmp_path):
+    """A rerun keeps a run stopped by a health check; retry_failed replaces its store by a
+    new run from t = 0 (here stopped again, by the same check)."""
+    stopped = Sweep(SHORT, product={"health.mass_tolerance": [1e-300]})
+    out = tmp_path / "h.zarr"
+    path = out / "runs" / run_name(stopped.points()[0])
+    run_sweep(stopped, out, client=cluster, progress=False)
+    created = RunStore.open(path).metadata["created"]
+    run_sweep(stopped, out, client=cluster, progress=False)
+    assert RunStore.open(path).metadata["created"] == created
+    run_sweep(stopped, out, client=cluster, progress=False, retry_failed=True)
+    store = RunStore.open(path)
+    assert store.metadata["created"] != created and store.progress["resumes"] == []
+    assert store.progress["status"] == "failed" and "mass drift" in store.progress["message"]
+
+
+def test_command_line_sweep_overwrite_replaces_only_a_granframe_store(cluster, tmp_path,
+                                                                    capsys):
+    import tomli_w
+
+    from granframe.tools.cli import main
+
+    path = tmp_path / "sweep.toml"
+    path.write_text(tomli_w.dumps({"base": SHORT, "product": {"grid.n_modes": [6]}}))
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "results.txt").write_text("precious\n")
+    assert main(["sweep", str(path), "--out", str(mine), "--overwrite"]) == 2
+    err = capsys.readouterr().err
+    assert "--overwrite refused" in err and "not a granframe store" in err
+    assert [p.name for p in mine.iterdir()] == ["results.txt"]
+    assert main(["sweep", str(path), "--out", str(tmp_path), "--overwrite"]) == 2
+    assert "holds the source" in capsys.readouterr().err
+
+    out = tmp_path / "s.zarr"
+    old = Sweep({**SHORT, "final_time": 0.2}, product={"restitution.value": [0.3]})
+    run_sweep(old, out, client=cluster, progress=False)
+    stale = out / "runs" / run_name(old.points()[0])
+    assert main(["sweep", str(path), "--out", str(out), "--scheduler",
+                 cluster.scheduler.address, "--overwrite", "--retry-failed"]) == 3
+    assert not stale.exists()
+    assert list(read_table(out)["grid.n_modes"]) == [6]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine", "s.zarr", "sweep.toml"]
+
+
+@pytest.mark.parametrize("killed_after", ["the rename", "the new directory"])
+def test_an_overwrite_cut_short_leaves_the_old_store_or_the_new_one(cluster, tmp_path,
+                                                                    killed_after):
+    """--overwrite renames the old store aside, makes the new directory, then deletes the
+    old store: killed after the rename, the next sweep puts the old store back; killed
+    after the new directory exists, it deletes the old one."""
+    sweep = Sweep(SHORT, product={"grid.n_modes": [6]})             # refused: no run to wait
+    out = tmp_path / "s.zarr"
+    run_sweep(sweep, out, client=cluster, progress=False)
+    os.rename(out, tmp_path / ".s.zarr.granframe-old-0123abcd")
+    if killed_after == "the new directory":
+        out.mkdir()
+    result = run_sweep(sweep, out, client=cluster, progress=False)
+    assert result.refused == (1 if killed_after == "the rename" else 0)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.zarr"]
+
+
+def test_the_documented_sweep_is_the_shipped_one_and_the_study_writes_it():
+    import importlib.util
+    import pathlib
+    import tomllib
+
+    root = pathlib.Path(__file__).resolve().parent.parent
+    block = (root / "docs" / "scaling.md").read_text().split("```toml\n", 1)[1].split("```")[0]
+    shipped = (root / "docs" / "figures" / "sweep" / "sweep.toml").read_text()
+    assert tomllib.loads(block) == tomllib.loads(shipped)
+    spec = importlib.util.spec_from_file_location(
+        "heated_state_sweep", root / "studies" / "heated_state_sweep.py")
+    study = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(study)
+    assert study.sweep().to_dict() == Sweep.from_toml(shipped).to_dict()

@@ -7,7 +7,8 @@ product). Each point is a run; :func:`run_sweep` submits one Dask task per run, 
 
 Layout of the sweep store ``STORE``::
 
-    STORE/zarr.json            group; attrs["granframe_sweep"]: the sweep, run names
+    STORE/zarr.json            group; attrs["granframe_sweep"]: the sweep, run names, the
+                               points refused for their parameters, created/updated times
     STORE/runs/<name>/         one run store (granframe.run.storage) per point
     STORE/table/               the sweep table: one row per run, in sweep order
 
@@ -15,21 +16,38 @@ The run stores are the record: each is written by the runner's commits (a store 
 consistent after any interruption) and resumed by it. A run that is finished is skipped
 when the sweep runs again; a run cut short (a worker killed, the sweep interrupted)
 resumes from its last snapshot, on whichever worker takes it; a run stopped by a health
-check, or refused for its parameters, stays failed with its message. The table is
-derived from the run stores by the process that drives the sweep (one writer): one row
-per run, rewritten whole, so a row is never written twice or half. It opens with
-``xarray.open_zarr(STORE, group="table")`` (dimension ``run``) or :func:`read_table`.
+check stays failed with its message, and a point refused for its parameters is recorded
+as refused in the root attributes (it has no run store) and not submitted again. Both are
+run again when asked (``retry_failed``). The table is derived from the run stores by the
+process that drives the sweep (one writer): one row per run, rewritten whole, so a row is
+never written twice or half.
+
+A sweep store is extended by running a sweep of the same base with more axis values: every
+run the store holds must be a point of the new sweep, the runs already ended are kept, and
+only the new points are run. A sweep of another base, or one that drops points, is
+refused; ``overwrite`` replaces the store (only a granframe store, see
+:func:`granframe.run.storage.check_replaceable`).
+
+:func:`open_sweep` gives the table as a gridded ``xarray.Dataset`` (one dimension per
+product axis and one for the zip axes, the parameters as coordinates), and
+:func:`describe_sweep` says what a sweep store holds (``granframe info``). The flat table
+also opens with ``xarray.open_zarr(STORE, group="table")`` (dimension ``run``) or
+:func:`read_table`.
 """
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import itertools
 import json
 import math
+import os
 import pathlib
 import re
+import shutil
 import time
+import uuid
 import warnings
 
 import attrs
@@ -38,8 +56,11 @@ import tqdm
 import zarr
 
 from granframe import validators as check
+from granframe._version import __version__
 from granframe.run.description import RunDescription
-from granframe.run.storage import WriterLock, codecs, store_kind
+from granframe.run.storage import (_LONG_NAMES, _TRASH, SWEEP_SCHEMA_KEY, WriterLock,
+                                   _differences, _now, _sibling, check_replaceable, codecs,
+                                   recover, store_kind)
 
 SCHEMA = "granframe.run.sweep/1"
 #: the final moments of a run the table keeps
@@ -176,26 +197,33 @@ def _status(path) -> str | None:
         return "damaged"
 
 
+#: the message of a point refused for its parameters begins with this
+REFUSED = "refused: "
+
+
 def _failed(message: str) -> dict:
     return {"status": "failed", "message": message, "wall_seconds": 0.0, "steps": 0,
             "time": 0.0, **{name: math.nan for name in TABLE_MOMENTS}}
 
 
-def run_point(description: dict, path: str, poll: float = 1.0) -> dict:
+def run_point(description: dict, path: str, poll: float = 1.0,
+              retry_failed: bool = False) -> dict:
     """Run (or resume, or skip) one point into ``path``; the task a worker executes.
 
-    Returns its table row. Parameters the description refuses, health stops and a damaged
-    store are returned as ``failed`` with the message; nothing is raised. When another
-    process holds the store's writer lock (Dask gave the task again to a new worker while
-    the first, presumed dead, still runs it), this one waits for it, polling every
-    ``poll`` seconds, and then takes the store as that process left it: finished, or cut
-    short and resumed from there. Two processes never write one store.
+    Returns its table row. Parameters the description refuses (message ``refused: ...``),
+    health stops and a damaged store are returned as ``failed`` with the message; nothing
+    is raised. A run stopped by a health check is returned as it is, or with
+    ``retry_failed`` run again from the start (its store replaced atomically). When
+    another process holds the store's writer lock (Dask gave the task again to a new
+    worker while the first, presumed dead, still runs it), this one waits for it, polling
+    every ``poll`` seconds, and then takes the store as that process left it: finished, or
+    cut short and resumed from there. Two processes never write one store at once.
     """
     from granframe.run.runner import HealthError, Simulation
     from granframe.run.storage import StoreError, StoreLockedError
 
     status = _status(path)
-    if status in ("finished", "failed"):
+    if status == "finished" or (status == "failed" and not retry_failed):
         return _row(path)
     if status == "damaged":
         return _failed(f"store: the run store '{path}' cannot be read (granframe check "
@@ -203,13 +231,15 @@ def run_point(description: dict, path: str, poll: float = 1.0) -> dict:
     try:
         simulation = Simulation(RunDescription.from_dict(description))
     except (ValueError, TypeError) as exc:
-        return _failed(f"refused: {exc}")
+        return _failed(f"{REFUSED}{exc}")
+    mode = {"overwrite": True} if status == "failed" else {"resume": True}
     while True:
         try:
-            simulation.run(path, resume=True, progress=False)
+            simulation.run(path, progress=False, **mode)
             break
         except StoreLockedError:
             time.sleep(poll)
+            mode = {"resume": True}            # take the store as its holder leaves it
         except HealthError:
             break                              # the store says failed, with the message
         except StoreError as exc:
@@ -225,14 +255,19 @@ def _row(path) -> dict:
         return _failed(f"store: {exc}")
 
 
+def _text(value) -> str:
+    """A parameter value as text: a string itself, anything else as JSON."""
+    return value if isinstance(value, str) else json.dumps(value, sort_keys=True)
+
+
 def _write_table(root: zarr.Group, names, points, rows) -> None:
     """The sweep table, rewritten whole from ``rows`` (name -> row; missing: pending)."""
     columns = {"name": numpy.array(names, dtype=str)}
     for key in points[0] if points else ():
         values = [p[key] for p in points]
-        kind = str if any(isinstance(v, str) for v in values) else float
-        columns[key] = numpy.array([kind(v) if not isinstance(v, bool) else float(v)
-                                    for v in values])
+        numeric = all(isinstance(v, (int, float)) for v in values)      # bool is an int
+        columns[key] = numpy.array([float(v) for v in values] if numeric
+                                   else [_text(v) for v in values])
     empty = {"status": "pending", "message": "", "wall_seconds": math.nan, "steps": 0,
              "time": math.nan, **{m: math.nan for m in TABLE_MOMENTS}}
     for field, default in empty.items():
@@ -259,25 +294,60 @@ def read_table(store) -> dict:
 
 @attrs.frozen
 class SweepResult:
-    """What a sweep did: its store, and how many runs finished, failed or were skipped."""
+    """What a sweep did: its store, and how many runs finished, failed or were skipped.
+
+    ``finished`` and ``failed`` count every point of the sweep that has ended; among them,
+    ``skipped`` runs whose stores had ended before and ``refused`` points refused for their
+    parameters before, which were not submitted again.
+    """
 
     store: str
     finished: int
     failed: int
     skipped: int
+    refused: int
     wall_seconds: float
 
 
 def run_sweep(sweep: Sweep, out, *, client=None, scheduler: str | None = None,
-              workers: int | None = None, progress: bool | None = None) -> SweepResult:
+              workers: int | None = None, progress: bool | None = None,
+              overwrite: bool = False, retry_failed: bool = False,
+              protect=()) -> SweepResult:
     """Run every point of ``sweep`` into the store ``out`` on Dask (see the module notes).
 
-    ``client`` (a ``distributed.Client``), else ``scheduler`` (an address), else a
-    ``LocalCluster`` of ``workers`` single-threaded worker processes (default: one per
-    core) made for the sweep and closed after it.
-    """
-    import distributed
+    Parameters
+    ----------
+    sweep : Sweep
+        The base description and its axes.
+    out : str or pathlib.Path
+        A new path, an empty directory, or a sweep store of the same base (continued, or
+        extended by new axis values: its ended runs are kept).
+    client : distributed.Client, optional
+        Where the runs are submitted; else ``scheduler``, else a ``LocalCluster`` of
+        ``workers`` single-threaded worker processes (default: one per core). A client or
+        cluster made here is closed after the sweep.
+    scheduler : str, optional
+        The address of an existing Dask scheduler.
+    workers : int, optional
+        Worker processes of the LocalCluster.
+    progress : bool, optional
+        A progress bar; None shows it on a terminal only.
+    overwrite : bool
+        Replace the granframe store at ``out`` (a run or sweep store, never anything else,
+        nor a store holding a path of ``protect``;
+        :func:`granframe.run.storage.check_replaceable`).
+    retry_failed : bool
+        Run again the points refused for their parameters and the runs stopped by a
+        health check (from the start); without it, both stay failed.
+    protect : sequence of paths
+        Paths ``out`` must not hold when it is replaced (the sweep's own file).
 
+    Returns
+    -------
+    SweepResult
+        Runs finished and failed, among them those that had ended before (skipped) and
+        the points refused before and not submitted again (refused).
+    """
     if not isinstance(sweep, Sweep):
         check.reject("run_sweep", "sweep", sweep, "must be a Sweep", error=TypeError)
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
@@ -289,8 +359,11 @@ def run_sweep(sweep: Sweep, out, *, client=None, scheduler: str | None = None,
     kind = store_kind(out)
     if kind == "other" and {p.name for p in out.iterdir()} == {"runs"}:
         kind = "sweep"             # run stores written before the sweep's own metadata
-    if kind not in ("missing", "empty", "sweep"):
-        what = {"run": "a granframe run store", "file": "a file"}.get(kind, "not a sweep store")
+    if overwrite:
+        check_replaceable(out, protect)          # refused before anything is touched
+    elif kind not in ("missing", "empty", "sweep"):
+        what = {"run": "a granframe run store (--overwrite replaces it)",
+                "file": "a file"}.get(kind, "not a sweep store")
         check.reject("run_sweep", "out", str(out), f"must be a new path, an empty directory or "
                      f"a sweep store; it is {what}")
     points = sweep.points()
@@ -298,59 +371,304 @@ def run_sweep(sweep: Sweep, out, *, client=None, scheduler: str | None = None,
     if len(set(names)) != len(names):
         check.reject("run_sweep", "sweep", sweep.to_dict(), "gives two points the same name")
     with WriterLock(out):
-        return _drive(sweep, out, points, names, client, scheduler, workers, progress, start)
+        recover(out)               # an overwrite cut short: the old store back, or deleted
+        if overwrite:
+            _clear(out, protect)
+        return _drive(sweep, out, points, names, client, scheduler, workers, progress,
+                      retry_failed, start)
 
 
-def _drive(sweep, out, points, names, client, scheduler, workers, progress, start):
+def _clear(out: pathlib.Path, protect) -> None:
+    """Replace the granframe store at ``out`` by an empty directory (its lock held).
+
+    The store is renamed aside, the empty directory made, then the old store deleted: a
+    kill before the directory exists leaves the old store for :func:`recover` to put back,
+    a kill after it leaves the old store for :func:`recover` to delete.
+    """
+    check_replaceable(out, protect)              # again, now that no sweep can start
+    if store_kind(out) in ("missing", "empty"):
+        return
+    trash = _sibling(out, _TRASH, uuid.uuid4().hex[:12])
+    os.rename(out, trash)
+    out.mkdir()
+    shutil.rmtree(trash)
+
+
+def _check_extension(previous: dict, sweep: Sweep, names, out) -> None:
+    """Refuse a sweep that is not the stored one or an extension of it (same base, every
+    stored run one of its points)."""
+    stored = previous["sweep"]
+    changed = list(_differences(stored.get("base"), json.loads(json.dumps(sweep.base))))
+    advice = "choose a new store, or --overwrite to replace it"
+    if changed:
+        check.reject("run_sweep", "out", str(out), f"holds another sweep: its base differs at "
+                     f"{', '.join(changed[:5])}; a sweep store is extended only by a sweep of "
+                     f"the same base ({advice})")
+    runs, wanted = previous.get("runs", []), set(names)
+    dropped = [name for name in runs if name not in wanted]
+    if dropped:
+        check.reject("run_sweep", "out", str(out), f"holds another sweep: {len(dropped)} of its "
+                     f"{len(runs)} runs are not points of this one ({', '.join(dropped[:3])}"
+                     f"{', ...' if len(dropped) > 3 else ''}); a sweep store is extended only "
+                     f"by adding axis values ({advice})")
+
+
+def _drive(sweep, out, points, names, client, scheduler, workers, progress, retry_failed,
+           start):
     """run_sweep with the sweep store's writer lock held (one driver, one table writer)."""
     import distributed
 
     root = zarr.open_group(str(out), mode="a", zarr_format=3)
-    previous = root.attrs.get("granframe_sweep")
-    if previous is not None and previous.get("sweep") != json.loads(json.dumps(sweep.to_dict())):
-        check.reject("run_sweep", "out", str(out), "holds another sweep; choose a new store")
-    root.attrs["granframe_sweep"] = {"schema": SCHEMA, "sweep": sweep.to_dict(), "runs": names}
+    previous = root.attrs.get(SWEEP_SCHEMA_KEY) or {}
+    if "sweep" in previous:
+        _check_extension(previous, sweep, names, out)
     paths = {n: str(out / "runs" / n) for n in names}
-    rows, todo = {}, []
+    refused = {n: m for n, m in previous.get("refused", {}).items() if n in paths}
+    meta = {"schema": SCHEMA, "version": __version__, "sweep": sweep.to_dict(),
+            "runs": names, "refused": refused, "created": previous.get("created", _now())}
+    root.attrs[SWEEP_SCHEMA_KEY] = {**meta, "updated": _now()}
+    rows, todo, kept = {}, [], 0
     for name, point in zip(names, points):
-        if _status(paths[name]) in ("finished", "failed"):
+        status = _status(paths[name])
+        if status == "finished" or (status == "failed" and not retry_failed):
             rows[name] = _row(paths[name])
-            continue
-        todo.append((name, apply(sweep.base, point)))
-    skipped = len(rows)
-    _write_table(root, names, points, rows)
-    own = None
-    if client is None:
-        if scheduler is not None:
-            client = distributed.Client(scheduler)
+        elif status is None and name in refused and not retry_failed:
+            rows[name] = _failed(refused[name])
+            kept += 1
         else:
-            own = distributed.LocalCluster(n_workers=workers, threads_per_worker=1,
-                                           processes=True, dashboard_address=":0")
-            client = distributed.Client(own)
-    try:
-        print(f"sweep: {len(names)} runs, {skipped} already ended, {len(todo)} to run; "
-              f"Dask dashboard: {client.dashboard_link}")
-        futures = {client.submit(run_point, description, paths[name], key=f"granframe-{name}",
-                                 pure=False): name for name, description in todo}
+            todo.append((name, apply(sweep.base, point)))
+    skipped = len(rows) - kept
+    _write_table(root, names, points, rows)
+    with contextlib.ExitStack() as made:           # a client or cluster made here is closed
+        if client is None and scheduler is not None:
+            client = made.enter_context(distributed.Client(scheduler))
+        elif client is None:
+            cluster = made.enter_context(distributed.LocalCluster(
+                n_workers=workers, threads_per_worker=1, processes=True,
+                dashboard_address=":0"))
+            client = made.enter_context(distributed.Client(cluster))
+        kept_refused = (f", {kept} refused before (--retry-failed submits them again)"
+                        if kept else "")
+        print(f"sweep: {len(names)} runs, {skipped} already ended{kept_refused}, {len(todo)} "
+              f"to run; Dask dashboard: {client.dashboard_link}")
+        futures = {client.submit(run_point, description, paths[name], retry_failed=retry_failed,
+                                 key=f"granframe-{name}", pure=False): name
+                   for name, description in todo}
         counts = {"finished": 0, "failed": 0}
-        bar = tqdm.tqdm(total=len(todo), disable=None if progress is None else not progress,
-                        unit="run", dynamic_ncols=True)
-        try:
+        with tqdm.tqdm(total=len(todo), disable=None if progress is None else not progress,
+                       unit="run", dynamic_ncols=True) as bar:
             for future in distributed.as_completed(futures):
                 name = futures[future]
-                rows[name] = future.result()
-                counts["finished" if rows[name]["status"] == "finished" else "failed"] += 1
+                rows[name] = row = future.result()
+                if row["status"] == "failed" and row["message"].startswith(REFUSED):
+                    refused[name] = row["message"]
+                else:
+                    refused.pop(name, None)
+                counts["finished" if row["status"] == "finished" else "failed"] += 1
                 running = sum(len(keys) for keys in client.processing().values())
                 bar.update(1)
                 bar.set_postfix_str(f"done {counts['finished']}, failed {counts['failed']}, "
                                     f"running {running}", refresh=False)
+                root.attrs[SWEEP_SCHEMA_KEY] = {**meta, "refused": refused, "updated": _now()}
                 _write_table(root, names, points, rows)
-        finally:
-            bar.close()
-    finally:
-        if own is not None:
-            client.close()
-            own.close()
     finished = sum(1 for r in rows.values() if r["status"] == "finished")
-    return SweepResult(str(out), finished, len(rows) - finished, skipped,
+    return SweepResult(str(out), finished, len(rows) - finished, skipped, kept,
                        time.perf_counter() - start)
+
+
+# -- reading a sweep store ------------------------------------------------------------------
+#: the table's columns besides the parameters and the run name, and their attributes
+_RESULTS = {
+    "status": {"long_name": "status of the run: finished, failed (see message) or pending "
+                            "(not run yet, or cut short: running the sweep again resumes it)"},
+    "message": {"long_name": "why the run failed; empty when it did not"},
+    "wall_seconds": {"long_name": "wall-clock time of the run", "units": "s"},
+    "steps": {"long_name": "time steps taken", "units": "1"},
+    "time": {"long_name": "time reached by the run", "units": "1"},
+    **{name: {"long_name": f"{_LONG_NAMES[name]} at the end of the run (NaN unless "
+                           "finished)", "units": "1"} for name in TABLE_MOMENTS},
+}
+_PENDING = {"status": "pending", "message": "", "wall_seconds": math.nan, "steps": 0,
+            "time": math.nan, **{name: math.nan for name in TABLE_MOMENTS}}
+
+
+def _sweep_metadata(path: pathlib.Path, owner: str) -> dict:
+    """The ``granframe_sweep`` attributes of the sweep store at ``path``, or a clear error."""
+    kind = store_kind(path)
+    if kind != "sweep":
+        what = {"missing": "missing", "file": "a file", "empty": "an empty directory",
+                "run": "a run store (granframe info or xarray.open_zarr read it)"}.get(
+                    kind, "not a granframe store")
+        check.reject(owner, "path", str(path), f"must be a sweep store (granframe sweep "
+                     f"SWEEP.toml --out STORE); it is {what}")
+    meta = zarr.open_group(str(path), mode="r", use_consolidated=False).attrs[SWEEP_SCHEMA_KEY]
+    if "sweep" not in meta:
+        check.reject(owner, "path", str(path), "must be a sweep store that records its sweep; "
+                     "this one names its runs only (run its sweep over it again to record it)")
+    return meta
+
+
+def _stored_rows(path: pathlib.Path) -> dict:
+    """Run name -> its row of the stored table; empty when there is no table yet."""
+    root = zarr.open_group(str(path), mode="r", use_consolidated=False)
+    if "table" not in root:
+        return {}
+    group = root["table"]
+    columns = {key: group[key][:] for key in ("name", *_RESULTS)}
+    return {str(name): {key: columns[key][i] for key in _RESULTS}
+            for i, name in enumerate(columns["name"])}
+
+
+def _grid(sweep: Sweep) -> list[tuple[str, str, dict]]:
+    """The dimensions of the gridded sweep: (name, axis kind, dotted parameter -> values);
+    one per product axis, then one for the zip axes, named after the first of them."""
+    dims = [(_variable(key), "product", {key: values}) for key, values in sweep.product.items()]
+    if sweep.zip:
+        dims.append((_variable(next(iter(sweep.zip))), "zip", sweep.zip))
+    return dims
+
+
+def _variable(key: str) -> str:
+    """The variable name of a dotted parameter: ``grid.n_modes`` -> ``grid_n_modes``."""
+    return re.sub(r"\W", "_", key)
+
+
+def _coordinate(values: list) -> numpy.ndarray:
+    """Axis values in their own type: int64, float64, bool, or text (JSON for tables)."""
+    if all(isinstance(v, bool) for v in values):
+        return numpy.array(values, dtype=bool)
+    if all(check.is_integer(v) for v in values):
+        return numpy.array(values, dtype=numpy.int64)
+    if all(check.is_real(v) for v in values):
+        return numpy.array(values, dtype=numpy.float64)
+    return numpy.array([_text(v) for v in values], dtype=str)
+
+
+def open_sweep(path) -> "xarray.Dataset":
+    """The results of a sweep store as an ``xarray.Dataset`` on the sweep's grid.
+
+    Each product axis is a dimension, its values the coordinate; the zip axes share one
+    dimension, named after the first zipped parameter (whose values index it), with each
+    zipped parameter a coordinate along it. Variable names replace the dots of parameters
+    (``grid.n_modes`` -> ``grid_n_modes``; the dotted name is the ``parameter``
+    attribute). Integer axes are int64, real ones float64, names and tables text.
+    Variables on the grid: ``status``, ``message``, ``run`` (the run store under
+    ``runs/``), ``wall_seconds``, ``steps``, ``time`` and the final moments
+    (:data:`TABLE_MOMENTS`), NaN unless the run finished. Every quantity is
+    dimensionless (units "1") but the wall time (s). The root attributes (``title``,
+    ``source``, ``history``, ``Conventions``, ``granframe_schema``, and the sweep as TOML
+    text in ``sweep_toml``) are flat, so ``to_netcdf`` writes the dataset as it is.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A sweep store (``granframe sweep ... --out STORE``).
+
+    Returns
+    -------
+    xarray.Dataset
+        Also for a sweep under way: its points not yet run are ``pending``.
+    """
+    import tomli_w
+    import xarray
+
+    path = pathlib.Path(path)
+    meta = _sweep_metadata(path, "open_sweep")
+    sweep = Sweep.from_dict(meta["sweep"])
+    names = [run_name(p) for p in sweep.points()]
+    dims = _grid(sweep)
+    shape = tuple(len(next(iter(axes.values()))) for _, _, axes in dims)
+    dimensions = tuple(name for name, _, _ in dims)
+    stored = _stored_rows(path)
+    rows = [stored.get(name, _PENDING) for name in names]
+    finished = numpy.array([row["status"] == "finished" for row in rows])
+    variables = {"run": (dimensions, numpy.array(names, dtype=str).reshape(shape),
+                         {"long_name": "name of the run store (STORE/runs/<run>)"})}
+    for key, attributes in _RESULTS.items():
+        values = numpy.array([row[key] for row in rows])
+        if key in ("status", "message"):
+            values = values.astype(str)
+        elif key == "steps":
+            values = values.astype(numpy.int64)
+        elif key in TABLE_MOMENTS:
+            values = numpy.where(finished, values.astype(numpy.float64), math.nan)
+        variables[key] = (dimensions, values.reshape(shape), dict(attributes))
+    coordinates = {}
+    for dimension, kind, axes in dims:
+        for key, values in axes.items():
+            values = _coordinate(values)
+            attributes = {"long_name": f"sweep parameter {key} ({kind} axis)",
+                          "parameter": key, **({"units": "1"} if values.dtype.kind in "if"
+                                               else {})}
+            coordinates[_variable(key)] = ((dimension,), values, attributes)
+    taken = [_variable(key) for key in (*sweep.product, *sweep.zip)]
+    if len(set(taken)) < len(taken) or set(taken) & set(variables):
+        check.reject("open_sweep", "path", str(path), f"holds a sweep whose parameters "
+                     f"{sorted([*sweep.product, *sweep.zip])} do not give distinct variable "
+                     f"names (dots become underscores; {sorted(variables)} are taken)")
+    version = meta.get("version", "(version not recorded)")
+    schema = meta.get("schema", SCHEMA)
+    history = [f"{meta[key]} {what} by granframe sweep (granframe {version}, store schema "
+               f"{schema})" for key, what in (("created", "created"), ("updated", "last written"))
+               if key in meta]
+    attributes = {"title": sweep.base.get("title") or "granframe sweep",
+                  "source": f"granframe {version}", "history": "\n".join(history),
+                  "Conventions": "CF-1.10", "granframe_schema": schema,
+                  "sweep_toml": tomli_w.dumps(sweep.to_dict())}
+    return xarray.Dataset(variables, coordinates, attributes)
+
+
+def describe_sweep(path) -> str:
+    """What a sweep store holds, in words (``granframe info``): its axes, its points and
+    how many finished, failed or are pending, its failures, where its table is, its base.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A sweep store.
+
+    Returns
+    -------
+    str
+        The report, one item a line.
+    """
+    import tomli_w
+
+    path = pathlib.Path(path)
+    meta = _sweep_metadata(path, "describe_sweep")
+    sweep = Sweep.from_dict(meta["sweep"])
+    names = [run_name(p) for p in sweep.points()]
+    stored = _stored_rows(path)
+    rows = {name: stored.get(name, _PENDING) for name in names}
+    lines = [f"sweep store {os.fspath(path)}",
+             f"granframe   {meta.get('version', '(version not recorded)')} (schema "
+             f"{meta.get('schema', SCHEMA)})"
+             + (f", created {meta['created']}" if "created" in meta else "")
+             + (f", updated {meta['updated']}" if "updated" in meta else "")]
+    dims = _grid(sweep)
+    for i, (dimension, kind, axes) in enumerate(dims):
+        values = next(iter(axes.values()))
+        shown = "; ".join(f"{key} = " + ", ".join(_text(v) for v in vals[:8])
+                          + (", ..." if len(vals) > 8 else "") for key, vals in axes.items())
+        lines.append(f"{'axes' if i == 0 else '':<12s}{dimension} ({kind}, {len(values)} "
+                     f"values): {shown}")
+    counts = {}
+    for row in rows.values():
+        counts[row["status"]] = counts.get(row["status"], 0) + 1
+    refused = sum(1 for n in names if n in meta.get("refused", {}))
+    lines.append(f"points      {len(names)}: " + ", ".join(
+        f"{counts[s]} {s}" + (f" ({refused} refused for their parameters)"
+                              if s == "failed" and refused else "")
+        for s in ("finished", "failed", "pending") if s in counts))
+    failed = [(n, r["message"]) for n, r in rows.items() if r["status"] == "failed"]
+    for name, message in failed[:5]:
+        lines.append(f"  failed    {name}: {message}")
+    if len(failed) > 5:
+        lines.append(f"  ... and {len(failed) - 5} more failed (open_sweep gives every "
+                     "message)")
+    grid = " x ".join(f"{d} {len(next(iter(a.values())))}" for d, _, a in dims)
+    lines.append(f"table       {grid}: granframe.open_sweep('{os.fspath(path)}'); the flat "
+                 f"table: xarray.open_zarr('{os.fspath(path)}', group='table')")
+    lines.append("base (TOML)")
+    lines.extend("  " + line for line in tomli_w.dumps(sweep.base).strip().splitlines())
+    return "\n".join(lines)

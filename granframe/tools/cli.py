@@ -21,7 +21,8 @@ info STORE
 check STORE
     Read every committed chunk of a run (or sweep) store and list the missing or damaged
     ones; exit status 3 when there is any.
-sweep SWEEP.toml --out STORE [--scheduler ADDRESS] [--workers N] [--progress]
+sweep SWEEP.toml --out STORE [--scheduler ADDRESS] [--workers N] [--overwrite]
+      [--retry-failed] [--progress]
     Run every point of a parameter sweep on Dask into one zarr store (docs/scaling.md);
     running it again skips ended runs and resumes cut ones. Exit status 3 when a run failed.
 advise SCENE.toml [--out DESCRIPTION.toml] [--json]
@@ -224,9 +225,11 @@ def _plot(args) -> int:
 
 
 def _info(args) -> int:
-    from granframe.run.storage import describe
+    from granframe.run.storage import describe, store_kind
+    from granframe.run.sweep import describe_sweep
 
-    print(describe(args.store))
+    print(describe_sweep(args.store) if store_kind(args.store) == "sweep"
+          else describe(args.store))
     return 0
 
 
@@ -239,15 +242,17 @@ def _sweep(args) -> int:
     try:
         result = run_sweep(Sweep.from_toml(path.read_text()), args.out,
                            scheduler=args.scheduler, workers=args.workers,
-                           progress=args.progress)
+                           progress=args.progress, overwrite=args.overwrite,
+                           retry_failed=args.retry_failed, protect=(path,))
     except KeyboardInterrupt:
         print(f"\ngranframe: interrupted; the sweep store '{args.out}' keeps every ended run "
               "and every snapshot of the others: run the same sweep again to continue",
               file=sys.stderr)
         return 130
     print(f"{result.store}: {result.finished} finished, {result.failed} failed "
-          f"({result.skipped} ended before) in {result.wall_seconds:.1f} s; table: "
-          f"xarray.open_zarr('{result.store}', group='table')")
+          f"({result.skipped} ended before, {result.refused} refused before) in "
+          f"{result.wall_seconds:.1f} s; results: "
+          f"granframe.open_sweep('{result.store}')")
     return 3 if result.failed else 0
 
 
@@ -344,6 +349,11 @@ def build_parser() -> argparse.ArgumentParser:
                        help="an existing Dask scheduler (default: a LocalCluster here)")
     sweep.add_argument("--workers", type=int, default=None,
                        help="worker processes of the LocalCluster (default: one per core)")
+    sweep.add_argument("--overwrite", action="store_true",
+                       help="replace an existing granframe store STORE (nothing else)")
+    sweep.add_argument("--retry-failed", action="store_true",
+                       help="run again the points refused for their parameters and the runs "
+                            "stopped by a health check (default: keep them failed)")
     sweep.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                        help="progress bar (default: only on a terminal)")
     sweep.set_defaults(handler=_sweep)
