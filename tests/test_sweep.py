@@ -422,3 +422,18 @@ def test_the_documented_sweep_is_the_shipped_one_and_the_study_writes_it():
     study = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(study)
     assert study.sweep().to_dict() == Sweep.from_toml(shipped).to_dict()
+
+
+def test_a_client_the_sweep_connects_is_closed_after_it(cluster, tmp_path):
+    """run_sweep(scheduler=...) closes the client it made: one left open reconnects to a
+    closed scheduler when the process ends, and prints distributed's tracebacks."""
+    def clients(dask_scheduler):
+        return sorted(dask_scheduler.clients)
+
+    before = cluster.run_on_scheduler(clients)
+    sweep = Sweep(SHORT, product={"grid.n_modes": [6]})
+    run_sweep(sweep, tmp_path / "s.zarr", scheduler=cluster.scheduler.address, progress=False)
+    deadline = time.monotonic() + 10
+    while cluster.run_on_scheduler(clients) != before and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert cluster.run_on_scheduler(clients) == before
