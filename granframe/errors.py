@@ -14,6 +14,10 @@ class UnknownNameError(ValueError):
     """A registry was asked for a name nobody registered."""
 
 
+class UnknownParameterError(TypeError):
+    """A registered implementation was given a parameter its factory does not take."""
+
+
 class BackendUnavailableError(ValueError):
     """An array backend whose package or device this machine lacks.
 

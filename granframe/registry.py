@@ -14,6 +14,7 @@ are not loaded.
 
 from __future__ import annotations
 
+import difflib
 import functools
 import importlib.metadata
 import inspect
@@ -26,7 +27,7 @@ import pluggy
 
 from granframe import contract_checks, hookspecs
 from granframe._version import __version__
-from granframe.errors import PluginError, UnknownNameError
+from granframe.errors import PluginError, UnknownNameError, UnknownParameterError
 
 ENTRY_POINT_GROUP = "granframe"
 DISABLE_ENV = "GRANFRAME_DISABLE_PLUGINS"
@@ -44,6 +45,66 @@ FAMILIES = {
 }
 
 _NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+
+#: Leading parameters of a collision operator's factory that the framework passes itself.
+OPERATOR_ARGUMENTS = ("grid", "kernel", "restitution", "backend")
+
+
+def closest(word, choices) -> str | None:
+    """The choice closest to ``word`` (:func:`difflib.get_close_matches`), None when none
+    is close."""
+    close = difflib.get_close_matches(str(word), [str(c) for c in choices], n=1)
+    return close[0] if close else None
+
+
+def did_you_mean(word, choices) -> str:
+    """``"; did you mean 'x'?"`` for the choice closest to ``word`` (:func:`closest`), or
+    ``""`` when none is close."""
+    match = closest(word, choices)
+    return "" if match is None else f"; did you mean '{match}'?"
+
+
+@attrs.frozen
+class Parameter:
+    """One parameter of a registered factory, as ``granframe plugins NAME`` shows it.
+
+    Attributes
+    ----------
+    name : str
+        The keyword users pass.
+    type : str
+        Its type as annotated (the attrs field's type, the signature's annotation or the
+        ``name : type`` line of the docstring's Parameters section); ``""`` if none is.
+    default : object
+        The default value; :data:`REQUIRED` when the parameter has none.
+    """
+
+    name: str
+    type: str
+    default: Any
+
+    @property
+    def required(self) -> bool:
+        return self.default is REQUIRED
+
+    def to_dict(self) -> dict:
+        """JSON-ready: a default that is not a JSON scalar is given as its ``repr``."""
+        default = self.default
+        if not (default is None or isinstance(default, (str, bool, int, float))):
+            default = repr(default)
+        return {"name": self.name, "type": self.type, "required": self.required,
+                **({} if self.required else {"default": default})}
+
+
+class _Required:
+    """The type of :data:`REQUIRED`."""
+
+    def __repr__(self) -> str:
+        return "REQUIRED"
+
+
+#: The default of a :class:`Parameter` that must be given.
+REQUIRED = _Required()
 
 
 @attrs.frozen
@@ -94,31 +155,111 @@ class Entry:
                     and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
         return None if required else ({},)
 
+    @property
+    def factory_path(self) -> str:
+        """``module.qualname`` of the factory."""
+        return _qualname(self.factory)
+
+    def parameters(self) -> list[Parameter] | None:
+        """The parameters users pass to the factory, in order: every keyword of its
+        signature but ``*args``/``**kwargs``, private (``_``) names and, for collision
+        operators, the four arguments the framework passes (:data:`OPERATOR_ARGUMENTS`);
+        None when the factory has no signature."""
+        try:
+            signature = inspect.signature(self.factory)
+        except (TypeError, ValueError):   # builtins without a signature
+            return None
+        fields = ({f.alias or f.name: f for f in attrs.fields(self.factory)}
+                  if isinstance(self.factory, type) and attrs.has(self.factory) else {})
+        written = _docstring_types(inspect.getdoc(self.factory))
+        found = []
+        for p in signature.parameters.values():
+            if (p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD) or p.name.startswith("_")
+                    or (self.family == "collision_operators" and p.name in OPERATOR_ARGUMENTS)):
+                continue
+            field = fields.get(p.name)
+            kind = field.type if field is not None else None
+            if kind is None and p.annotation is not p.empty:
+                kind = p.annotation
+            if kind is None:
+                kind = written.get(p.name, "")
+            elif not isinstance(kind, str):
+                kind = getattr(kind, "__name__", str(kind))
+            if field is not None and isinstance(field.default, attrs.Factory):
+                default = field.default     # shown as Factory(...): a fresh value per object
+            else:
+                default = REQUIRED if p.default is p.empty else p.default
+            found.append(Parameter(p.name, kind, default))
+        return found
+
+    def summary(self) -> str:
+        """The docstring's summary: its first paragraph, on one line."""
+        text = inspect.getdoc(self.factory) or ""
+        return " ".join(text.split("\n\n", 1)[0].split())
+
+    def check_parameters(self, params: dict, arguments=()) -> None:
+        """Refuse ``params`` that the factory does not take, naming this implementation.
+
+        An unknown keyword gets the closest accepted one (``unknown parameter 'g_0'; did
+        you mean 'g0'?``) before a missing one is reported; ``arguments`` are the names
+        the caller passes besides ``params`` (a description checks an operator's options
+        with ``grid`` and the rest as None). A factory without a signature, or with
+        ``**kwargs``, takes any keyword; its call decides.
+
+        Raises
+        ------
+        UnknownParameterError
+            A ``TypeError``: ``<family> '<name>': unknown parameter ...``, with the
+            accepted parameters.
+        TypeError
+            ``<family> '<name>': missing required parameter ...``, and other calls the
+            signature refuses.
+        """
+        try:
+            signature = inspect.signature(self.factory)
+        except (TypeError, ValueError):   # builtins without a signature: let the call decide
+            return
+        who = f"{self.family} '{self.name}'"
+
+        def accepted() -> str:
+            return f"accepted parameters: {', '.join(self._names()) or 'none'}"
+
+        named = [p for p in signature.parameters.values()
+                 if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+        if not any(p.kind is p.VAR_KEYWORD for p in signature.parameters.values()):
+            for key in params:
+                if key not in {p.name for p in named}:
+                    # then the message as it was before suggestions, whole: it is matched on
+                    raise UnknownParameterError(
+                        f"{who}: unknown parameter '{key}'{did_you_mean(key, self._names())} "
+                        f"({who}: got an unexpected keyword argument '{key}'; {accepted()})")
+        given = set(params) | set(arguments)
+        for p in named:
+            if p.default is p.empty and p.name not in given:
+                raise TypeError(f"{who}: missing required parameter '{p.name}'; {accepted()}")
+        try:
+            signature.bind(**{**dict.fromkeys(arguments), **params})
+        except TypeError as exc:   # what the checks above do not cover (positional-only, ...)
+            raise TypeError(f"{who}: {exc}; {accepted()}") from None
+
+    def _names(self) -> list[str]:
+        return [p.name for p in self.parameters() or ()]
+
     def create(self, **params) -> Any:
         """Call the factory and check its product against the family's contract
         (:func:`granframe.contract_checks.check_product`).
 
-        A wrong parameter name becomes a clear ``TypeError``; a product that breaks the
-        contract a :class:`PluginError` naming the plugin, the implementation and what is
-        wrong.
+        A wrong parameter name becomes a clear ``TypeError`` (:meth:`check_parameters`);
+        a product that breaks the contract a :class:`PluginError` naming the plugin, the
+        implementation and what is wrong.
         """
-        try:
-            signature = inspect.signature(self.factory)
-        except (TypeError, ValueError):  # builtins without a signature: let the call decide
-            signature = None
-        if signature is not None:
-            try:
-                signature.bind(**params)
-            except TypeError as exc:
-                accepted = [p for p in signature.parameters if not p.startswith("_")]
-                raise TypeError(f"{self.family} '{self.name}': {exc}; accepted parameters: "
-                                f"{', '.join(accepted) or 'none'}") from None
+        self.check_parameters(params)
         product = self.factory(**params)
         try:
             contract_checks.check_product(self.family, product)
         except contract_checks.ContractViolation as exc:
             raise PluginError(f"{self.source}: {self.family} '{self.name}' "
-                              f"({_qualname(self.factory)}) breaks its contract: {exc}") from None
+                              f"({self.factory_path}) breaks its contract: {exc}") from None
         return product
 
     def to_dict(self) -> dict:
@@ -128,6 +269,19 @@ class Entry:
 
 def _qualname(factory) -> str:
     return f"{getattr(factory, '__module__', '?')}.{getattr(factory, '__qualname__', repr(factory))}"
+
+
+def _docstring_types(text: str | None) -> dict[str, str]:
+    """``name -> type`` from the ``name : type`` lines of a numpydoc Parameters section."""
+    section = re.search(r"^Parameters\n-+\n(.*?)(?:\n\S[^\n]*\n-+\n|\Z)", text or "",
+                        re.S | re.M)
+    if section is None:
+        return {}
+    types = {}
+    for names, kind in re.findall(r"^(\S[^:\n]*?) : ([^\n]+)$", section.group(1), re.M):
+        for name in names.split(","):
+            types[name.strip()] = kind.strip()
+    return types
 
 
 def _first_line(text: str | None) -> str:
@@ -193,7 +347,8 @@ class Registries:
     def _family(self, family: str) -> dict[str, Entry]:
         if family not in self._entries:
             raise UnknownNameError(f"parameter 'family' = {family!r} is invalid; "
-                                   f"known families: {', '.join(FAMILIES)}")
+                                   f"known families: {', '.join(FAMILIES)}"
+                                   f"{did_you_mean(family, FAMILIES)}")
         return self._entries[family]
 
     def names(self, family: str) -> list[str]:
@@ -210,8 +365,14 @@ class Registries:
         if name not in entries:
             raise UnknownNameError(
                 f"{family}: name {name!r} is not registered; known: "
-                f"{', '.join(sorted(entries)) or '(none registered)'}")
+                f"{', '.join(sorted(entries)) or '(none registered)'}"
+                f"{did_you_mean(name, entries)}")
         return entries[name]
+
+    def find(self, name: str) -> list[Entry]:
+        """Every implementation registered as ``name``, in any family (family order)."""
+        return [self._entries[family][name] for family in FAMILIES
+                if name in self._entries[family]]
 
     def create(self, family: str, name: str, **params) -> Any:
         """Build implementation ``name`` of ``family`` with ``params``."""

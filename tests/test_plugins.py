@@ -2,6 +2,8 @@
 
 import json
 import os
+import pathlib
+import re
 import subprocess
 import sys
 
@@ -206,3 +208,122 @@ def test_operators_and_backends_are_plugins():
     for name in ("fast_spectral", "direct_spectral"):
         assert registries.get("collision_operators", name).source.plugin == "spectral"
     assert registries.get("array_backends", "pyfftw").source.plugin == "fftw"
+
+
+# -- the kernel contract of docs/plugins.md, and parameters by name --------------------------
+
+DOCS = pathlib.Path(__file__).parent.parent / "docs" / "plugins.md"
+
+
+def _section(title: str) -> str:
+    """The text of the section ``## title`` of docs/plugins.md."""
+    text = DOCS.read_text()
+    start = text.index(f"## {title}\n")
+    end = text.find("\n## ", start + 1)
+    return text[start:] if end < 0 else text[start:end]
+
+
+def _python_blocks(text: str) -> list[str]:
+    return re.findall(r"```python\n(.*?)```", text, re.S)
+
+
+def test_the_documented_kernel_example_runs():
+    """Every Python block of "Writing a collision kernel", executed in order: the kernel and
+    its hook, an operator and the step limits on it, and the conformance class it shows."""
+    blocks = _python_blocks(_section("Writing a collision kernel"))
+    assert len(blocks) == 2
+    namespace = {"__name__": "docs_plugins_example"}
+    for block in blocks:
+        exec(compile(block, str(DOCS), "exec"), namespace)
+    assert namespace["q"].shape == namespace["grid"].shape
+    namespace["TestSoftenedHardSpheres"]().test_collision_kernel()
+    # the documented class is the example plugin's, verbatim
+    documented = re.search(r"@attrs\.frozen\nclass SoftenedHardSpheres.*?\n\n\n", blocks[0],
+                           re.S).group(0)
+    assert documented in (FAKE_SITE / "granframe_example_plugin.py").read_text()
+
+
+def test_the_documented_restitution_law_is_the_example_plugins():
+    [law] = [b for b in _python_blocks(_section("Step by step: a new restitution law"))
+             if "class ExponentialDecay" in b]
+    documented = re.search(r"@attrs\.frozen\nclass ExponentialDecay.*?\n\n\n", law,
+                           re.S).group(0)
+    assert documented in (FAKE_SITE / "granframe_example_plugin.py").read_text()
+
+
+def test_a_misspelled_parameter_names_the_closest(monkeypatch, fresh_registries):
+    with pytest.raises(TypeError) as caught:
+        granframe.restitution_law("toscani", strenght=1.0, exponent=0.5)
+    assert str(caught.value) == (
+        "restitution_laws 'toscani': unknown parameter 'strenght'; did you mean 'strength'? "
+        "(restitution_laws 'toscani': got an unexpected keyword argument 'strenght'; "
+        "accepted parameters: strength, exponent)")
+    with pytest.raises(TypeError) as caught:
+        granframe.restitution_law("viscoelastic", a=0.2)     # nothing close: no suggestion
+    assert str(caught.value) == (
+        "restitution_laws 'viscoelastic': unknown parameter 'a' (restitution_laws "
+        "'viscoelastic': got an unexpected keyword argument 'a'; accepted parameters: "
+        "strength)")
+    with pytest.raises(TypeError) as caught:
+        granframe.restitution_law("toscani", strength=1.0)
+    assert str(caught.value) == ("restitution_laws 'toscani': missing required parameter "
+                                 "'exponent'; accepted parameters: strength, exponent")
+    monkeypatch.syspath_prepend(str(FAKE_SITE))
+    with pytest.raises(TypeError, match=r"^collision_kernels 'softened_hard_spheres': unknown "
+                                        r"parameter 'speed_scal'; did you mean 'speed_scale'\? "):
+        fresh_registries().create("collision_kernels", "softened_hard_spheres", speed_scal=2.0)
+
+
+def test_a_misspelled_parameter_of_a_description_names_the_closest():
+    from granframe.run.description import RunDescription
+    from test_runner import heated
+
+    with pytest.raises(TypeError, match=r"^collision_kernels 'vhs': unknown parameter "
+                                        r"'exponnent'; did you mean 'exponent'\? "):
+        heated(kernel={"name": "vhs", "exponnent": 0.5})
+    text = heated().to_toml().replace('name = "maxwellian"\n',
+                                      'name = "maxwellian"\ntemperatur = 2.0\n')
+    with pytest.raises(TypeError, match=r"^initial_conditions 'maxwellian': unknown parameter "
+                                        r"'temperatur'; did you mean 'temperature'\? "):
+        RunDescription.from_toml(text)
+    with pytest.raises(TypeError) as caught:
+        heated(operator={"name": "fast_spectral", "radial_point": 8})
+    assert str(caught.value).startswith(
+        "RunDescription: parameter 'operator' = {'radial_point': 8} is invalid; has an unknown "
+        "option: collision_operators 'fast_spectral': unknown parameter 'radial_point'; did "
+        "you mean 'radial_points'? ")
+
+
+def test_an_unknown_name_or_family_names_the_closest(fresh_registries):
+    registries = fresh_registries()
+    with pytest.raises(UnknownNameError) as caught:
+        registries.get("restitution_laws", "toscanni")
+    assert str(caught.value) == ("restitution_laws: name 'toscanni' is not registered; known: "
+                                 "constant, tanh, threshold, toscani, viscoelastic; did you "
+                                 "mean 'toscani'?")
+    with pytest.raises(UnknownNameError, match=r"known families: .*; did you mean "
+                                               r"'restitution_laws'\?$"):
+        registries.names("restitution_law")
+
+
+def test_entries_describe_their_parameters(fresh_registries):
+    from granframe.registry import REQUIRED
+
+    registries = fresh_registries()
+    toscani = registries.get("restitution_laws", "toscani")
+    assert [(p.name, p.type, p.required) for p in toscani.parameters()] == [
+        ("strength", "float", True), ("exponent", "float", True)]
+    assert toscani.summary() == ("Toscani's law e(r) = 1 / (1 + c r^gamma) [Toscani 2000], "
+                                 "c >= 0, gamma real.")
+    fast = registries.get("collision_operators", "fast_spectral").parameters()
+    # after grid, kernel, restitution and backend; types from the numpydoc Parameters section
+    assert fast[0].name == "radial_points" and fast[0].type == "int" and fast[0].default is None
+    assert {p.name for p in fast}.isdisjoint({"grid", "kernel", "restitution", "backend"})
+    maxwellian = {p.name: p for p in registries.get("initial_conditions", "maxwellian")
+                  .parameters()}
+    assert maxwellian["temperature"].default == 1.0 and maxwellian["velocity"].type == "tuple | None"
+    assert maxwellian["temperature"].to_dict() == {"name": "temperature", "type": "float",
+                                                   "required": False, "default": 1.0}
+    assert repr(REQUIRED) == "REQUIRED"
+    assert registries.get("time_integrators", "rk4").parameters() == []
+    assert [e.family for e in registries.find("maxwell")] == ["collision_kernels"]

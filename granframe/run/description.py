@@ -38,7 +38,6 @@ Example (the review's heated Maxwell-molecule test)::
 
 from __future__ import annotations
 
-import inspect
 import json
 import math
 import tomllib
@@ -50,6 +49,7 @@ import tomli_w
 
 from granframe import validators as check
 from granframe.abc import PRECISIONS
+from granframe.errors import UnknownParameterError
 from granframe.backends import AUTO, resolve_backend
 from granframe.velocity.grid import VelocityGrid
 from granframe.model.initial import callable_reference, resolve_callable
@@ -263,18 +263,12 @@ def check_component(family: str, component: Component, owner: str = "RunDescript
     entry = default_registries().get(family, component.name)   # unknown names: clear error
     params = {**arguments, **component.params}
     try:
-        signature = inspect.signature(entry.factory)
-    except (TypeError, ValueError):   # builtins without a signature: nothing to check here
-        return
-    try:
-        signature.bind(**params)
-    except TypeError as exc:
+        entry.check_parameters(component.params, arguments)   # names the closest parameter
+    except UnknownParameterError as exc:
         if family == "collision_operators":
-            check.reject(owner, "operator", component.params, f"has an unknown option ({exc})",
+            check.reject(owner, "operator", component.params, f"has an unknown option: {exc}",
                          error=TypeError)
-        accepted = [p for p in signature.parameters if not p.startswith("_")]
-        raise TypeError(f"{family} '{component.name}': {exc}; accepted parameters: "
-                        f"{', '.join(accepted) or 'none'}") from None
+        raise
     if isinstance(entry.factory, type) and attrs.has(entry.factory):
         _check_fields(entry.factory, params)
 

@@ -147,12 +147,13 @@ def check_options(backend: str, threads: int, repeats: int) -> None:
     """Refuse a backend that is not registered, ``threads`` outside 1..MAX_THREADS and
     ``repeats`` < 1 (a median of no timings is NaN), before any subprocess starts."""
     from granframe.backends import MAX_THREADS
-    from granframe.registry import default_registries
+    from granframe.registry import default_registries, did_you_mean
 
     names = default_registries().names("array_backends")
     if backend not in names:
         check.reject("bench", "backend", backend,
-                     f"must be a registered array backend: {', '.join(names)}")
+                     f"must be a registered array backend: {', '.join(names)}"
+                     f"{did_you_mean(backend, names)}")
     if not check.is_integer(threads) or not 1 <= threads <= MAX_THREADS:
         check.reject("bench", "threads", threads, f"must be an integer >= 1 and <= {MAX_THREADS}")
     if not check.is_integer(repeats) or repeats < 1:
