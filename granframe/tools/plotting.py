@@ -1,72 +1,151 @@
-"""Figures of a run store (``granframe plot``): PNG files drawn with matplotlib.
+"""Figures of a run: plotting functions on the xarray Dataset of a run store.
 
-- ``temperature.png``: T(t) with the exact law where one exists, and the
-  relative error against it (otherwise the mass drift);
-- ``entropy.png``: relative entropy H(f(t) | f(t_end)) on a log scale with the
-  fitted exponential rate;
-- ``slices.png``: f(v1, 0, ...) at several times, linear and logarithmic;
-- ``contour.png``: f in the (v1, v2) plane (through v3 = 0 in 3D), first and last snapshot;
-- ``moments.png``: mass drift, kurtosis against the Maxwellian value, min f.
+Each function takes the Dataset of a run store (``xarray.open_zarr(path)``, or
+``granframe.open_run(path)``) and an optional matplotlib ``ax`` to draw into; without one
+it makes a figure captioned with the run's parameters (:func:`caption`). Each returns the
+axes it drew into. Every quantity granframe computes is dimensionless (the scaling of
+the run description), and every axis label says so.
+
+``granframe plot STORE --out DIR`` (:func:`plot`) checks the store's checksums, composes
+the functions into five figures (:func:`figures`) and writes them as PNG, PDF or SVG:
+
+- ``temperature``: T(t) with the exact law where one exists, and the relative error
+  against it (otherwise the mass drift);
+- ``entropy``: relative entropy of f(t) to the exact equilibrium where one is known
+  (elastic collisions without a heat bath: the Maxwellian of the conserved moments),
+  otherwise to the last snapshot, which the figure says makes it zero at t_end by
+  construction;
+- ``slices``: f(v1, 0, ...) at five times with a marker at each grid point, linear and
+  logarithmic (-f where f < 0 as open markers);
+- ``contour``: f in the (v1, v2) plane (through v3 = 0 in 3D), first and last snapshot,
+  filled from f = 0 up, with f < 0 in grey;
+- ``moments``: mass drift, kurtosis against the Maxwellian value, and the negative share
+  of f on a log axis against the positivity health limit.
 """
 
 from __future__ import annotations
 
+import math
 import pathlib
 
-import matplotlib
+import numpy
+import xarray
+from matplotlib import colormaps, ticker
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy  # noqa: E402
-
-from granframe.tools.analysis import relative_entropy  # noqa: E402
-from granframe.run.description import RunDescription  # noqa: E402
-from granframe.model.exact import heated_maxwell_law  # noqa: E402
-from granframe.equations.rescaled import Rescaling  # noqa: E402
-from granframe.run.storage import RunStore, StoreDamagedError, summarise  # noqa: E402
+from granframe import validators as check
+from granframe.equations.rescaled import Rescaling
+from granframe.model.exact import heated_maxwell_law
+from granframe.run.description import RunDescription
+from granframe.run.storage import RunStore, StoreDamagedError, summarise
+from granframe.tools.analysis import relative_entropy
 
 #: Largest max|f(t_end) - f(t_end - interval)| / max f for which f(t_end) is taken as f_infinity.
 STATIONARY = 1e-6
 
-_STYLE = {"figure.dpi": 110, "axes.grid": True, "grid.alpha": 0.3, "font.size": 10,
-          "axes.titlesize": 10, "legend.fontsize": 9}
+#: File formats ``granframe plot --format`` writes.
+FORMATS = ("png", "pdf", "svg")
+
+#: Smallest and largest resolution, in dots per inch, of the raster parts of a figure.
+DPI_RANGE = (10, 600)
+
+#: Resolution of ``granframe plot`` unless ``--dpi`` says otherwise.
+DEFAULT_DPI = 110
+
+_TIME = "time t (dimensionless)"
+
+_STYLE = {"axes.grid": True, "grid.alpha": 0.3, "font.size": 10, "axes.titlesize": 10,
+          "legend.fontsize": 8}
+
+#: Figure name -> (rows, columns), size in inches.
+_LAYOUTS = {"temperature": ((1, 2), (11, 4.4)), "entropy": ((1, 1), (8, 5.2)),
+            "slices": ((1, 2), (11, 4.4)), "contour": ((1, 2), (11, 5.8)),
+            "moments": ((1, 3), (14, 4.2))}
+
+
+def _attribute(ds, name):
+    """A run store's attribute ``name``, or None.
+
+    Looked up at the top of ``ds.attrs``, then in its ``granframe`` entry (the metadata
+    ``xarray.open_zarr`` shows), then as the flat attributes ``<name>_<key>`` that
+    ``granframe.open_run`` gives for a table (``progress_records``, ``rescaling_rate``),
+    returned as a table.
+    """
+    if name in ds.attrs:
+        return ds.attrs[name]
+    meta = ds.attrs.get("granframe")
+    if isinstance(meta, dict) and name in meta:
+        return meta[name]
+    prefix = name + "_"
+    flat = {key[len(prefix):]: value for key, value in ds.attrs.items()
+            if key.startswith(prefix)}
+    return flat or None
+
+
+def _open(path) -> xarray.Dataset:
+    """The Dataset of the store at ``path``, once every committed chunk passed its checksum."""
+    store = RunStore.open(path, complete=False)
+    problems = store.verify()
+    if problems:
+        raise StoreDamagedError(f"plot: store '{path}' is damaged: {summarise(problems)} "
+                                "(granframe check lists every problem)", problems)
+    return xarray.open_zarr(path, consolidated=False, chunks=None)
 
 
 class _Run:
-    """What the figures read from a store."""
+    """What the figures read from the Dataset of a run store (or from a store's path).
 
-    def __init__(self, path):
-        store = RunStore.open(path, complete=False)
-        problems = store.verify()     # every committed chunk present and passing its checksum
-        if problems:
-            raise StoreDamagedError(f"plot: store '{path}' is damaged: {summarise(problems)} "
-                                    "(granframe check lists every problem)", problems)
-        group, progress = store.group, store.progress
-        n, k = int(progress["records"]), store.snapshot_count
-        if k == 0:
-            raise ValueError(f"plot: store '{path}' has no snapshot yet")
-        self.description = RunDescription.from_dict(store.metadata["description"])
-        self.title = self.description.title or pathlib.Path(path).name
+    Records and snapshots are trimmed to the committed ones; a rescaled run's times and
+    temperatures are converted to physical ones (f stays the profile g).
+    """
+
+    def __init__(self, data):
+        name = None
+        if not isinstance(data, xarray.Dataset):
+            name = pathlib.Path(data).name
+            data = _open(data)
+        text = _attribute(data, "description_toml")
+        if not isinstance(text, str):
+            check.reject("plot", "ds", type(data).__name__,
+                         "must be the Dataset of a granframe run store (an attribute "
+                         "'description_toml' with the run description)", error=TypeError)
+        progress = _attribute(data, "progress") or {}
+        trim = {dim: slice(0, int(progress[key])) for dim, key in
+                (("step_time", "records"), ("time", "snapshots")) if key in progress}
+        self.ds = data.isel(trim)
+        self.count = self.ds.sizes["time"]
+        if self.count == 0:
+            raise ValueError(f"plot: {'store ' + repr(name) if name else 'the dataset'} "
+                             "has no snapshot yet")
+        self.description = RunDescription.from_toml(text)
+        self.title = self.description.title or name or "untitled run"
         self.grid = self.description.grid
-        self.step_time = group["step_time"][:n]
-        self.moments = {name: group[name][:n] for name in
-                        ("mass", "temperature", "kurtosis", "min_f", "negative_mass_fraction")}
-        self.times = group["time"][:k]
-        self.f = group["f"]
-        self.count = k
-        self.axes = [group[f"v{i + 1}"][:] for i in range(self.grid.dimension)]
         self.status = progress.get("status")
-        if "rescaling" in store.metadata:
-            # a rescaled run: times and temperatures in physical terms; f is the profile g
-            law = Rescaling.from_store(store)
+        self.step_time = self.ds["step_time"].values
+        self.moments = {key: self.ds[key].values for key in
+                        ("mass", "temperature", "kurtosis", "min_f", "negative_mass_fraction")}
+        self.times = self.ds["time"].values
+        self.axes = [self.ds[f"v{i + 1}"].values for i in range(self.grid.dimension)]
+        self.rescaled = _attribute(data, "rescaling") is not None
+        if self.rescaled:
+            law = Rescaling(**_attribute(data, "rescaling"))
             self.moments["temperature"] = law.temperature(self.step_time,
                                                           self.moments["temperature"])
             self.step_time = law.physical_time(self.step_time)
             self.times = law.physical_time(self.times)
             self.title += " (rescaled; f shown as the profile g)"
+        #: the names of f and of the velocity in the figures: g and xi for a rescaled run
+        self.f_name, self.v_name = ("g", "ξ") if self.rescaled else ("f", "v")
+        self._extremes = None
+
+    @classmethod
+    def of(cls, data) -> "_Run":
+        return data if isinstance(data, cls) else cls(data)
 
     def snapshot(self, index):
-        return self.f[index]
+        return numpy.asarray(self.ds["f"].isel(time=index).values)
 
     def plane(self, index):
         """f in the (v1, v2) plane (through the middle of v3 in 3D)."""
@@ -79,6 +158,14 @@ class _Run:
         middle = self.grid.n_modes // 2
         return f[(slice(None),) + (middle,) * (f.ndim - 1)]
 
+    def extremes(self):
+        """(max f, min f) of every snapshot, read once."""
+        if self._extremes is None:
+            values = [(float(f.max()), float(f.min()))
+                      for f in map(self.snapshot, range(self.count))]
+            self._extremes = numpy.array(values).T
+        return self._extremes
+
     def exact_temperature(self):
         d = self.description
         law = heated_maxwell_law(d.build("kernel"), d.build("restitution"), d.heat_bath,
@@ -87,129 +174,483 @@ class _Run:
             return None
         return law(self.step_time, self.moments["temperature"][0], self.moments["mass"][0])
 
+    def equilibrium(self):
+        """The exact equilibrium on the grid, or None where none is known.
+
+        Elastic collisions (e = 1 at every speed) without a heat bath conserve mass,
+        momentum and energy, and f tends to the Maxwellian of those moments of f(0).
+        """
+        d = self.description
+        law = d.build("restitution")
+        speeds = numpy.linspace(0.0, self.grid.truncation_radius, 65)
+        if self.rescaled or d.heat_bath != 0.0 or not numpy.all(law(speeds) == 1.0):
+            return None
+        f0 = self.snapshot(0)
+        return self.grid.maxwellian(density=self.grid.mass(f0),
+                                    velocity=self.grid.bulk_velocity(f0),
+                                    temperature=self.grid.temperature(f0))
+
     def snapshot_indices(self, count=5):
         return sorted(set(numpy.linspace(0, self.count - 1, min(count, self.count))
                           .round().astype(int)))
 
 
-def _temperature(run, ax_t, ax_e):
+def _component(component) -> str:
+    """A component as ``name(key=value, ...)``, nested tables with a name the same way."""
+    if isinstance(component, dict) and "name" in component:
+        params = {k: v for k, v in component.items() if k != "name"}
+        name = component["name"]
+    else:
+        name, params = component.name, component.params
+    if not params:
+        return name
+    shown = ", ".join(f"{key}={_component(value) if isinstance(value, dict) else value}"
+                      for key, value in params.items())
+    return f"{name}({shown})"
+
+
+def caption(ds) -> str:
+    """The caption of every figure of a run, from its stored description.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of a run store.
+
+    Returns
+    -------
+    str
+        Four lines: the run's title (and its status unless finished); the dimension, N,
+        dt and integrator, heat bath tau and Knudsen number; the operator; the
+        restitution law e and the kernel exponent lambda, and that every quantity is
+        dimensionless.
+    """
+    run = _Run.of(ds)
+    d, grid = run.description, run.grid
+    integrator = d.build("integrator")
+    if getattr(integrator, "adaptive", False):
+        steps = run.ds["dt"].values[1:]
+        dt = (f"dt = {steps.min():.3g}..{steps.max():.3g} (adaptive {d.integrator.name}, "
+              f"tolerance {d.tolerance:g})" if steps.size else
+              f"dt adaptive ({d.integrator.name}, tolerance {d.tolerance:g})")
+    else:
+        dt = f"dt = {d.time_step:g} ({_component(d.integrator)})"
+    kernel = d.build("kernel")
+    exponent = getattr(kernel, "exponent", kernel.speed_exponent)
+    energy = getattr(kernel, "energy_exponent", 0.0)
+    status = "" if run.status in (None, "finished") else f" -- run status: {run.status}"
+    return "\n".join([
+        f"{run.title}{status}",
+        f"{grid.dimension}D, N = {grid.n_modes}, R = {grid.truncation_radius:g}, "
+        f"L = {grid.half_width:.4g}; {dt}; heat bath τ = {d.heat_bath:g}, "
+        f"Knudsen number ε = {d.knudsen:g}",
+        f"operator {_component(d.operator)}",
+        f"restitution e: {_component(d.restitution)}; kernel {_component(d.kernel)}, "
+        f"exponent λ = {exponent:g}" + (f", energy exponent γ = {energy:g}" if energy else "")
+        + "; all quantities dimensionless"])
+
+
+def _axes(ax, run):
+    """``ax``, or the axes of a new figure captioned with the run's parameters."""
+    if ax is not None:
+        return ax
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.8), layout="constrained")
+    fig.suptitle(caption(run), fontsize=8)
+    return ax
+
+
+def _positive(values):
+    """``values`` with its zeros and negative entries left out (for a logarithmic axis)."""
+    values = numpy.asarray(values, dtype=float)
+    return numpy.where(values > 0, values, numpy.nan)
+
+
+def temperature(ds, ax=None):
+    """T(t), with the exact law where one is known.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of a run store.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into; a new captioned figure when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    run = _Run.of(ds)
+    ax = _axes(ax, run)
     t, T = run.step_time, run.moments["temperature"]
     exact = run.exact_temperature()
-    marks = max(1, len(t) // 40)
     if exact is not None:
-        ax_t.plot(t, exact, color="C0", lw=1.5, label="exact law")
-        ax_t.plot(t[::marks], T[::marks], "o", color="C1", ms=3.5, label="granframe")
-        error = numpy.abs(T / exact - 1)
-        ax_e.semilogy(t[1:], numpy.maximum(error[1:], 1e-17), color="C1")
-        ax_e.set_title(f"|T / T_exact - 1|, max {error.max():.2e}")
+        marks = max(1, len(t) // 40)
+        ax.plot(t, exact, color="C0", lw=1.5, label="exact law")
+        ax.plot(t[::marks], T[::marks], "o", color="C1", ms=3.5,
+                label=f"granframe, every {marks} steps" if marks > 1 else "granframe")
     else:
-        ax_t.plot(t, T, color="C1", label="granframe")
-        drift = numpy.abs(run.moments["mass"] / run.moments["mass"][0] - 1)
-        ax_e.semilogy(t[1:], numpy.maximum(drift[1:], 1e-17), color="C2")
-        ax_e.set_title(f"no exact law for this kernel/law: |mass/mass(0) - 1|, max "
-                       f"{drift.max():.1e}")
-    ax_t.set(xlabel="t", ylabel="temperature T", title=f"temperature, {run.title}")
-    ax_t.legend()
-    ax_e.set(xlabel="t")
+        ax.plot(t, T, color="C1", label="granframe (no exact law for this kernel and law)")
+    ax.set(xlabel=_TIME, ylabel="temperature T (dimensionless)", title="temperature")
+    ax.legend()
+    return ax
 
 
-def _entropy(run, ax):
-    reference = run.snapshot(run.count - 1)
+def temperature_error(ds, ax=None):
+    """|T / T_exact - 1| on a log axis, for a run with an exact temperature law.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of a run store whose kernel and restitution law have an exact
+        temperature law (Maxwell molecules, constant e).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into; a new captioned figure when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+
+    Raises
+    ------
+    ValueError
+        When no exact law is known for the run.
+    """
+    run = _Run.of(ds)
+    exact = run.exact_temperature()
+    if exact is None:
+        check.reject("temperature_error", "ds", run.title,
+                     "must be a run with an exact temperature law (Maxwell molecules with "
+                     "the review's constant and a constant restitution coefficient)")
+    ax = _axes(ax, run)
+    error = numpy.abs(run.moments["temperature"] / exact - 1)
+    ax.semilogy(run.step_time, _positive(error), color="C1")
+    ax.set(xlabel=_TIME, ylabel=r"$|T/T_{exact} - 1|$ (dimensionless)",
+           title=f"relative error of T against the exact law, max {error.max():.2e} "
+                 "(zeros left out)")
+    return ax
+
+
+def mass_drift(ds, ax=None):
+    """|m(t) / m(0) - 1| on a log axis, with the health check's limit.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of a run store.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into; a new captioned figure when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    run = _Run.of(ds)
+    ax = _axes(ax, run)
+    mass = run.moments["mass"]
+    drift = numpy.abs(mass / mass[0] - 1)
+    ax.semilogy(run.step_time, _positive(drift), ".", ms=2, color="C2",
+                label=f"granframe, max {drift.max():.1e}")
+    ax.axhline(run.description.health.mass_tolerance, color="C3", ls="--", lw=1,
+               label="health limit (mass_tolerance)")
+    ax.set(xlabel=_TIME, ylabel=r"mass drift $|m(t)/m(0) - 1|$ (dimensionless)",
+           title="mass drift (zeros left out)")
+    ax.legend()
+    return ax
+
+
+def kurtosis(ds, ax=None):
+    """The kurtosis kappa(t) against the Maxwellian value (d + 2)/d.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of a run store.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into; a new captioned figure when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    run = _Run.of(ds)
+    ax = _axes(ax, run)
+    d = run.grid.dimension
+    ax.plot(run.step_time, run.moments["kurtosis"], color="C4", label="granframe")
+    ax.axhline((d + 2) / d, color="k", ls="--", lw=1, label=f"Maxwellian, {(d + 2) / d:g}")
+    ax.set(xlabel=_TIME, ylabel=r"kurtosis $\kappa$ (dimensionless)",
+           title=r"kurtosis $\kappa = \rho\int|v-u|^4 f\,/\,(\int|v-u|^2 f)^2$")
+    ax.legend()
+    return ax
+
+
+def positivity(ds, ax=None):
+    """How much of f is negative, on a log axis, against the positivity health limit.
+
+    Draws the negative mass share int max(-f, 0) / int |f| at every step and
+    -min f / max f at the snapshots; zeros (f >= 0 everywhere) are left out.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of a run store.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into; a new captioned figure when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    run = _Run.of(ds)
+    ax = _axes(ax, run)
+    share = run.moments["negative_mass_fraction"]
+    peaks, lows = run.extremes()
+    ax.semilogy(run.step_time, _positive(share), color="C3",
+                label=r"negative mass share $\int f^- / \int |f|$")
+    ax.semilogy(run.times, _positive(-lows / peaks), "s", ms=3.5, color="C5",
+                label=r"$-\min f / \max f$ (at the snapshots)")
+    ax.axhline(run.description.health.positivity_tolerance, color="k", ls="--", lw=1,
+               label="health limit (positivity_tolerance)")
+    ax.set(xlabel=_TIME, ylabel="negative part of f, share (dimensionless)",
+           title="positivity: the negative part of f (zeros left out)")
+    ax.legend()
+    return ax
+
+
+def entropy(ds, ax=None):
+    """Relative entropy H(f(t) | f_ref) on a log axis.
+
+    f_ref is the exact equilibrium where one is known (elastic collisions without a heat
+    bath: the Maxwellian with the mass, momentum and temperature of f(0)); otherwise the
+    last snapshot f(t_end), and the title says that H is then zero at t_end by
+    construction. An exponential rate is fitted against an exact equilibrium, or against
+    f(t_end) once the run is stationary (:data:`STATIONARY`).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of a run store with at least two snapshots.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into; a new captioned figure when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    run = _Run.of(ds)
+    if run.count < 2:
+        check.reject("entropy", "ds", f"{run.count} snapshot",
+                     "must hold at least two snapshots")
+    ax = _axes(ax, run)
     h = run.grid.cell_volume
-    values = numpy.array([relative_entropy(run.snapshot(i), reference, h)
-                          for i in range(run.count - 1)])
-    times = run.times[:-1]
+    reference = run.equilibrium()
+    if reference is not None:
+        indices = range(run.count)
+        symbol = r"$H(f(t)\,|\,M)$, M the exact equilibrium"
+        title = ["relative entropy to the exact equilibrium M",
+                 "(elastic, no heat bath: the Maxwellian of the mass, momentum and "
+                 "temperature of f(0))"]
+        fitted = True
+    else:
+        reference = run.snapshot(run.count - 1)
+        indices = range(run.count - 1)
+        end = run.times[-1]
+        symbol = r"$H(f(t)\,|\,f(t_{end}))$"
+        title = [f"relative entropy to the last snapshot f(t_end), t_end = {end:g}",
+                 "(no exact equilibrium known: H = 0 at t_end by construction, "
+                 "not by convergence)"]
+        ax.axvline(end, color="0.4", ls=":", lw=1, label="t_end (the reference)")
+        change = float(numpy.abs(reference - run.snapshot(run.count - 2)).max()
+                       / reference.max())
+        fitted = change < STATIONARY
+        if not fitted:
+            title.append(f"not stationary: the last two snapshots differ by {change:.1e} of "
+                         "max f; no rate fitted")
+    times = run.times[list(indices)]
+    values = numpy.array([relative_entropy(run.snapshot(i), reference, h) for i in indices])
     positive = values > 0
-    ax.semilogy(times[positive], values[positive], "o-", ms=3.5, color="C0",
-                label=r"$H(f(t)\,|\,f(t_{end}))$")
-    # f(t_end) stands for f_infinity only once the run is stationary; only then is a rate fitted
-    change = float(numpy.abs(reference - run.snapshot(run.count - 2)).max() / reference.max())
-    title = f"relative entropy to f(t = {run.times[-1]:g})"
+    ax.semilogy(times, _positive(values), "o-", ms=3.5, color="C0", label=symbol)
     fit = positive & (values > 1e-8 * values[positive].max(initial=0.0))
-    if change < STATIONARY and fit.sum() >= 3:
+    if fitted and fit.sum() >= 3:
         slope, intercept = numpy.polyfit(times[fit], numpy.log(values[fit]), 1)
         ax.semilogy(times[fit], numpy.exp(intercept + slope * times[fit]), "--", color="C3",
                     label=f"fit exp({slope:.4g} t)")
-    else:
-        title += (f"\nnot stationary yet (last snapshots differ by {change:.1e} of max f): "
-                  "no rate fitted")
-    ax.set(xlabel="t", ylabel="relative entropy", title=title)
+    ax.set(xlabel=_TIME, ylabel="relative entropy H (dimensionless)", title="\n".join(title))
     ax.legend()
+    return ax
 
 
-def _slices(run, ax_lin, ax_log):
+def slices(ds, ax=None, scale="linear"):
+    """f along v1 through v = 0 at five times, a marker at each grid point.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of a run store.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into; a new captioned figure when None.
+    scale : {"linear", "log"}
+        The y axis. On the log axis f > 0 is drawn as filled markers and -f where f < 0
+        as open ones.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    if scale not in ("linear", "log"):
+        check.reject("slices", "scale", scale, "must be 'linear' or 'log'")
+    run = _Run.of(ds)
+    ax = _axes(ax, run)
     v = run.axes[0]
-    label = "f(v1, 0)" if run.grid.dimension == 2 else "f(v1, 0, 0)"
-    for i in run.snapshot_indices():
+    f, v1 = run.f_name, f"{run.v_name}1"
+    label = f"{f}({v1}, 0)" if run.grid.dimension == 2 else f"{f}({v1}, 0, 0)"
+    indices = run.snapshot_indices()
+    for colour, i in enumerate(indices):
         line = run.line(i)
-        ax_lin.plot(v, line, label=f"t = {run.times[i]:g}")
-        ax_log.semilogy(v, numpy.where(line > 0, line, numpy.nan), label=f"t = {run.times[i]:g}")
-    peak = max(float(run.line(i).max()) for i in run.snapshot_indices())
-    ax_log.set_ylim(peak * 1e-16, peak * 3)
-    ax_lin.set(xlabel="v1", ylabel=label, title=f"slices of f, {run.title}")
-    ax_log.set(xlabel="v1", title="log scale (where f > 0; negative values left out)")
-    ax_lin.legend()
+        style = dict(color=f"C{colour}", marker="o", ms=2.5, lw=1, label=f"t = {run.times[i]:g}")
+        if scale == "linear":
+            ax.plot(v, line, **style)
+        else:
+            ax.semilogy(v, _positive(line), **style)
+            ax.semilogy(v, _positive(-line), ls="none", marker="o", ms=3.5, mfc="none",
+                        color=f"C{colour}")
+    if scale == "log":
+        peak = max(float(run.line(i).max()) for i in indices)
+        ax.set_ylim(peak * 1e-16, peak * 3)
+        ax.plot([], [], ls="none", marker="o", mfc="none", color="0.3",
+                label=f"-{f} where {f} < 0")
+        title = f"log scale: filled {f} > 0, open -{f} where {f} < 0"
+    else:
+        title = f"slices of {f} through {run.v_name} = 0, a marker at each grid point"
+    ax.set(xlabel=f"velocity {v1} (dimensionless)", ylabel=f"{label} (dimensionless)",
+           title=title)
+    ax.legend()
+    return ax
 
 
-def _contours(run, axes):
+def contour(ds, ax=None, index=-1):
+    """Filled contours of f in the (v1, v2) plane (through v3 = 0 in 3D) at one snapshot.
+
+    The filled levels start at f = 0, so the lowest band reaches as far as f >= 0; f < 0
+    is grey. Orange lines mark f = 1e-2 and 1e-4 of max f. The window holds the square where
+    f exceeds 1e-4 of max f, with a margin of 15 %.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of a run store.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into (its figure gets the colour bar); a new captioned figure when
+        None.
+    index : int
+        The snapshot, counted as a Python sequence index (0 the first, -1 the last).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    run = _Run.of(ds)
+    if not check.is_integer(index) or not -run.count <= index < run.count:
+        check.reject("contour", "index", index,
+                     f"must be an integer from {-run.count} to {run.count - 1}")
+    ax = _axes(ax, run)
+    index = int(index) % run.count
     v1, v2 = run.axes[0], run.axes[1]
-    for ax, index in zip(axes, (0, run.count - 1)):
-        plane = run.plane(index)
-        # each panel shows the square where its f exceeds 1e-3 of its maximum (above the noise)
-        inside = plane > 1e-3 * plane.max()
-        reach = max(float(numpy.abs(v1[inside.any(axis=1)]).max()),
-                    float(numpy.abs(v2[inside.any(axis=0)]).max())) + run.grid.spacing
-        levels = numpy.linspace(0, plane.max(), 21)[1:]
-        filled = ax.contourf(v1, v2, plane.T, levels=levels, cmap="viridis")
-        ax.contour(v1, v2, plane.T, levels=plane.max() * numpy.array([1e-4, 1e-2]),
-                   colors="0.35", linewidths=0.8, linestyles=[":", "--"])
-        ax.set(xlim=(-reach, reach), ylim=(-reach, reach))
-        ax.set_aspect("equal")
-        where = "" if run.grid.dimension == 2 else ", v3 = 0"
-        ax.set(xlabel="v1", ylabel="v2", title=f"f at t = {run.times[index]:g}{where}")
-        plt.colorbar(filled, ax=ax, shrink=0.8, format="%.3g",
-                     label="f (grey: 1e-2 dashed, 1e-4 dotted, of max f)")
+    plane = run.plane(index)
+    peak = float(plane.max())
+    inside = plane > 1e-4 * peak
+    reach = min(1.15 * max(float(numpy.abs(v1[inside.any(axis=1)]).max()),
+                           float(numpy.abs(v2[inside.any(axis=0)]).max())) + run.grid.spacing,
+                run.grid.half_width)
+    levels = ticker.MaxNLocator(nbins=12).tick_values(0.0, peak)
+    cmap = colormaps["viridis"].with_extremes(under="0.8")
+    filled = ax.contourf(v1, v2, plane.T, levels=levels, cmap=cmap, extend="min")
+    ax.contour(v1, v2, plane.T, levels=peak * numpy.array([1e-4, 1e-2]), colors="C1",
+               linewidths=0.8, linestyles=[":", "--"])
+    ax.set(xlim=(-reach, reach), ylim=(-reach, reach))
+    ax.set_aspect("equal")
+    f, v = run.f_name, run.v_name
+    where = "" if run.grid.dimension == 2 else f", {v}3 = 0"
+    ax.set(xlabel=f"velocity {v}1 (dimensionless)", ylabel=f"velocity {v}2 (dimensionless)",
+           title=f"{f}({v}1, {v}2{where}) at t = {run.times[index]:g}, max {f} = {peak:.3g}")
+    ax.legend(handles=[Line2D([], [], color="C1", ls="--", lw=0.8,
+                              label=f"{f} = 1e-2 max {f}"),
+                       Line2D([], [], color="C1", ls=":", lw=0.8, label=f"{f} = 1e-4 max {f}"),
+                       Patch(color="0.8", label=f"{f} < 0")],
+              loc="upper center", bbox_to_anchor=(0.5, -0.13), ncols=3, fontsize=7)
+    ax.figure.colorbar(filled, ax=ax, shrink=0.85, label=f"{f} (dimensionless)")
+    return ax
 
 
-def _moments(run, axes):
-    t = run.step_time
-    drift = numpy.abs(run.moments["mass"] / run.moments["mass"][0] - 1)
-    axes[0].semilogy(t, numpy.where(drift > 0, drift, numpy.nan), ".", ms=2, color="C2")
-    axes[0].set(xlabel="t", title="|mass / mass(0) - 1| (zeros left out)")
-    d = run.grid.dimension
-    axes[1].plot(t, run.moments["kurtosis"], color="C4", label="granframe")
-    axes[1].axhline((d + 2) / d, color="k", ls="--", lw=1, label=f"Maxwellian {(d + 2) / d:g}")
-    axes[1].set(xlabel="t", title="kurtosis")
-    axes[1].legend()
-    peaks = numpy.array([float(run.snapshot(i).max()) for i in range(run.count)])
-    axes[2].plot(t, run.moments["min_f"] / numpy.interp(t, run.times, peaks), color="C5",
-                 label="min f / max f")
-    axes[2].plot(t, -run.moments["negative_mass_fraction"], color="C3", ls="--",
-                 label="- negative mass share")
-    axes[2].set(xlabel="t", title="positivity")
-    axes[2].legend()
+def figures(ds) -> dict:
+    """The five figures of a run, each captioned with its parameters.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of a run store.
+
+    Returns
+    -------
+    dict of str to matplotlib.figure.Figure
+        ``temperature``, ``slices``, ``contour``, ``moments`` and, with at least three
+        snapshots, ``entropy``. They are not attached to pyplot.
+    """
+    run = _Run.of(ds)
+    error = temperature_error if run.exact_temperature() is not None else mass_drift
+    panels = {"temperature": (temperature, error),
+              "slices": (slices, lambda r, ax: slices(r, ax, scale="log")),
+              "contour": (lambda r, ax: contour(r, ax, index=0), contour),
+              "moments": (mass_drift, kurtosis, positivity)}
+    if run.count >= 3:
+        panels["entropy"] = (entropy,)
+    text = caption(run)
+    drawn = {}
+    for name, draws in panels.items():
+        layout, size = _LAYOUTS[name]
+        fig = Figure(figsize=size, layout="constrained")
+        for ax, draw in zip(numpy.atleast_1d(fig.subplots(*layout)), draws):
+            draw(run, ax)
+        fig.suptitle(text, fontsize=8, color="C3" if run.status not in (None, "finished")
+                     else "black")
+        drawn[name] = fig
+    return drawn
 
 
-def plot(store, out) -> list[pathlib.Path]:
-    """Write the figures of ``store`` into the folder ``out``; returns their paths."""
-    run = _Run(store)
+def plot(store, out, *, format="png", dpi=DEFAULT_DPI) -> list[pathlib.Path]:
+    """Write the figures of the run store ``store`` into the folder ``out``.
+
+    Parameters
+    ----------
+    store : str or pathlib.Path
+        A run store; every committed chunk must pass its checksum.
+    out : str or pathlib.Path
+        The folder for the figures (made when missing).
+    format : {"png", "pdf", "svg"}
+        The file format.
+    dpi : float
+        Resolution of the raster parts, in dots per inch, within :data:`DPI_RANGE`.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written, ``<figure>.<format>``.
+    """
+    if format not in FORMATS:
+        check.reject("plot", "format", format, f"must be one of {', '.join(FORMATS)}")
+    low, high = DPI_RANGE
+    if not check.is_real(dpi) or not (math.isfinite(dpi) and low <= dpi <= high):
+        check.reject("plot", "dpi", dpi, f"must be a number from {low} to {high}")
+    import matplotlib
+
+    with matplotlib.rc_context(_STYLE):
+        drawn = figures(_Run(store))
     out = pathlib.Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    figures = {"temperature.png": ((1, 2), (11, 4), _temperature),
-               "slices.png": ((1, 2), (11, 4), _slices),
-               "contour.png": ((1, 2), (10, 4.2), lambda r, a, b: _contours(r, (a, b))),
-               "moments.png": ((1, 3), (13, 3.6), lambda r, *a: _moments(r, a))}
-    if run.count >= 3:
-        figures["entropy.png"] = ((1, 1), (6, 4), _entropy)
     written = []
-    with plt.rc_context(_STYLE):
-        for name, (layout, size, draw) in figures.items():
-            fig, axes = plt.subplots(*layout, figsize=size, constrained_layout=True)
-            draw(run, *numpy.atleast_1d(axes))
-            if run.status != "finished":
-                fig.suptitle(f"run status: {run.status}", color="C3")
-            path = out / name
-            fig.savefig(path)
-            plt.close(fig)
-            written.append(path)
+    for name, fig in drawn.items():
+        path = out / f"{name}.{format}"
+        fig.savefig(path, format=format, dpi=dpi)
+        written.append(path)
     return written

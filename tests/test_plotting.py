@@ -1,0 +1,254 @@
+"""Plotting functions on the Dataset of a run store, and ``granframe plot``."""
+
+import numpy
+import pytest
+import xarray
+from matplotlib.contour import QuadContourSet
+from matplotlib.figure import Figure
+
+import granframe
+from granframe.run.description import RunDescription
+from granframe.run.runner import Simulation
+from granframe.run.storage import RunStore
+from granframe.tools import plotting
+from granframe.tools.cli import main
+
+from test_runner import heated
+from test_unbuilt_description import _refuse_building_cupy
+
+#: Every plotting function that draws one panel, with the options it is drawn with.
+PANELS = {"temperature": (plotting.temperature, {}),
+          "temperature_error": (plotting.temperature_error, {}),
+          "mass_drift": (plotting.mass_drift, {}),
+          "kurtosis": (plotting.kurtosis, {}),
+          "positivity": (plotting.positivity, {}),
+          "entropy": (plotting.entropy, {}),
+          "slices": (plotting.slices, {}),
+          "slices_log": (plotting.slices, {"scale": "log"}),
+          "contour_first": (plotting.contour, {"index": 0}),
+          "contour_last": (plotting.contour, {})}
+
+
+@pytest.fixture(scope="module")
+def store(tmp_path_factory):
+    """A heated Maxwell-molecule run: 2D, N = 32, dt = 0.05 to t = 1, five snapshots."""
+    path = tmp_path_factory.mktemp("plotting") / "run.zarr"
+    Simulation(heated()).run(path, progress=False)
+    return path
+
+
+@pytest.fixture
+def ds(store):
+    with xarray.open_zarr(store, consolidated=False) as data:
+        yield data
+
+
+def _axes():
+    return Figure(layout="constrained").subplots()
+
+
+def _with_description(ds, **replace):
+    """``ds`` with its stored description's TOML text edited (old -> new), where
+    ``open_zarr`` shows it: at the root and in the ``granframe`` metadata."""
+    text = ds.attrs["granframe"]["description_toml"]
+    for old, new in replace.values():
+        assert old in text
+        text = text.replace(old, new)
+    edited = ds.copy()
+    edited.attrs = {**ds.attrs, "description_toml": text,
+                    "granframe": {**ds.attrs["granframe"], "description_toml": text}}
+    return edited
+
+
+@pytest.mark.parametrize("name", PANELS)
+def test_each_function_draws_into_the_given_axes_with_labelled_axes(ds, name):
+    draw, options = PANELS[name]
+    ax = _axes()
+    assert draw(ds, ax=ax, **options) is ax
+    assert ax.has_data()
+    assert "(dimensionless)" in ax.get_xlabel() and "(dimensionless)" in ax.get_ylabel()
+    assert ax.get_title()
+
+
+def test_without_axes_a_function_makes_a_captioned_figure(ds):
+    import matplotlib.pyplot as plt
+
+    ax = plotting.kurtosis(ds)
+    try:
+        assert "N = 32" in ax.figure.get_suptitle() and "dt = 0.05" in ax.figure.get_suptitle()
+    finally:
+        plt.close(ax.figure)
+
+
+def test_the_caption_states_the_parameters_and_that_quantities_are_dimensionless(ds):
+    text = plotting.caption(ds)
+    for part in ("test", "2D, N = 32", "dt = 0.05 (rk4)", "τ = 0.1", "ε = 1",
+                 "fast_spectral(radial_points=16, sphere=circle_trapezoid(n_points=8))",
+                 "e: constant(value=0.5)", "kernel maxwell, exponent λ = 0",
+                 "all quantities dimensionless"):
+        assert part in text
+    drawn = plotting.figures(ds)
+    assert set(drawn) == {"temperature", "entropy", "slices", "contour", "moments"}
+    for fig in drawn.values():
+        assert fig.get_suptitle() == text
+        for ax in fig.axes:
+            assert ax.get_ylabel(), (fig.get_suptitle(), ax.get_title())
+
+
+def test_positivity_is_the_negative_share_on_a_log_axis(ds):
+    ax = plotting.positivity(ds, ax=_axes())
+    assert ax.get_yscale() == "log"
+    labels = [text.get_text() for text in ax.get_legend().get_texts()]
+    assert any("negative mass share" in label for label in labels)
+    assert any("positivity_tolerance" in label for label in labels)
+    for line in ax.get_lines():                 # zeros left out, not drawn at a floor
+        values = numpy.asarray(line.get_ydata(), dtype=float)
+        assert (values[~numpy.isnan(values)] > 0).all()
+
+
+@pytest.mark.parametrize("scale", ["linear", "log"])
+def test_slices_have_a_marker_at_each_grid_point(ds, scale):
+    ax = plotting.slices(ds, ax=_axes(), scale=scale)
+    drawn = [line for line in ax.get_lines() if len(line.get_xdata())]
+    assert len(drawn) >= 5
+    assert all(line.get_marker() not in ("None", "", None) for line in drawn)
+    assert all(len(line.get_xdata()) == 32 for line in drawn)
+    assert ax.get_yscale() == scale
+
+
+def test_contour_levels_start_at_zero_with_round_ticks_and_negative_values_apart(ds):
+    ax = plotting.contour(ds, ax=_axes(), index=0)
+    filled = [c for c in ax.collections if isinstance(c, QuadContourSet) and c.filled]
+    assert len(filled) == 1
+    levels = filled[0].levels
+    assert levels[0] == 0.0 and filled[0].extend == "min"
+    assert all(float(f"{level:.2g}") == pytest.approx(level, abs=1e-15) for level in levels)
+    assert "t = 0," in ax.get_title()
+
+
+def test_entropy_against_the_last_snapshot_says_it_vanishes_there_by_construction(ds):
+    ax = plotting.entropy(ds, ax=_axes())
+    assert "last snapshot" in ax.get_title() and "by construction" in ax.get_title()
+    assert ax.get_yscale() == "log"
+
+
+def test_entropy_of_an_elastic_run_is_taken_against_the_exact_maxwellian(tmp_path):
+    path = tmp_path / "elastic.zarr"
+    Simulation(heated(restitution={"name": "constant", "value": 1.0}, heat_bath=0.0,
+                      initial={"name": "bkw", "time": 0.0}, time_step=0.1, final_time=2.0,
+                      grid={"dimension": 2, "n_modes": 32, "support_radius": 4.0},
+                      output={"snapshot_interval": 0.5})).run(path, progress=False)
+    with xarray.open_zarr(path, consolidated=False) as data:
+        ax = plotting.entropy(data, ax=_axes())
+    assert "exact equilibrium" in ax.get_title() and "by construction" not in ax.get_title()
+    values = ax.get_lines()[0].get_ydata()
+    assert len(values) == 5 and values[0] > values[-1] > 0
+
+
+def test_a_run_without_an_exact_temperature_law_shows_the_mass_drift(ds):
+    other = _with_description(ds, kernel=('[kernel]\nname = "maxwell"',
+                                          '[kernel]\nname = "hard_spheres"'))
+    with pytest.raises(ValueError, match="temperature_error: parameter 'ds' = 'test' .*exact "
+                                         "temperature law"):
+        plotting.temperature_error(other, ax=_axes())
+    right = plotting.figures(other)["temperature"].axes[1]
+    assert "mass drift" in right.get_ylabel()
+    assert "exponent λ = 1" in plotting.caption(other)
+
+
+def test_the_figures_of_open_run_match_those_of_open_zarr(ds, store):
+    opened = granframe.open_run(store)
+    assert "granframe" not in opened.attrs          # flat attributes only
+    assert plotting.caption(opened) == plotting.caption(ds)
+    for name, draw in (("slices", plotting.slices), ("positivity", plotting.positivity)):
+        ours, theirs = draw(opened, ax=_axes()), draw(ds, ax=_axes())
+        for a, b in zip(ours.get_lines(), theirs.get_lines()):
+            numpy.testing.assert_array_equal(a.get_ydata(), b.get_ydata(), err_msg=name)
+
+
+def test_only_committed_snapshots_and_records_are_drawn(ds):
+    meta = ds.attrs["granframe"]
+    cut = ds.copy()
+    cut.attrs = {"description_toml": meta["description_toml"],
+                 "progress_snapshots": 2, "progress_records": 6}
+    assert "t = 0.25," in plotting.contour(cut, ax=_axes()).get_title()
+    assert plotting.kurtosis(cut, ax=_axes()).get_lines()[0].get_xdata()[-1] == 0.25
+    with pytest.raises(TypeError, match="plot: parameter 'ds' = 'Dataset' is invalid; must be "
+                                        "the Dataset of a granframe run store"):
+        plotting.caption(xarray.Dataset())
+
+
+def test_bad_options_of_the_functions_are_refused_by_name(ds, store, tmp_path):
+    with pytest.raises(ValueError, match="slices: parameter 'scale' = 'symlog'"):
+        plotting.slices(ds, ax=_axes(), scale="symlog")
+    with pytest.raises(ValueError, match="contour: parameter 'index' = 5 .* from -5 to 4"):
+        plotting.contour(ds, ax=_axes(), index=5)
+    with pytest.raises(ValueError, match="plot: parameter 'format' = 'jpg' .* png, pdf, svg"):
+        plotting.plot(store, tmp_path, format="jpg")
+    with pytest.raises(ValueError, match="plot: parameter 'dpi' = 0 .* from 10 to 600"):
+        plotting.plot(store, tmp_path, dpi=0)
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("fmt, magic", [("pdf", b"%PDF"), ("svg", b"<?xml")])
+def test_plot_format_writes_vector_files(store, tmp_path, capsys, fmt, magic):
+    out = tmp_path / "figures"
+    assert main(["plot", str(store), "--out", str(out), "--format", fmt]) == 0
+    names = {p.name for p in out.iterdir()}
+    assert names == {f"{n}.{fmt}" for n in ("temperature", "entropy", "slices", "contour",
+                                            "moments")}
+    assert all((out / n).read_bytes().startswith(magic) for n in names)
+    assert str(out / f"temperature.{fmt}") in capsys.readouterr().out
+
+
+def test_plot_dpi_sets_the_png_resolution(store, tmp_path):
+    def width(path):
+        return int.from_bytes(path.read_bytes()[16:20], "big")      # the PNG IHDR width
+
+    assert main(["plot", str(store), "--out", str(tmp_path / "a"), "--dpi", "40"]) == 0
+    assert main(["plot", str(store), "--out", str(tmp_path / "b"), "--dpi", "80"]) == 0
+    small, large = width(tmp_path / "a" / "moments.png"), width(tmp_path / "b" / "moments.png")
+    assert large == pytest.approx(2 * small, rel=0.02)
+
+
+@pytest.mark.parametrize("value", ["0", "-5", "9", "601", "nan", "inf", "high"])
+def test_plot_refuses_a_bad_dpi_naming_the_option(store, tmp_path, capsys, value):
+    with pytest.raises(SystemExit) as stop:
+        main(["plot", str(store), "--out", str(tmp_path / "f"), "--dpi", value])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert f"argument --dpi: must be a number from 10 to 600, got '{value}'" in err
+    assert not (tmp_path / "f").exists()
+
+
+def test_plot_refuses_an_unknown_format_naming_the_option(store, tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        main(["plot", str(store), "--out", str(tmp_path / "f"), "--format", "jpg"])
+    assert "argument --format: invalid choice: 'jpg'" in capsys.readouterr().err
+
+
+def test_the_figures_of_a_store_written_with_the_cupy_backend_are_drawn_on_a_cpu(
+        tmp_path, monkeypatch):
+    path = tmp_path / "gpu.zarr"
+    Simulation(heated(final_time=0.5, backend={"name": "cupy", "module": "numpy"})).run(
+        path, progress=False)
+    written = RunStore.open(path, mode="r+")
+    meta = written.metadata
+    meta["description"]["backend"] = {"name": "cupy"}
+    meta["description_toml"] = RunDescription.from_dict(meta["description"]).to_toml()
+    written.group.attrs.update({"granframe": meta, "description_toml": meta["description_toml"]})
+    _refuse_building_cupy(monkeypatch)
+    with xarray.open_zarr(path, consolidated=False) as data:
+        assert RunDescription.from_toml(data.attrs["description_toml"]).backend.name == "cupy"
+        drawn = plotting.figures(data)
+    assert set(drawn) == {"temperature", "entropy", "slices", "contour", "moments"}
+    assert "N = 32" in drawn["contour"].get_suptitle()
+    assert [p.name for p in plotting.plot(path, tmp_path / "fig", format="svg")][0] == \
+        "temperature.svg"
+
+
+def test_the_caption_of_an_adaptive_run_gives_the_range_of_its_steps(ds):
+    adaptive = _with_description(ds, integrator=('[integrator]\nname = "rk4"',
+                                                 '[integrator]\nname = "dopri54"'),
+                                 tolerance=("heat_bath = ", "tolerance = 1e-6\nheat_bath = "))
+    assert "dt = 0.05..0.05 (adaptive dopri54, tolerance 1e-06)" in plotting.caption(adaptive)
