@@ -2,22 +2,25 @@
 
 Commands
 --------
-plugins [--json]
+plugins [--json] [[FAMILY] NAME]
     List every registered implementation per family with its source and a
-    one-line description. The JSON form is documented in docs/plugins.md.
+    one-line description; with NAME, show one implementation (its family, description,
+    parameters with their types and defaults, docstring summary). The JSON forms are
+    documented in docs/plugins.md.
 bench [--json] [--backend NAME] [--threads T] [--repeats R] [--precision P]
       [--config D:N[:N_RHO:M] ...] [--batch B ...]
     Time the fast operator against the FFT floor (docs/benchmarks.md); with --batch, on
     stacks of B distributions, per distribution.
 run SOURCE --out STORE [--resume [--rollback]] [--overwrite] [--quick] [--only NAMES]
-    [--progress]
+    [--progress] [--set KEY=VALUE ...]
     Run a description (a TOML file or a study module under studies/) into a zarr store;
-    a study with several runs writes STORE/<name>.zarr each, then its report.
+    a study with several runs writes STORE/<name>.zarr each, then its report (from the
+    runs that have ended, so also after --only). --set overrides a key of the description.
     Exit status 3 when a health check stopped the run, 130 when interrupted.
 plot STORE --out DIR [--format png|pdf|svg] [--dpi DPI]
     Draw the figures of a run (PNG unless --format says otherwise).
-info STORE
-    Say what is in a store.
+info STORE [--json]
+    Say what is in a store (--json: a run store's content as a JSON document).
 check STORE
     Read every committed chunk of a run (or sweep) store and list the missing or damaged
     ones; exit status 3 when there is any.
@@ -35,7 +38,10 @@ from __future__ import annotations
 import argparse
 import json
 import pathlib
+import re
 import sys
+
+import attrs
 
 from granframe._version import __version__
 
@@ -44,11 +50,24 @@ def _plugins(args) -> int:
     from granframe.registry import FAMILIES, default_registries
 
     registries = default_registries()
+    families = list(FAMILIES)
+    if len(args.names) == 1 and args.names[0] in FAMILIES:
+        families = args.names
+    elif args.names:
+        entry = _entry(registries, args.names)
+        if args.json:
+            json.dump(_entry_document(entry), sys.stdout, indent=2)
+            sys.stdout.write("\n")
+        else:
+            print(_entry_text(entry))
+        return 0
     if args.json:
-        json.dump(registries.to_json(), sys.stdout, indent=2)
+        document = registries.to_json()
+        document["families"] = {f: document["families"][f] for f in families}
+        json.dump(document, sys.stdout, indent=2)
         sys.stdout.write("\n")
         return 0
-    for family in FAMILIES:
+    for family in families:
         entries = registries.entries(family)
         print(f"{family} ({len(entries)})")
         if not entries:
@@ -57,6 +76,66 @@ def _plugins(args) -> int:
         for e in entries:
             print(f"    {e.name:<{width}}  {e.description}  [{e.source}]")
     return 0
+
+
+def _entry(registries, names):
+    """The registered implementation that ``plugins NAME`` or ``plugins FAMILY NAME``
+    means; an unknown one gets the closest name."""
+    from granframe.errors import UnknownNameError
+    from granframe.registry import FAMILIES, did_you_mean
+
+    if len(names) > 2:
+        raise ValueError(f"plugins: parameter 'names' = {' '.join(names)!r} is invalid; give "
+                         "NAME or FAMILY NAME, e.g. granframe plugins collision_kernels vhs")
+    if len(names) == 2:
+        return registries.get(*names)
+    [name] = names
+    found = registries.find(name)
+    if len(found) > 1:
+        raise UnknownNameError(f"plugins: name {name!r} is registered in several families "
+                               f"({', '.join(e.family for e in found)}); give FAMILY NAME, "
+                               f"e.g. granframe plugins {found[0].family} {name}")
+    if not found:
+        known = [n for family in FAMILIES for n in registries.names(family)] + list(FAMILIES)
+        raise UnknownNameError(f"plugins: name {name!r} is not registered in any family"
+                               f"{did_you_mean(name, known)} (granframe plugins lists them)")
+    return found[0]
+
+
+def _entry_document(entry) -> dict:
+    """``granframe plugins NAME --json`` (docs/plugins.md)."""
+    parameters = entry.parameters()
+    return {"schema": "granframe.plugin/1", "granframe_version": __version__,
+            "family": entry.family, **entry.to_dict(), "factory": entry.factory_path,
+            "summary": entry.summary(),
+            "parameters": None if parameters is None else [p.to_dict() for p in parameters]}
+
+
+def _entry_text(entry) -> str:
+    """``granframe plugins NAME``: one implementation in words."""
+    from granframe.registry import OPERATOR_ARGUMENTS
+
+    lines = [f"{entry.name} ({entry.family})",
+             f"  description  {entry.description}",
+             f"  source       {entry.source}",
+             f"  factory      {entry.factory_path}"]
+    summary = entry.summary()
+    if summary and summary != entry.description:
+        lines.append(f"  summary      {summary}")
+    parameters = entry.parameters()
+    after = (f" (after {', '.join(OPERATOR_ARGUMENTS)})"
+             if entry.family == "collision_operators" else "")
+    if parameters is None:
+        lines.append("parameters: not known (the factory has no signature)")
+    elif not parameters:
+        lines.append(f"parameters{after}: none")
+    else:
+        lines.append(f"parameters{after}:")
+        rows = [(p.name, p.type or "-", "required" if p.required else f"default {p.default!r}")
+                for p in parameters]
+        widths = [max(len(row[i]) for row in rows) for i in range(2)]
+        lines.extend(f"  {n:<{widths[0]}}  {t:<{widths[1]}}  {d}" for n, t, d in rows)
+    return "\n".join(lines)
 
 
 def _bench(args) -> int:
@@ -83,6 +162,7 @@ def _bench(args) -> int:
 
 
 def _run(args) -> int:
+    from granframe.registry import did_you_mean
     from granframe.run import storage
     from granframe.run.runner import check_run_modes, load_study
 
@@ -91,16 +171,21 @@ def _run(args) -> int:
         raise ValueError("run: --rollback applies to --resume (it continues from the last "
                          "intact commit of a damaged store)")
     study = load_study(args.source, quick=args.quick)
+    if args.only and list(study.runs) != [""]:
+        unknown = [n for n in args.only.split(",") if n not in study.runs]
+        if unknown:
+            raise ValueError(f"run: parameter 'only' = {args.only!r} is invalid; the study's "
+                             f"runs are {', '.join(study.runs)}"
+                             f"{did_you_mean(unknown[0], study.runs)}")
+    if args.set:
+        study = attrs.evolve(study, runs={name: _with_settings(description, args.set)
+                                          for name, description in study.runs.items()})
     out = pathlib.Path(args.out)
     if list(study.runs) == [""]:
         if args.only:
             raise ValueError("run: --only applies to studies with several runs")
         return _run_one(study.runs[""], out, args)
     names = list(study.runs) if not args.only else args.only.split(",")
-    unknown = [n for n in names if n not in study.runs]
-    if unknown:
-        raise ValueError(f"run: parameter 'only' = {args.only!r} is invalid; the study's runs "
-                         f"are {', '.join(study.runs)}")
     kind = {"run": "run store", "sweep": "sweep store", "file": "file"}.get(
         storage.store_kind(out))
     if kind is not None:
@@ -115,29 +200,144 @@ def _run(args) -> int:
         if code == 130:
             return code
         status = max(status, code)
-    # the report reads finished runs and runs stopped by a health check (their moments up to
-    # the stop are valid data); it waits for runs that are missing or interrupted
+    if study.report is not None:
+        _report(study, out, args.source)
+    return status
+
+
+def _report(study, out: pathlib.Path, source) -> None:
+    """Write the study's report to ``out/report`` from the runs in ``out`` that ended.
+
+    Runs that finished and runs stopped by a health check (their moments up to the stop
+    are valid data) have ended; missing or interrupted ones have not. The report gets
+    the stores of those that ended, so after ``--only`` it covers the runs made so far;
+    a report that looks up a run that has not ended (a KeyError naming it) waits for it.
+    """
+    from granframe.run import storage
+
     ended = {}
     for name in study.runs:
         store = out / f"{name}.zarr"
         if storage.store_kind(store) == "run" and storage.RunStore.open(store).progress.get(
                 "status") in ("finished", "failed"):
             ended[name] = store
-    if study.report is not None and len(ended) == len(study.runs):
-        report = out / "report"
+    waiting = [name for name in study.runs if name not in ended]
+    if not ended:
+        print(f"report: waiting for the runs ({len(waiting)} have not ended; run again "
+              "with --resume)")
+        return
+    report = out / "report"
+    try:
+        summary = study.report(ended, report)
+        text = json.dumps(summary, indent=2) + "\n"
+    except KeyError as exc:
+        if not (exc.args and exc.args[0] in waiting):
+            raise _report_failed(exc, source, out) from None
+        print(f"report: waiting for {len(waiting)} of {len(study.runs)} runs (it reads "
+              f"'{exc.args[0]}', which has not ended): run them with --only "
+              f"{','.join(waiting)}, or run again with --resume")
+        return
+    except Exception as exc:   # the study's own code: say where it failed, keep the runs
+        raise _report_failed(exc, source, out) from None
+    (report / "summary.json").write_text(text)
+    print(f"report: {report} (summary.json and figures)"
+          + (f", from {len(ended)} of {len(study.runs)} runs: {', '.join(ended)}"
+             if waiting else ""))
+
+
+def _report_failed(exc, source, out) -> ValueError:
+    return ValueError(f"run: the report of study '{source}' failed: {_where(exc, source)}; "
+                      f"the runs' stores in '{out}' are kept (fix the report, then run again "
+                      "with --resume)")
+
+
+def _with_settings(description, settings: list[str]):
+    """``description`` with each ``KEY=VALUE`` of ``run --set`` applied, in order.
+
+    KEY is a dotted key of the description's table (``grid.n_modes``,
+    ``operator.sphere.n_points``, ``kernel.name``); one that the description cannot have
+    is refused with the closest that it can. The grid's half width and truncation radius,
+    when they are the ones its support radius implies, are derived again from the new
+    one. VALUE is read as a TOML value (``64``,
+    ``0.5``, ``true``, ``"rk4"``, ``[1, 2]``, ``{name = "lebedev", order = 7}``), or
+    taken as a string when it is not one (``kernel.name=hard_spheres``).
+    """
+    import tomllib
+
+    from granframe.registry import did_you_mean
+    from granframe.run.description import RunDescription
+
+    data = description.to_dict()
+    derived = attrs.evolve(description.grid, half_width=None, truncation_radius=None)
+    for key in ("half_width", "truncation_radius"):   # they follow --set grid.support_radius
+        if getattr(derived, key) == getattr(description.grid, key):
+            del data["grid"][key]
+    for setting in settings:
+        key, equals, text = setting.partition("=")
+        key = key.strip()
+        if not equals or not key:
+            raise ValueError(f"run: parameter 'set' = {setting!r} is invalid; must be "
+                             "KEY=VALUE, e.g. --set grid.n_modes=64")
+        known = _settable_keys(data)
+        if key not in known:
+            raise ValueError(f"run: parameter 'set' = {setting!r} is invalid; '{key}' is not "
+                             f"a key of the description{did_you_mean(key, known)}")
         try:
-            summary = study.report(ended, report)
-            text = json.dumps(summary, indent=2) + "\n"
-        except Exception as exc:   # the study's own code: say where it failed, keep the runs
-            raise ValueError(f"run: the report of study '{args.source}' failed: "
-                             f"{_where(exc, args.source)}; the runs' stores in '{out}' are "
-                             "kept (fix the report, then run again with --resume)") from None
-        (report / "summary.json").write_text(text)
-        print(f"report: {report} (summary.json and figures)")
-    elif study.report is not None:
-        print(f"report: waiting for {len(study.runs) - len(ended)} of {len(study.runs)} runs "
-              "(run again with --resume)")
-    return status
+            value = tomllib.loads(f"value = {text.strip()}")["value"]
+        except tomllib.TOMLDecodeError:
+            value = text.strip()
+        *parents, last = key.split(".")
+        node = data
+        for part in parents:
+            child = node.get(part)
+            node[part] = node = ({"name": child} if isinstance(child, str)
+                                 else child if isinstance(child, dict) else {})
+        node[last] = value
+    return RunDescription.from_dict(data)
+
+
+def _settable_keys(data: dict) -> list[str]:
+    """The dotted keys a description table ``data`` can have: every key it has, every
+    field of RunDescription and of its grid, output and health tables, and for each
+    component (and each quadrature among the operator's options) ``name`` and the
+    parameters of the implementation it names."""
+    from granframe.backends import resolve_backend
+    from granframe.registry import default_registries
+    from granframe.run.description import COMPONENT_FAMILIES, Health, Output, RunDescription
+    from granframe.velocity.grid import VelocityGrid
+
+    def present(table, prefix=""):
+        for key, value in table.items():
+            yield prefix + key
+            if isinstance(value, dict):
+                yield from present(value, f"{prefix}{key}.")
+
+    def parameters(family, table, prefix):
+        name = table.get("name") if isinstance(table, dict) else table
+        yield f"{prefix}name"
+        if not isinstance(name, str):
+            return
+        try:
+            entry = default_registries().get(
+                family, resolve_backend(name) if family == "array_backends" else name)
+        except ValueError:   # an unknown name: the description names the closest
+            return
+        yield from (prefix + p.name for p in entry.parameters() or ())
+
+    keys = set(present(data))
+    tables = {"grid": VelocityGrid, "output": Output, "health": Health}
+    for field in attrs.fields(RunDescription):
+        if field.init:
+            keys.add(field.alias or field.name)
+    for table, cls in tables.items():
+        keys.update(f"{table}.{f.alias or f.name}" for f in attrs.fields(cls) if f.init)
+    for field, family in COMPONENT_FAMILIES.items():
+        keys.update(parameters(family, data.get(field), f"{field}."))
+    operator = data.get("operator")
+    for option, value in (operator.items() if isinstance(operator, dict) else ()):
+        if isinstance(value, dict):
+            keys.update(parameters("quadratures", value, f"operator.{option}."))
+    return sorted(keys)
 
 
 def _where(exc: BaseException, source) -> str:
@@ -238,7 +438,44 @@ def _dpi(text: str) -> float:
     return value
 
 
+def _info_document(path) -> dict:
+    """``granframe info STORE --json``: what ``info`` says of a run store, as JSON
+    (docs/runner.md): the store's metadata and progress as stored, and the range of its
+    snapshots and moments."""
+    from granframe.run.storage import RunStore, StoreDamagedError, store_kind, summarise
+
+    if store_kind(path) == "sweep":
+        raise ValueError(f"info: parameter 'store' = '{path}' is invalid; --json describes "
+                         f"run stores, and it is a sweep store (granframe info {path} "
+                         "describes it)")
+    store = RunStore.open(path)   # refuses what is not a run store
+    problems = store.verify([n for n in store._names() if n != "f"])
+    if problems:
+        raise StoreDamagedError(f"store '{path}' is damaged: {summarise(problems)} "
+                                "(granframe check lists every problem)", problems)
+    group, progress = store.group, store.progress
+    document = {"schema": "granframe.info/1", "store": str(store.path),
+                "metadata": store.metadata, "progress": progress, "snapshots": None,
+                "moments": None}
+    if progress.get("snapshots"):
+        times = group["time"][:int(progress["snapshots"])]
+        document["snapshots"] = {"count": len(times), "shape": list(group["f"].shape[1:]),
+                                 "first_time": float(times[0]), "last_time": float(times[-1])}
+    if progress.get("records"):
+        n = int(progress["records"])
+        document["moments"] = {
+            "records": n, "first_time": float(group["step_time"][0]),
+            "last_time": float(group["step_time"][n - 1]), "steps": int(group["step"][n - 1]),
+            **{name: {"first": float(group[name][0]), "last": float(group[name][n - 1])}
+               for name in ("mass", "temperature", "kurtosis", "min_f")}}
+    return document
+
+
 def _info(args) -> int:
+    if args.json:
+        json.dump(_info_document(args.store), sys.stdout, indent=2)
+        sys.stdout.write("\n")
+        return 0
     from granframe.run.storage import describe, store_kind
     from granframe.run.sweep import describe_sweep
 
@@ -300,13 +537,136 @@ def _advise(args) -> int:
     return 0
 
 
+class Parser(argparse.ArgumentParser):
+    """An :class:`argparse.ArgumentParser` that names the closest choice or option when
+    one is mistyped (Python 3.11's argparse has no ``suggest_on_error``).
+
+    Subcommands get parsers of the same class (``add_subparsers`` makes them so). Each
+    parser refuses the arguments it does not know itself, instead of returning them from
+    :meth:`parse_known_args`, so that the message comes with the subcommand's usage and
+    names the closest of its options; an unknown option is reported before a missing
+    required argument.
+    """
+
+    def parse_known_args(self, args=None, namespace=None):
+        self._arguments = list(sys.argv[1:] if args is None else args)
+        namespace, extras = super().parse_known_args(args, namespace)
+        if extras:
+            self.error(self._unrecognized(extras))
+        return namespace, extras
+
+    def error(self, message):
+        from granframe.registry import did_you_mean
+
+        choice = re.fullmatch(r"argument .*?: invalid choice: '(.*?)' \(choose from (.*)\)",
+                              message)
+        if choice:
+            choices = [c.strip().strip("'") for c in choice.group(2).split(",")]
+            message += did_you_mean(choice.group(1), choices)
+        elif message.startswith("the following arguments are required"):
+            unknown = [token for token in getattr(self, "_arguments", ())
+                       if self._is_unknown_option(token)]
+            if unknown:
+                message = self._unrecognized(unknown)
+        super().error(message)
+
+    def _is_unknown_option(self, token: str) -> bool:
+        if not token.startswith("-") or token in ("-", "--") or re.fullmatch(
+                r"-\d+$|-\d*\.\d+", token):
+            return False
+        option = token.split("=", 1)[0]
+        known = self._option_string_actions
+        return option not in known and not (option.startswith("--") and any(
+            name.startswith(option) for name in known))
+
+    def _unrecognized(self, tokens) -> str:
+        """``unrecognized arguments: ...``, with the closest option to each unknown one."""
+        from granframe.registry import closest
+
+        options = [name for name in self._option_string_actions if name.startswith("--")]
+        hints = []
+        for token in tokens:
+            match = closest(token.split("=", 1)[0], options) if token.startswith("-") else None
+            if match is not None:
+                hints.append(f"'{match}'" if len(tokens) == 1 else f"'{match}' for '{token}'")
+        return f"unrecognized arguments: {' '.join(tokens)}" + (
+            f"; did you mean {', '.join(hints)}?" if hints else "")
+
+
+#: What each command's ``--help`` says above its options (argparse's description) and,
+#: below them, its examples (the epilog).
+COMMAND_HELP = {
+    "plugins": ("""\
+List the registered implementations of every family (collision kernels, restitution laws,
+quadratures, collision operators, time integrators, initial conditions, array backends)
+with their source. With NAME (FAMILY NAME when the name is registered in several families,
+or FAMILY alone for one family's list), show one implementation: its family, description,
+source, docstring summary and parameters with their types and defaults.""",
+                """\
+  granframe plugins
+  granframe plugins toscani
+  granframe plugins collision_operators fast_spectral --json"""),
+    "bench": ("""\
+Time the fast spectral operator against the FFT floor, the time of the transforms it cannot
+avoid (docs/benchmarks.md). --batch evaluates stacks of B distributions at once and reports
+time and floor per distribution.""",
+              """\
+  granframe bench --config 2:64 --config 3:32 --repeats 5
+  granframe bench --json --backend numpy --batch 1 8 64"""),
+    "run": ("""\
+Run a description (a .toml file, or a study module defining description(quick) or
+runs(quick)) into a zarr store. A study with several runs writes STORE/<name>.zarr for each,
+then its report to STORE/report from the runs that have ended (also after --only). --set
+overrides a key of the description (repeatable; the value is read as TOML). Exit status 3
+when a health check stopped a run, 130 when interrupted.""",
+            """\
+  granframe run studies/heated_maxwell.py --out runs/h.zarr
+  granframe run studies/heated_maxwell.py --out runs/h.zarr --resume
+  granframe run desc.toml --out runs/d.zarr --set grid.n_modes=64 --set kernel.name=vhs
+  granframe run studies/review_test1.py --out runs/test1 --only a,b"""),
+    "plot": ("""\
+Draw the figures of a run store (temperature, relative entropy, slices and contours of f,
+moments) into a folder.""",
+             """\
+  granframe plot runs/h.zarr --out figures/h"""),
+    "info": ("""\
+Say what is in a store: status, snapshots, moments, provenance and the description. With
+--json, a run store's metadata and progress as stored and the range of its snapshots and
+moments, as one JSON document.""",
+             """\
+  granframe info runs/h.zarr
+  granframe info runs/h.zarr --json"""),
+    "check": ("""\
+Read every committed chunk of a run (or sweep) store and verify its checksum; list the
+missing or damaged ones (exit status 3 when there is any).""",
+              """\
+  granframe check runs/h.zarr"""),
+    "sweep": ("""\
+Run every point of a parameter sweep (a base description and its axes) on Dask into one
+zarr store (docs/scaling.md). Running it again skips ended runs and resumes cut ones. Exit
+status 3 when a run failed.""",
+              """\
+  granframe sweep sweep.toml --out runs/sweep.zarr --workers 2"""),
+    "advise": ("""\
+Propose the cheapest configuration (grid, quadratures, time step) predicted to meet a
+scene's tolerance on its temperature or distribution (docs/advise.md).""",
+               """\
+  granframe advise scene.toml
+  granframe advise scene.toml --out desc.toml && granframe run desc.toml --out runs/a.zarr"""),
+}
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="granframe",
-        description="Fourier spectral solvers for the inelastic Boltzmann equation.")
+    parser = Parser(
+        prog="granframe", formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Fourier spectral solvers for the inelastic Boltzmann equation.",
+        epilog="examples:\n  granframe plugins\n  granframe run studies/heated_maxwell.py "
+               "--out runs/h.zarr\n  granframe COMMAND --help")
     parser.add_argument("--version", action="version", version=f"granframe {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     plugins = commands.add_parser("plugins", help="list registered implementations per family")
+    plugins.add_argument("names", nargs="*", metavar="[FAMILY] NAME",
+                         help="show this implementation (or this family)")
     plugins.add_argument("--json", action="store_true", help="machine-readable output")
     plugins.set_defaults(handler=_plugins)
     bench = commands.add_parser("bench", help="time the fast operator against the FFT floor")
@@ -343,6 +703,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="the study's reduced variant (smaller grid or time)")
     run.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                      help="progress bar (default: only on a terminal)")
+    run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                     help="override a key of the description (repeatable), e.g. "
+                          "grid.n_modes=64; VALUE is read as TOML")
     run.set_defaults(handler=_run)
     plot = commands.add_parser("plot", help="draw the figures of a run store (PNG, PDF or SVG)")
     plot.add_argument("store", metavar="STORE")
@@ -355,6 +718,8 @@ def build_parser() -> argparse.ArgumentParser:
     plot.set_defaults(handler=_plot)
     info = commands.add_parser("info", help="say what is in a run store")
     info.add_argument("store", metavar="STORE")
+    info.add_argument("--json", action="store_true",
+                      help="a run store's content as a JSON document")
     info.set_defaults(handler=_info)
     check = commands.add_parser("check", help="read every committed chunk of a store and "
                                 "report missing or damaged ones (exit 3 if any)")
@@ -384,6 +749,10 @@ def build_parser() -> argparse.ArgumentParser:
                         help="write the proposed run description")
     advise.add_argument("--json", action="store_true", help="machine-readable output")
     advise.set_defaults(handler=_advise)
+    for name, command in commands.choices.items():
+        command.description, examples = COMMAND_HELP[name]
+        command.epilog = f"examples:\n{examples}"
+        command.formatter_class = argparse.RawDescriptionHelpFormatter
     return parser
 
 
