@@ -22,6 +22,17 @@ def reject(owner: str, name: str, value: Any, allowed: str, *, error=ValueError)
     raise error(f"{owner}: parameter '{name}' = {shown} is invalid; {allowed}")
 
 
+def distinct(value: float, limit: float, digits: int = 3) -> tuple[str, str]:
+    """``value`` and ``limit`` with ``digits`` significant digits, or as many more as make
+    them differ (17 tell any two floats apart), for messages comparing a value with its
+    limit: a share of 0.01004 above a tolerance of 0.01 reads "0.01004 > 0.01"."""
+    for n in range(digits, 18):
+        shown = f"{value:.{n}g}", f"{limit:.{n}g}"
+        if shown[0] != shown[1]:
+            break
+    return shown
+
+
 def _owner(instance) -> str:
     return type(instance).__name__
 

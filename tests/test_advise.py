@@ -2,17 +2,23 @@
 has the brute-force comparison); closed forms and the rescaled formulation are proposed where
 they apply; bad scenes are refused by name."""
 
+import importlib.util
 import math
+import pathlib
 
 import attrs
 import numpy
 import pytest
+from scipy.interpolate import CubicSpline
 
-from granframe.tools.advise import Scene, advise
+import granframe.tools.advise as advise_module
+from granframe.equations.rescaled import Rescaling
+from granframe.run.storage import RunStore
+from granframe.tools.advise import MODES, SPHERE, Scene, advise
 from granframe.velocity.quadratures import Lebedev
 from granframe.tools.cli import main
 from granframe.run.description import RunDescription
-from granframe.model.exact import bkw, heated_maxwell_temperature
+from granframe.model.exact import bkw, heated_maxwell_law, heated_maxwell_temperature
 from granframe.run.runner import Simulation
 
 MAXWELLIAN = {"name": "maxwellian", "temperature": 1.0}
@@ -120,3 +126,118 @@ def test_command_line_writes_a_runnable_description(tmp_path, capsys):
     description = RunDescription.from_toml(out.read_text())
     assert math.isclose(description.final_time, 1.0)
     assert main(["advise", str(tmp_path / "missing.toml")]) == 2
+
+
+
+def _validation_scenes() -> dict:
+    """The scenes of studies/advise_validation.py, by name."""
+    path = pathlib.Path(__file__).parents[1] / "studies" / "advise_validation.py"
+    spec = importlib.util.spec_from_file_location("advise_validation", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.SCENES
+
+
+#: the quick variant of each validation scene, so that advise, the run and the reference take
+#: a few seconds: the 3D scenes at a looser tolerance or over a shorter time, the long free
+#: cooling to t = 10 (T falls 7-fold: the rescaled formulation is still proposed)
+QUICK = {"heated hard spheres 2D": {},
+         "BKW 2D, f": {},
+         "cooling Maxwell 3D, T (isotropic)": {"tolerance": 1e-3, "final_time": 1.0},
+         "heated hard spheres 3D, T (isotropic)": {"final_time": 0.5},
+         "long free cooling, hard spheres 2D": {"final_time": 10.0}}
+
+
+def _refined(description):
+    """The reference run of a description: N x 4/3 (the next size advise offers), S x 1.15,
+    twice the radial points, the next larger sphere rule (2D: twice the points), dt / 2
+    (RK4: a 16th of the time error) and float64. A rescaled run goes 5 % further in s, so
+    that its physical times cover the advised run's (a_0 differs between grids by the
+    discretisation error)."""
+    grid, params = description.grid, description.operator.params
+    sphere = dict(params["sphere"])
+    if "n_points" in sphere:
+        sphere["n_points"] *= 2
+    else:
+        sphere["order"] = SPHERE[SPHERE.index(sphere["order"]) + 1]
+    final = description.final_time * (1.05 if description.rescaled else 1.0)
+    steps = 2 * math.ceil(final / description.time_step - 1e-9)
+    return RunDescription.from_dict({
+        **description.to_dict(), "final_time": final, "time_step": final / steps,
+        "grid": {"dimension": grid.dimension, "support_radius": 1.15 * grid.support_radius,
+                 "n_modes": min(n for n in MODES if n >= 4 * grid.n_modes / 3)},
+        "operator": {"name": "fast_spectral", "radial_points": 2 * params["radial_points"],
+                     "sphere": sphere}})
+
+
+def _run(description, store):
+    """``granframe run`` of the description, written as TOML beside ``store``; the exit status."""
+    path = store.with_suffix(".toml")
+    path.write_text(description.to_toml())
+    return main(["run", str(path), "--out", str(store)])
+
+
+def _temperatures(store):
+    """Physical times and temperatures of the run in ``store`` (a rescaled run stores g)."""
+    run = RunStore.open(store)
+    if run.metadata.get("rescaling") is None:
+        return run.group["step_time"][:], run.group["temperature"][:]
+    history = Rescaling.from_store(run).history(run)
+    return history["time"], history["temperature"]
+
+
+def _reference(scene, description, directory):
+    """The scene's reference: T_ref(t) from the exact law (Maxwell molecules, constant e) or
+    from the refined run of ``description`` (:func:`_refined`, run in ``directory``); for the
+    distribution, f_BKW at the end (the validation's one distribution scene is BKW)."""
+    if scene.quantity == "distribution":
+        return bkw(description.grid, scene.final_time)[0]
+    law = heated_maxwell_law(scene.build("kernel"), scene.build("restitution"),
+                             scene.heat_bath, scene.knudsen)
+    if law is not None:
+        grid, f0 = description.grid, Simulation(description).f0
+        return lambda t: law(t, grid.temperature(f0), grid.mass(f0))
+    store = directory / "reference.zarr"
+    assert _run(_refined(description), store) == 0
+    t_ref, temperature_ref = _temperatures(store)
+    spline = CubicSpline(t_ref, numpy.log(temperature_ref))
+    return lambda t: numpy.exp(spline(t))
+
+
+def _measured_error(scene, store, reference):
+    """The error of the run in ``store`` against :func:`_reference`: max_t |T/T_ref - 1|, or
+    max |f - f_ref| / max f_ref at the end."""
+    if scene.quantity == "distribution":
+        f = RunStore.open(store).group["f"][-1]
+        return float(numpy.max(numpy.abs(f - reference)) / numpy.max(reference))
+    t, temperature = _temperatures(store)
+    return float(numpy.max(numpy.abs(temperature / reference(t) - 1)))
+
+
+@pytest.mark.parametrize("name", [pytest.param(name, marks=pytest.mark.slow) if "3D" in name
+                                  else name for name in QUICK])
+def test_every_advised_description_runs_as_written_and_meets_its_tolerance(
+        name, tmp_path, monkeypatch, capsys):
+    """Each validation scene (quick variant): every description advise may propose runs,
+    written as TOML, through ``granframe run`` to the end (exit 0: its health limits hold
+    for its own precision), and its measured error is within the tolerance advise predicts
+    it meets. Which one advise proposes depends on which is measured faster here (float64
+    or float32), so every description it times is run, the proposed one among them."""
+    scene = Scene.from_dict({**_validation_scenes()[name], **QUICK[name]})
+    timed, candidates = advise_module._time_evaluation, []
+
+    def timing(description):
+        candidates.append(description)
+        return timed(description)
+
+    monkeypatch.setattr(advise_module, "_time_evaluation", timing)
+    advice = advise(scene, closed_forms=False)
+    assert advice.meets_tolerance and advice.description in candidates
+    assert {d.operator.params.get("precision", "float64") for d in candidates} == {
+        "float64", "float32"}
+    reference = _reference(scene, advice.description, tmp_path)
+    for i, description in enumerate(candidates):
+        store = tmp_path / f"advised-{i}.zarr"
+        assert _run(description, store) == 0, capsys.readouterr().err
+        error = _measured_error(scene, store, reference)
+        assert error <= scene.tolerance, (description.operator, error, advice.errors)

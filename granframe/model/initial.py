@@ -275,17 +275,17 @@ def check_fits(grid, f, condition: InitialCondition, edge_tolerance: float,
     share = face_share(f)
     if share > edge_tolerance:
         check.reject(owner, "f0 on the faces of the box / max f0", share,
-                     f"must be <= edge_tolerance = {edge_tolerance:g}: the data does not fit in "
-                     f"[-L, L]^d with L = {grid.half_width:.6g}; enlarge the grid's "
+                     f"must be <= health.edge_tolerance = {edge_tolerance:g}: the data does not "
+                     f"fit in [-L, L]^d with L = {grid.half_width:.6g}; enlarge the grid's "
                      "support_radius (or half_width)")
     intended = condition.intended_mass
     if intended is not None:
         error = abs(grid.mass(f) / intended - 1.0)
         if error > mass_tolerance:
             check.reject(owner, "relative mass error on the grid", error,
-                         f"must be <= mass_tolerance = {mass_tolerance:g} (grid mass "
-                         f"{grid.mass(f):.10g}, intended {intended:.10g}): mass lies outside the "
-                         "box, or the data is too narrow for the grid spacing "
+                         f"must be <= health.initial_mass_tolerance = {mass_tolerance:g} (grid "
+                         f"mass {grid.mass(f):.10g}, intended {intended:.10g}): mass lies outside "
+                         "the box, or the data is too narrow for the grid spacing "
                          f"h = {grid.spacing:.4g}")
 
 

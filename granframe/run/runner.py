@@ -41,7 +41,7 @@ from granframe.stepping.stability import check_time_step
 from granframe.registry import default_registries
 from granframe.equations.rescaled import RescaledBoltzmann
 from granframe.run.storage import SCALAR_MOMENTS, RunStore, StoreExistsError
-from granframe.validators import reject
+from granframe.validators import distinct, reject
 from granframe.velocity.estimators import resolution_report
 
 _RUN_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
@@ -169,12 +169,13 @@ def health_problem(record: dict, mass0: float, health) -> str | None:
         return f"the mass is not positive ({record['mass']:.6g})"
     drift = abs(record["mass"] / mass0 - 1.0)
     if drift > health.mass_tolerance:
-        return (f"mass drift |mass/mass(0) - 1| = {drift:.3g} exceeds mass_tolerance = "
-                f"{health.mass_tolerance:g}")
+        shown, limit = distinct(drift, health.mass_tolerance)
+        return (f"mass drift |mass/mass(0) - 1| = {shown} exceeds health.mass_tolerance = "
+                f"{limit}")
     if record["negative_mass_fraction"] > health.positivity_tolerance:
-        return (f"loss of positivity: negative mass share {record['negative_mass_fraction']:.3g} "
-                f"exceeds positivity_tolerance = {health.positivity_tolerance:g} "
-                f"(min f = {record['min_f']:.3g})")
+        shown, limit = distinct(record["negative_mass_fraction"], health.positivity_tolerance)
+        return (f"loss of positivity: negative mass share {shown} exceeds "
+                f"health.positivity_tolerance = {limit} (min f = {record['min_f']:.3g})")
     return None
 
 

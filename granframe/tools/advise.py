@@ -36,9 +36,16 @@ How each choice is made (docs/advise.md):
    the explicit limit (:mod:`granframe.stepping.stability`), halved until the error measured by
    step doubling over the first 8 steps, scaled to the horizon, is within what is left of
    the tolerance.
-7. **Precision.** float32 where the tolerance is 1e-4 or looser (its measured floor is 4e-6,
-   docs/benchmarks.md) and it is measured faster than float64 for the proposed operator.
-8. **Cost.** The proposed right-hand side is built and timed on this machine (median of 7
+7. **Precision.** float32 where the tolerance is 1e-4 or looser (its measured floor is 4.3e-6
+   on BKW 2D, docs/accuracy-vs-cost.md, "float32"), its bound on the mass drift (below) is
+   within the tolerance, and it is measured faster than float64 for the proposed operator.
+8. **Health.** The description carries health limits its own precision meets. The operator
+   conserves mass to its round-off floor, |int Q| <= MASS_FLOOR_EPSILONS eps rho nu per
+   evaluation, so over the nu t / eps collision times of the run the mass drifts by at most
+   that floor times the collision times: ``health.mass_tolerance`` is that bound, or the
+   runner's default where that is looser (in float64). ``health.initial_mass_tolerance`` is
+   the limit the grid was chosen against (step 4).
+9. **Cost.** The proposed right-hand side is built and timed on this machine (median of 7
    evaluations after 2 warm-ups), times the number of evaluations of the run.
 """
 
@@ -80,8 +87,14 @@ SHARE = 1.0 / 3.0
 #: the rule is not a consistent approximation (Lebedev 5 and 7: 0.4-0.9, unstable in a run;
 #: Lebedev 11: 0.01-0.04; docs/advise.md)
 CONSISTENCY = 0.1
-#: loosest tolerance float32 is considered for (its measured floor is 4e-6, docs/benchmarks.md)
+#: loosest tolerance float32 is considered for (its measured floor against an exact solution
+#: is 4.3e-6, on BKW 2D: docs/accuracy-vs-cost.md, "float32")
 FLOAT32_TOLERANCE = 1e-4
+#: |int Q| / (rho nu) of the fast operator, its mass round-off floor per evaluation, in machine
+#: epsilons of its precision: measured 5.2e-7 in float32 (4.4 eps) and 1e-15 in float64
+#: (4.5 eps), docs/accuracy-vs-cost.md, "float32"; tests/test_operators.py bounds float32 by
+#: 5e-6 rho nu (42 eps), the bound taken here
+MASS_FLOOR_EPSILONS = 42
 
 
 @attrs.frozen(kw_only=True)
@@ -344,7 +357,7 @@ def _anisotropic(probe, grid, temperature: float):
 
 def _fits(probe, grid) -> bool:
     """Whether the runner accepts f0 on ``grid`` (:func:`granframe.model.initial.check_fits` with
-    the default health limits)."""
+    the default health limits, which :func:`_health` writes into the description)."""
     health = Health()
     try:
         check_fits(grid, probe.initial.sample(grid), probe.initial, health.edge_tolerance,
@@ -352,6 +365,41 @@ def _fits(probe, grid) -> bool:
     except ValueError:
         return False
     return True
+
+
+def mass_drift_bound(precision: str, collision_times: float) -> float:
+    """The largest relative mass drift of a run of the fast operator.
+
+    Parameters
+    ----------
+    precision : str
+        The operator's precision, ``float64`` or ``float32``.
+    collision_times : float
+        nu t / eps of the run: its length in units of the mean free time.
+
+    Returns
+    -------
+    float
+        :data:`MASS_FLOOR_EPSILONS` machine epsilons of ``precision`` times
+        ``collision_times``: |d ln rho / dt| = |int Q| / (eps rho) <= MASS_FLOOR_EPSILONS
+        eps nu / eps at every evaluation, summed over the run.
+    """
+    return MASS_FLOOR_EPSILONS * float(numpy.finfo(precision).eps) * collision_times
+
+
+def _health(precision: str, collision_times: float) -> dict:
+    """The health table of a proposed run, consistent with its precision.
+
+    ``mass_tolerance`` is :func:`mass_drift_bound`, or the runner's default where that is
+    looser (in float64 the bound is 9e-15 per collision time, and the default also covers the
+    round-off of the time integration). ``initial_mass_tolerance`` is the limit
+    :func:`_fits` chose the grid against, the runner's default: f0 is sampled and checked in
+    float64 whatever the operator's precision.
+    """
+    default = Health()
+    return {"mass_tolerance": max(default.mass_tolerance,
+                                  mass_drift_bound(precision, collision_times)),
+            "initial_mass_tolerance": default.initial_mass_tolerance}
 
 
 def _resolution(probe, support, coldest, tolerance):
@@ -509,18 +557,29 @@ def advise(scene: Scene, *, backend: str = "auto", closed_forms: bool = True) ->
     dt = final / steps
     reasons.append(f"{integrator}, dt = {dt:.4g} ({steps} steps; RK4 error by step doubling "
                    f"{time_error:.2g})")
-    # the moments (temperature) are written every step, f at the start and the end
-    description = RunDescription.from_dict(
-        {**base, "final_time": steps * dt, "time_step": dt, "integrator": integrator,
-         "health": {}})
+    # the collision times the run spans: the mass round-off of the operator acts over them
+    collision_times = probe.collision_frequency(hottest) / scene.knudsen * steps * dt
+
+    def proposal(precision):
+        """The description in ``precision``; the moments (temperature) are written every
+        step, f at the start and the end."""
+        return RunDescription.from_dict(
+            {**base, "final_time": steps * dt, "time_step": dt, "integrator": integrator,
+             "operator": (operator if precision == "float64"
+                          else {**operator, "precision": precision}),
+             "health": _health(precision, collision_times)})
+
+    description = proposal("float64")
     seconds = _time_evaluation(description)
-    if tol >= FLOAT32_TOLERANCE:
-        single = description.replace(operator=Component(
-            "fast_spectral", {**description.operator.params, "precision": "float32"}))
+    drift32 = mass_drift_bound("float32", collision_times)
+    if tol >= FLOAT32_TOLERANCE and drift32 <= tol:
+        single = proposal("float32")
         single_seconds = _time_evaluation(single)
         if single_seconds < seconds:
             reasons.append(f"float32: measured faster here ({1e3 * single_seconds:.3g} ms "
-                           f"against {1e3 * seconds:.3g} ms), floor 4e-6 << tolerance")
+                           f"against {1e3 * seconds:.3g} ms); mass drift over "
+                           f"{collision_times:.3g} collision times at most {drift32:.2g} "
+                           "(health.mass_tolerance)")
             description, seconds = single, single_seconds
     errors = {"resolution": resolution_error, "support": support_error,
               "quadrature": quadrature_error, "time": time_error}
