@@ -128,7 +128,6 @@ def test_command_line_writes_a_runnable_description(tmp_path, capsys):
     assert main(["advise", str(tmp_path / "missing.toml")]) == 2
 
 
-
 def _validation_scenes() -> dict:
     """The scenes of studies/advise_validation.py, by name."""
     path = pathlib.Path(__file__).parents[1] / "studies" / "advise_validation.py"
