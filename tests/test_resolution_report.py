@@ -83,3 +83,9 @@ def test_a_resolved_run_has_no_warning_and_the_tolerance_is_a_setting(tmp_path):
     assert any(w.startswith("support: share ") for w in strict.warnings)
     with pytest.raises(ValueError, match="resolution_tolerance"):
         _run(resolution_tolerance=0.0)
+
+
+def test_a_value_just_above_the_tolerance_is_not_rounded_onto_it():
+    grid = gf.VelocityGrid(2, 32, 4.0)
+    (warning,) = resolution_report(grid, grid.maxwellian(), 0.0010004, 1e-3)["warnings"]
+    assert "negative mass share 0.0010004 > health.resolution_tolerance = 0.001;" in warning

@@ -117,17 +117,22 @@ def resolution_report(grid, f, negative_share: float, tolerance: float, xp=numpy
     tail = spectral_tail(grid, f, xp=xp)
     beyond = pair_share_beyond(grid, f, 2.0 * grid.support_radius, xp=xp)
     error = TAIL_ERROR_FACTOR * tail
-    setting = f"health.resolution_tolerance = {tolerance:g}"
     warnings = []
     if error > tolerance:
+        shown, limit = check.distinct(error, tolerance)
         warnings.append(f"velocity resolution: spectral tail {tail:.3g}, estimated error "
-                        f"{error:.3g} > {setting}; raise grid.n_modes (N = {grid.n_modes})")
+                        f"{shown} > health.resolution_tolerance = {limit}; raise "
+                        f"grid.n_modes (N = {grid.n_modes})")
     if negative_share > tolerance:
-        warnings.append(f"positivity: negative mass share {negative_share:.3g} > {setting}; "
-                        f"f oscillates, raise grid.n_modes (N = {grid.n_modes})")
+        shown, limit = check.distinct(negative_share, tolerance)
+        warnings.append(f"positivity: negative mass share {shown} > "
+                        f"health.resolution_tolerance = {limit}; f oscillates, raise "
+                        f"grid.n_modes (N = {grid.n_modes})")
     if beyond > tolerance:
-        warnings.append(f"support: share {beyond:.3g} of pairs with relative speed beyond "
-                        f"R = 2S = {2.0 * grid.support_radius:g} > {setting}; raise "
-                        "grid.support_radius" + (" once N resolves f" if warnings else ""))
+        shown, limit = check.distinct(beyond, tolerance)
+        warnings.append(f"support: share {shown} of pairs with relative speed beyond "
+                        f"R = 2S = {2.0 * grid.support_radius:g} > "
+                        f"health.resolution_tolerance = {limit}; raise grid.support_radius"
+                        + (" once N resolves f" if warnings else ""))
     return {"spectral_tail": tail, "tail_error": error, "pairs_beyond_support": beyond,
             "negative_mass_fraction": float(negative_share), "warnings": warnings}
