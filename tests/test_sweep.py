@@ -281,8 +281,30 @@ def test_open_sweep_and_info_refuse_what_is_not_a_sweep_store(tmp_path, capsys):
     (tmp_path / "mine" / "notes.txt").write_text("mine\n")
     with pytest.raises(ValueError, match="parameter 'path'.*must be a sweep store"):
         open_sweep(tmp_path / "mine")
+    with pytest.raises(TypeError, match="parameter 'path' = 3 is invalid"):
+        open_sweep(3)
     assert main(["info", str(tmp_path / "mine")]) == 2
     assert "Traceback" not in capsys.readouterr().err
+
+
+def test_open_sweep_and_info_name_a_damaged_table(gridded, tmp_path, capsys):
+    import shutil
+
+    from granframe import open_sweep
+    from granframe.run.storage import StoreDamagedError
+    from granframe.tools.cli import main
+
+    copy = tmp_path / "s.zarr"
+    shutil.copytree(gridded, copy)
+    chunk = copy / "table" / "temperature" / "c" / "0"
+    data = bytearray(chunk.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    chunk.write_bytes(bytes(data))
+    with pytest.raises(StoreDamagedError, match="is damaged: table/temperature"):
+        open_sweep(copy)
+    assert main(["info", str(copy)]) == 2
+    err = capsys.readouterr().err
+    assert "is damaged: table/temperature" in err and "Traceback" not in err
 
 
 def test_info_on_a_sweep_store_says_what_is_in_it(gridded, capsys):

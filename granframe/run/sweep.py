@@ -58,9 +58,9 @@ import zarr
 from granframe import validators as check
 from granframe._version import __version__
 from granframe.run.description import RunDescription
-from granframe.run.storage import (_LONG_NAMES, _TRASH, SWEEP_SCHEMA_KEY, WriterLock,
-                                   _differences, _now, _sibling, check_replaceable, codecs,
-                                   recover, store_kind)
+from granframe.run.storage import (_LONG_NAMES, _TRASH, SWEEP_SCHEMA_KEY, StoreDamagedError,
+                                   WriterLock, _differences, _now, _sibling, check_replaceable,
+                                   codecs, recover, store_kind)
 
 SCHEMA = "granframe.run.sweep/1"
 #: the final moments of a run the table keeps
@@ -492,12 +492,16 @@ _PENDING = {"status": "pending", "message": "", "wall_seconds": math.nan, "steps
             "time": math.nan, **{name: math.nan for name in TABLE_MOMENTS}}
 
 
-def _sweep_metadata(path: pathlib.Path, owner: str) -> dict:
+def _sweep_metadata(path, owner: str) -> dict:
     """The ``granframe_sweep`` attributes of the sweep store at ``path``, or a clear error."""
+    if not isinstance(path, (str, os.PathLike)):
+        check.reject(owner, "path", path, "must be the path (str or os.PathLike) of a sweep "
+                     "store", error=TypeError)
+    path = pathlib.Path(path)
     kind = store_kind(path)
     if kind != "sweep":
         what = {"missing": "missing", "file": "a file", "empty": "an empty directory",
-                "run": "a run store (granframe info or xarray.open_zarr read it)"}.get(
+                "run": "a run store (granframe.open_run reads it)"}.get(
                     kind, "not a granframe store")
         check.reject(owner, "path", str(path), f"must be a sweep store (granframe sweep "
                      f"SWEEP.toml --out STORE); it is {what}")
@@ -513,8 +517,13 @@ def _stored_rows(path: pathlib.Path) -> dict:
     root = zarr.open_group(str(path), mode="r", use_consolidated=False)
     if "table" not in root:
         return {}
-    group = root["table"]
-    columns = {key: group[key][:] for key in ("name", *_RESULTS)}
+    group, columns = root["table"], {}
+    for key in ("name", *_RESULTS):
+        try:
+            columns[key] = group[key][:]
+        except ValueError as exc:           # a chunk failing its checksum
+            raise StoreDamagedError(f"sweep store '{path}' is damaged: table/{key}: {exc} "
+                                    "(granframe check lists every problem)") from None
     return {str(name): {key: columns[key][i] for key in _RESULTS}
             for i, name in enumerate(columns["name"])}
 
@@ -572,8 +581,8 @@ def open_sweep(path) -> "xarray.Dataset":
     import tomli_w
     import xarray
 
-    path = pathlib.Path(path)
     meta = _sweep_metadata(path, "open_sweep")
+    path = pathlib.Path(path)
     sweep = Sweep.from_dict(meta["sweep"])
     names = [run_name(p) for p in sweep.points()]
     dims = _grid(sweep)
@@ -634,8 +643,8 @@ def describe_sweep(path) -> str:
     """
     import tomli_w
 
-    path = pathlib.Path(path)
     meta = _sweep_metadata(path, "describe_sweep")
+    path = pathlib.Path(path)
     sweep = Sweep.from_dict(meta["sweep"])
     names = [run_name(p) for p in sweep.points()]
     stored = _stored_rows(path)
