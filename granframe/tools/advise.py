@@ -63,7 +63,8 @@ from granframe import validators as check
 from granframe.run.description import (COMPONENT_FAMILIES, Component, Health, RunDescription,
                                        component_field)
 from granframe.equations.homogeneous import collision_frequency
-from granframe.velocity.estimators import mass_beyond, pair_share_beyond, spectral_tail
+from granframe.velocity.estimators import (TAIL_ERROR_FACTOR, mass_beyond, pair_share_beyond,
+                                          spectral_tail)
 from granframe.model.exact import heated_maxwell_law
 from granframe.velocity.grid import VelocityGrid
 from granframe.model.initial import check_fits, face_share
@@ -78,8 +79,6 @@ MODES = (8, 12, 16, 20, 24, 32, 40, 48, 64, 80, 96, 128)
 RADIAL = (8, 12, 16, 24, 32, 48, 64)
 CIRCLE = (8, 12, 16, 24, 32, 48, 64)
 SPHERE = tuple(o for o in (3, 5, 7, 11, 17, 23, 29) if o in LEBEDEV_ORDERS)
-#: temperature error per unit spectral tail, measured in studies/free_cooling.py
-TAIL_FACTOR = 3.0
 #: share of the tolerance given to the resolution; the quadratures and the time step share
 #: what it leaves
 SHARE = 1.0 / 3.0
@@ -403,7 +402,7 @@ def _health(precision: str, collision_times: float) -> dict:
 
 
 def _resolution(probe, support, coldest, tolerance):
-    """Smallest N with spectral tail <= tol / TAIL_FACTOR for f0 and the coldest state, among
+    """Smallest N with spectral tail <= tol / TAIL_ERROR_FACTOR for f0 and the coldest state, among
     the grids the runner accepts f0 on."""
     best = None
     for n in MODES:
@@ -411,8 +410,8 @@ def _resolution(probe, support, coldest, tolerance):
         if not _fits(probe, grid) and n != MODES[-1]:
             continue
         tail = max(spectral_tail(grid, f) for f in _states(probe, grid, coldest))
-        best = (grid, TAIL_FACTOR * tail)
-        if TAIL_FACTOR * tail <= SHARE * tolerance:
+        best = (grid, TAIL_ERROR_FACTOR * tail)
+        if TAIL_ERROR_FACTOR * tail <= SHARE * tolerance:
             break
     return best
 
@@ -533,7 +532,7 @@ def advise(scene: Scene, *, backend: str = "auto", closed_forms: bool = True) ->
     grid, resolution_error = _resolution(probe, support, coldest, tol)
     reasons.append(f"S = {support:g} (truncation at R = 2S: <= {tol / 10:.2g} after an "
                    f"amplification {amplification:.3g}); N = {grid.n_modes}: spectral tail x "
-                   f"{TAIL_FACTOR:g} = {resolution_error:.2g} at T = {coldest:.3g}")
+                   f"{TAIL_ERROR_FACTOR:g} = {resolution_error:.2g} at T = {coldest:.3g}")
     # what the resolution and the support leave of the tolerance: half to the quadratures,
     # the rest to the time step
     radial, size, quadrature_error = _quadrature(probe, grid, coldest,
