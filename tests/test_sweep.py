@@ -322,6 +322,23 @@ def test_info_on_a_sweep_store_says_what_is_in_it(gridded, capsys):
     assert "base (TOML)" in out and "final_time = 0.1" in out
 
 
+def test_an_axis_of_whole_components_is_a_text_coordinate(cluster, tmp_path):
+    """Values that are tables (a component with its parameters) are kept as JSON text, in
+    the table and on the grid."""
+    from granframe import open_sweep
+
+    laws = [{"name": "constant", "value": 0.5}, {"name": "constant", "value": 0.7}]
+    out = tmp_path / "s.zarr"
+    result = run_sweep(Sweep(SHORT, product={"restitution": laws}), out, client=cluster,
+                       progress=False)
+    assert (result.finished, result.failed) == (2, 0)
+    texts = ['{"name": "constant", "value": 0.5}', '{"name": "constant", "value": 0.7}']
+    assert list(read_table(out)["restitution"]) == texts
+    ds = open_sweep(out)
+    assert ds.restitution.dtype.kind == "U" and list(ds.restitution.values) == texts
+    assert "units" not in ds.restitution.attrs
+
+
 def test_a_sweep_store_is_extended_by_new_axis_values_and_runs_only_them(cluster, tmp_path):
     sweep = Sweep(SHORT, product={"restitution.value": [0.3, 0.7]})
     out = tmp_path / "s.zarr"

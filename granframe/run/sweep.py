@@ -218,6 +218,22 @@ def run_point(description: dict, path: str, poll: float = 1.0,
     worker while the first, presumed dead, still runs it), this one waits for it, polling
     every ``poll`` seconds, and then takes the store as that process left it: finished, or
     cut short and resumed from there. Two processes never write one store at once.
+
+    Parameters
+    ----------
+    description : dict
+        The point's run description as a table (:func:`apply` of the base and the point).
+    path : str
+        Its run store, ``STORE/runs/<name>``.
+    poll : float
+        Seconds between looks at a writer lock held by another process.
+    retry_failed : bool
+        Run a run stopped by a health check again, from the start.
+
+    Returns
+    -------
+    dict
+        The table row: status, message, wall_seconds, steps, time, final moments.
     """
     from granframe.run.runner import HealthError, Simulation
     from granframe.run.storage import StoreError, StoreLockedError
