@@ -89,3 +89,18 @@ def test_a_value_just_above_the_tolerance_is_not_rounded_onto_it():
     grid = gf.VelocityGrid(2, 32, 4.0)
     (warning,) = resolution_report(grid, grid.maxwellian(), 0.0010004, 1e-3)["warnings"]
     assert "negative mass share 0.0010004 > health.resolution_tolerance = 0.001;" in warning
+
+
+def test_the_figures_of_an_under_resolved_run_say_so(tmp_path):
+    import xarray
+
+    from granframe.tools import plotting
+
+    path = tmp_path / "coarse.zarr"
+    result = Simulation(_run(n_modes=20)).run(path, progress=False)
+    for ds in (gf.open_run(path), xarray.open_zarr(path, consolidated=False)):
+        text = plotting.caption(ds)
+        assert f"UNDER-RESOLVED: {result.warnings[0]}" in text.splitlines()
+    resolved = tmp_path / "fine.zarr"
+    Simulation(_run()).run(resolved, progress=False)
+    assert "UNDER-RESOLVED" not in plotting.caption(gf.open_run(resolved))

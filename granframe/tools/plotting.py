@@ -123,6 +123,11 @@ class _Run:
         self.title = self.description.title or name or "untitled run"
         self.grid = self.description.grid
         self.status = progress.get("status")
+        # the resolution warnings of the last commit: nested in the store's metadata, flat
+        # (resolution_warnings) in granframe.open_run's attributes
+        warnings = (progress.get("resolution") or {}).get("warnings",
+                                                           progress.get("resolution_warnings"))
+        self.warnings = [warnings] if isinstance(warnings, str) else list(warnings or ())
         self.step_time = self.ds["step_time"].values
         self.moments = {key: self.ds[key].values for key in
                         ("mass", "temperature", "kurtosis", "min_f", "negative_mass_fraction")}
@@ -223,7 +228,8 @@ def caption(ds) -> str:
         Four lines: the run's title (and its status unless finished); the dimension, N,
         dt and integrator, heat bath tau and Knudsen number; the operator; the
         restitution law e and the kernel exponent lambda, and that every quantity is
-        dimensionless.
+        dimensionless. Then one line per resolution warning of the last commit
+        (:func:`granframe.velocity.estimators.resolution_report`), which names what to raise.
     """
     run = _Run.of(ds)
     d, grid = run.description, run.grid
@@ -247,7 +253,8 @@ def caption(ds) -> str:
         f"operator {_component(d.operator)}",
         f"restitution e: {_component(d.restitution)}; kernel {_component(d.kernel)}, "
         f"exponent λ = {exponent:g}" + (f", energy exponent γ = {energy:g}" if energy else "")
-        + "; all quantities dimensionless"])
+        + "; all quantities dimensionless"]
+        + [f"UNDER-RESOLVED: {warning}" for warning in run.warnings])
 
 
 def _axes(ax, run):
@@ -613,7 +620,7 @@ def figures(ds) -> dict:
         for ax, draw in zip(numpy.atleast_1d(fig.subplots(*layout)), draws):
             draw(run, ax)
         fig.suptitle(text, fontsize=8, color="C3" if run.status not in (None, "finished")
-                     else "black")
+                     or run.warnings else "black")
         drawn[name] = fig
     return drawn
 
