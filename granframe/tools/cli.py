@@ -258,9 +258,9 @@ def _with_settings(description, settings: list[str]):
     ``operator.sphere.n_points``, ``kernel.name``); one that the description cannot have
     is refused with the closest that it can. The grid's half width and truncation radius,
     when they are the ones its support radius implies, are derived again from the new
-    one. VALUE is read as a TOML value (``64``,
-    ``0.5``, ``true``, ``"rk4"``, ``[1, 2]``, ``{name = "lebedev", order = 7}``), or
-    taken as a string when it is not one (``kernel.name=hard_spheres``).
+    one. VALUE is read as a TOML value (``64``, ``0.5``, ``true``, ``"rk4"``, ``[1, 2]``,
+    ``{name = "lebedev", order = 7}``), or taken as a string when it is not one
+    (``kernel.name=hard_spheres``).
     """
     import tomllib
 
