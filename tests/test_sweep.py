@@ -476,3 +476,23 @@ def test_a_client_the_sweep_connects_is_closed_after_it(cluster, tmp_path):
     while cluster.run_on_scheduler(clients) != before and time.monotonic() < deadline:
         time.sleep(0.05)
     assert cluster.run_on_scheduler(clients) == before
+
+
+def test_the_table_and_info_flag_the_runs_that_end_under_resolved(cluster, tmp_path, capsys):
+    from granframe import open_sweep
+    from granframe.tools.cli import main
+
+    # N = 20 cuts off a tail exp(-T (pi 9 / L)^2 / 2) = 6e-3 of hat f; N = 32 resolves f
+    sweep = Sweep(SHORT, product={"grid.n_modes": [20, 32]})
+    out = tmp_path / "resolution.zarr"
+    assert run_sweep(sweep, out, client=cluster, progress=False).finished == 2
+    ds = open_sweep(out)
+    coarse, fine = ds.sel(grid_n_modes=20), ds.sel(grid_n_modes=32)
+    assert coarse.tail_error.item() > 1e-3 > fine.tail_error.item()
+    assert "raise grid.n_modes (N = 20)" in coarse.resolution_warning.item()
+    assert fine.resolution_warning.item() == ""
+    assert ds.pairs_beyond_support.attrs["units"] == "1"
+    assert main(["info", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "resolution  1 of the finished runs end under-resolved" in text
+    assert "velocity resolution: spectral tail" in text

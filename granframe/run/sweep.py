@@ -65,6 +65,10 @@ from granframe.run.storage import (_LONG_NAMES, _TRASH, SWEEP_SCHEMA_KEY, StoreD
 SCHEMA = "granframe.run.sweep/1"
 #: the final moments of a run the table keeps
 TABLE_MOMENTS = ("temperature", "kurtosis", "sonine_a2", "mass", "negative_mass_fraction")
+#: the resolution indicators of a run's last commit the table keeps
+#: (:func:`granframe.velocity.estimators.resolution_report`), and its warnings as one text
+TABLE_RESOLUTION = ("tail_error", "pairs_beyond_support")
+_NO_RESOLUTION = {**{name: math.nan for name in TABLE_RESOLUTION}, "resolution_warning": ""}
 
 
 def _axes(owner: str, name: str, value) -> dict:
@@ -181,6 +185,9 @@ def _summary(path) -> dict:
     n = int(progress.get("records", 0))
     for name in TABLE_MOMENTS:
         row[name] = float(store.group[name][n - 1]) if n else math.nan
+    resolution = progress.get("resolution") or {}
+    row.update({name: float(resolution.get(name, math.nan)) for name in TABLE_RESOLUTION})
+    row["resolution_warning"] = "; ".join(resolution.get("warnings", ()))
     return row
 
 
@@ -203,7 +210,7 @@ REFUSED = "refused: "
 
 def _failed(message: str) -> dict:
     return {"status": "failed", "message": message, "wall_seconds": 0.0, "steps": 0,
-            "time": 0.0, **{name: math.nan for name in TABLE_MOMENTS}}
+            "time": 0.0, **{name: math.nan for name in TABLE_MOMENTS}, **_NO_RESOLUTION}
 
 
 def run_point(description: dict, path: str, poll: float = 1.0,
@@ -285,7 +292,7 @@ def _write_table(root: zarr.Group, names, points, rows) -> None:
         columns[key] = numpy.array([float(v) for v in values] if numeric
                                    else [_text(v) for v in values])
     empty = {"status": "pending", "message": "", "wall_seconds": math.nan, "steps": 0,
-             "time": math.nan, **{m: math.nan for m in TABLE_MOMENTS}}
+             "time": math.nan, **{m: math.nan for m in TABLE_MOMENTS}, **_NO_RESOLUTION}
     for field, default in empty.items():
         values = [rows.get(n, empty)[field] for n in names]
         columns[field] = numpy.array(values, dtype=str if isinstance(default, str) else float)
@@ -503,9 +510,18 @@ _RESULTS = {
     "time": {"long_name": "time reached by the run", "units": "1"},
     **{name: {"long_name": f"{_LONG_NAMES[name]} at the end of the run (NaN unless "
                            "finished)", "units": "1"} for name in TABLE_MOMENTS},
+    "tail_error": {"long_name": "error predicted by the spectral tail of f at the last "
+                                "commit (3 max |hat f_k| / |hat f_0| on the outermost shell)",
+                   "units": "1"},
+    "pairs_beyond_support": {"long_name": "share of pairs of f at the last commit with "
+                                          "relative speed beyond 2S (cut off by the "
+                                          "operators)", "units": "1"},
+    "resolution_warning": {"long_name": "what the run's resolution warnings say to raise "
+                                        "(grid.n_modes, grid.support_radius); empty when f "
+                                        "was resolved"},
 }
 _PENDING = {"status": "pending", "message": "", "wall_seconds": math.nan, "steps": 0,
-            "time": math.nan, **{name: math.nan for name in TABLE_MOMENTS}}
+            "time": math.nan, **{name: math.nan for name in TABLE_MOMENTS}, **_NO_RESOLUTION}
 
 
 def _sweep_metadata(path, owner: str) -> dict:
@@ -535,6 +551,9 @@ def _stored_rows(path: pathlib.Path) -> dict:
         return {}
     group, columns = root["table"], {}
     for key in ("name", *_RESULTS):
+        if key in _NO_RESOLUTION and key not in group:   # a table written before them
+            columns[key] = numpy.full(group["name"].shape, _NO_RESOLUTION[key])
+            continue
         try:
             columns[key] = group[key][:]
         except ValueError as exc:           # a chunk failing its checksum
@@ -579,7 +598,8 @@ def open_sweep(path) -> "xarray.Dataset":
     attribute). Integer axes are int64, real ones float64, names and tables text.
     Variables on the grid: ``status``, ``message``, ``run`` (the run store under
     ``runs/``), ``wall_seconds``, ``steps``, ``time`` and the final moments
-    (:data:`TABLE_MOMENTS`), NaN unless the run finished. Every quantity is
+    (:data:`TABLE_MOMENTS`), NaN unless the run finished, and the resolution of the last
+    commit (:data:`TABLE_RESOLUTION` and ``resolution_warning``, the warnings' text). Every quantity is
     dimensionless (units "1") but the wall time (s). The root attributes (``title``,
     ``source``, ``history``, ``Conventions``, ``granframe_schema``, and the sweep as TOML
     text in ``sweep_toml``) are flat, so ``to_netcdf`` writes the dataset as it is.
@@ -611,7 +631,7 @@ def open_sweep(path) -> "xarray.Dataset":
                          {"long_name": "name of the run store (STORE/runs/<run>)"})}
     for key, attributes in _RESULTS.items():
         values = numpy.array([row[key] for row in rows])
-        if key in ("status", "message"):
+        if key in ("status", "message", "resolution_warning"):
             values = values.astype(str)
         elif key == "steps":
             values = values.astype(numpy.int64)
@@ -691,6 +711,11 @@ def describe_sweep(path) -> str:
     if len(failed) > 5:
         lines.append(f"  ... and {len(failed) - 5} more failed (open_sweep gives every "
                      "message)")
+    coarse = [n for n, r in rows.items() if r["resolution_warning"]]
+    if coarse:
+        lines.append(f"resolution  {len(coarse)} of the finished runs end under-resolved "
+                     "(resolution_warning in open_sweep), e.g.")
+        lines.append(f"  {coarse[0]}: {rows[coarse[0]]['resolution_warning']}")
     grid = " x ".join(f"{d} {len(next(iter(a.values())))}" for d, _, a in dims)
     lines.append(f"table       {grid}: granframe.open_sweep('{os.fspath(path)}'); the flat "
                  f"table: xarray.open_zarr('{os.fspath(path)}', group='table')")
