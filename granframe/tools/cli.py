@@ -630,12 +630,15 @@ moments) into a folder.""",
              """\
   granframe plot runs/h.zarr --out figures/h"""),
     "info": ("""\
-Say what is in a store: status, snapshots, moments, provenance and the description. With
---json, a run store's metadata and progress as stored and the range of its snapshots and
-moments, as one JSON document.""",
+Say what is in a store. A run store: status, snapshots, moments, the resolution of the last
+commit and its warnings, provenance and the description; with --json, its metadata and
+progress as stored and the range of its snapshots and moments, as one JSON document. A
+sweep store: its axes, how many points finished, failed or are pending, its failures, the
+runs that end under-resolved, and its base description.""",
              """\
   granframe info runs/h.zarr
-  granframe info runs/h.zarr --json"""),
+  granframe info runs/h.zarr --json
+  granframe info runs/sweep.zarr"""),
     "check": ("""\
 Read every committed chunk of a run (or sweep) store and verify its checksum; list the
 missing or damaged ones (exit status 3 when there is any).""",
@@ -643,10 +646,15 @@ missing or damaged ones (exit status 3 when there is any).""",
   granframe check runs/h.zarr"""),
     "sweep": ("""\
 Run every point of a parameter sweep (a base description and its axes) on Dask into one
-zarr store (docs/scaling.md). Running it again skips ended runs and resumes cut ones. Exit
-status 3 when a run failed.""",
+zarr store (docs/scaling.md). Running it again skips ended runs and resumes cut ones; a
+sweep of the same base with more axis values extends the store and runs only the new
+points. Points refused for their parameters are not run again unless --retry-failed;
+--overwrite replaces a sweep (or run) store, never anything else. Exit status 3 when a run
+failed.""",
               """\
-  granframe sweep sweep.toml --out runs/sweep.zarr --workers 2"""),
+  granframe sweep sweep.toml --out runs/sweep.zarr --workers 2
+  granframe sweep sweep.toml --out runs/sweep.zarr --retry-failed
+  granframe sweep sweep.toml --out runs/sweep.zarr --overwrite"""),
     "advise": ("""\
 Propose the cheapest configuration (grid, quadratures, time step) predicted to meet a
 scene's tolerance on its temperature or distribution (docs/advise.md).""",
@@ -716,7 +724,7 @@ def build_parser() -> argparse.ArgumentParser:
                       help="resolution of the raster parts in dots per inch, 10 to 600 "
                            "(default 110)")
     plot.set_defaults(handler=_plot)
-    info = commands.add_parser("info", help="say what is in a run store")
+    info = commands.add_parser("info", help="say what is in a run or sweep store")
     info.add_argument("store", metavar="STORE")
     info.add_argument("--json", action="store_true",
                       help="a run store's content as a JSON document")
