@@ -66,7 +66,7 @@ def test_accuracy_vs_cost_quick_writes_fronts(tmp_path):
         assert front and all(a["seconds"] <= b["seconds"] and a["error"] > b["error"]
                              for a, b in zip(front, front[1:]))
     # float32 costs no accuracy where the discretisation error dominates (BKW, N = 32)
-    rows = list(csv.DictReader(open(tmp_path / "bkw_2d.csv")))
+    rows = list(csv.DictReader((tmp_path / "bkw_2d.csv").read_text().splitlines()))
     errors = {r["precision"]: float(r["error"]) for r in rows
               if r["N"] == "32" and r["method"] == "fast_spectral"}
     assert errors["float32"] == pytest.approx(errors["float64"], rel=1e-3)
@@ -78,7 +78,7 @@ def test_stability_map_quick_separates_explicit_and_penalised(tmp_path):
     penalised Euler scheme stays stable; at eps = 1 both are accurate."""
     study = _load_study("stability_map")
     summary = study.run(tmp_path, quick=True)
-    rows = list(csv.DictReader(open(tmp_path / "collisions.csv")))
+    rows = list(csv.DictReader((tmp_path / "collisions.csv").read_text().splitlines()))
     verdict = {(r["scheme"], float(r["eps"]), float(r["dt"])): r["verdict"] for r in rows}
     assert verdict[("rk4", 1e-3, 0.01)] == "unstable"
     assert verdict[("penalised_euler", 1e-3, 0.01)] == "accurate"
@@ -92,7 +92,7 @@ def test_aliasing_quick_shows_the_box_bound(tmp_path, capsys):
     through the study's command line (granframe.tools.studykit.command)."""
     assert _load_study("aliasing").main(["--out", str(tmp_path), "--quick"]) == 0
     assert "L/S = 2.21" in capsys.readouterr().out
-    rows = list(csv.DictReader(open(tmp_path / "aliasing.csv")))
+    rows = list(csv.DictReader((tmp_path / "aliasing.csv").read_text().splitlines()))
     errors = {float(row["L_over_S"]): float(row["error"]) for row in rows}
     assert errors[1.5] > 1e-3 and errors[2.21] < 1e-7, errors
 
