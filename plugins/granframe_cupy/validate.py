@@ -15,7 +15,7 @@
    float64 with the generic steps: time per evaluation by CUDA events (median after
    warm-up), the cuFFT floor (the operator's batched transforms) and time/floor, device
    memory.
-3. The issue's targets on an H100: 3D N = 64 in <= 15 ms per evaluation (float64), and
+3. The targets on an H100: 3D N = 64 in <= 15 ms per evaluation (float64), and
    3D N = 128 runs.
 
 Writes ``OUT/gpu_tests.txt``, ``OUT/bench.json`` and ``OUT/bench.md`` (with the device
@@ -37,7 +37,7 @@ CONFIGS = [(3, n, 30, 32) for n in (8, 16, 32, 64, 128)]
 #: Test files with backend-parametrised (gpu-marked) cases.
 TEST_FILES = ["tests/test_backend_kernels.py", "tests/test_cupy_backend.py",
               "tests/test_operators.py", "tests/test_operator_properties.py"]
-#: Seconds per evaluation the issue asks of 3D N = 64 (N_rho = 30, M = 32) on an H100.
+#: Target seconds per evaluation of 3D N = 64 (N_rho = 30, M = 32) on an H100.
 TARGET_N64_S = 15e-3
 #: The variants timed: label, precision, backend options.
 VARIANTS = [("fused kernels", "float64", {}), ("fused kernels", "float32", {}),
