@@ -229,10 +229,10 @@ class Entry:
         if not any(p.kind is p.VAR_KEYWORD for p in signature.parameters.values()):
             for key in params:
                 if key not in {p.name for p in named}:
-                    # then the message as it was before suggestions, whole: it is matched on
+                    suggestion = did_you_mean(key, self._names())
                     raise UnknownParameterError(
-                        f"{who}: unknown parameter '{key}'{did_you_mean(key, self._names())} "
-                        f"({who}: got an unexpected keyword argument '{key}'; {accepted()})")
+                        f"{who}: unknown parameter '{key}'{suggestion}"
+                        + (f" {accepted().capitalize()}" if suggestion else f"; {accepted()}"))
         given = set(params) | set(arguments)
         for p in named:
             if p.default is p.empty and p.name not in given:

@@ -256,14 +256,12 @@ def test_a_misspelled_parameter_names_the_closest(monkeypatch, fresh_registries)
         granframe.restitution_law("toscani", strenght=1.0, exponent=0.5)
     assert str(caught.value) == (
         "restitution_laws 'toscani': unknown parameter 'strenght'; did you mean 'strength'? "
-        "(restitution_laws 'toscani': got an unexpected keyword argument 'strenght'; "
-        "accepted parameters: strength, exponent)")
+        "Accepted parameters: strength, exponent")
     with pytest.raises(TypeError) as caught:
         granframe.restitution_law("viscoelastic", a=0.2)     # nothing close: no suggestion
     assert str(caught.value) == (
-        "restitution_laws 'viscoelastic': unknown parameter 'a' (restitution_laws "
-        "'viscoelastic': got an unexpected keyword argument 'a'; accepted parameters: "
-        "strength)")
+        "restitution_laws 'viscoelastic': unknown parameter 'a'; accepted parameters: "
+        "strength")
     with pytest.raises(TypeError) as caught:
         granframe.restitution_law("toscani", strength=1.0)
     assert str(caught.value) == ("restitution_laws 'toscani': missing required parameter "

@@ -48,8 +48,8 @@ def test_backend_parameters_are_checked_without_building_it(monkeypatch):
         heated(backend={"name": "cupy", "module": "torch"})
     with pytest.raises(ValueError, match="CuPyBackend: parameter 'device' = -1"):
         heated(backend={"name": "cupy", "device": -1})
-    with pytest.raises(TypeError, match="array_backends 'cupy': got an unexpected keyword "
-                                        "argument 'devices'; accepted parameters: device"):
+    with pytest.raises(TypeError, match="array_backends 'cupy': unknown parameter 'devices'; "
+                                        "did you mean 'device'\\? Accepted parameters: device"):
         heated(backend={"name": "cupy", "devices": 1})
 
 
