@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import itertools
 import pathlib
+import textwrap
 import time
 
 import matplotlib
@@ -41,6 +42,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
+from matplotlib import ticker  # noqa: E402
 
 import granframe as gf  # noqa: E402
 from granframe.backends import preferred_backend
@@ -249,25 +251,81 @@ def _row(name, scene, config, result):
             "precompute_s": result["precompute_s"]}
 
 
+#: What each scene's figure says it is: physics, data and reference (all dimensionless).
+CAPTIONS = {
+    "bkw_2d": "2D elastic Maxwell molecules (e = 1, kernel exponent λ = 0), BKW solution at "
+              "t = 6.5, S = 5; reference: its exact ∂f/∂t",
+    "bkw_3d": "3D elastic Maxwell molecules (e = 1, kernel exponent λ = 0), BKW solution at "
+              "t = 6.5, S = 5; reference: its exact ∂f/∂t",
+    "hard_spheres_tanh_3d": "3D hard spheres (kernel exponent λ = 1), tanh restitution law "
+                            "e0 = 0.2, f0 two Maxwellians, S = 4; reference: fast operator at "
+                            f"N = {REFERENCE_N}, N_ρ = 48, Lebedev 29",
+    "heated_2d": "2D heated Maxwell molecules (λ = 0), e = 0.5, heat bath τ = 0.1, T0 = 8, "
+                 "S = 12, RK4 to t = 2; reference: the exact temperature law",
+    "heated_3d": "3D heated Maxwell molecules (λ = 0), e = 0.5, heat bath τ = 0.1, T0 = 1.5, "
+                 "S = 5, RK4 to t = 2; reference: the exact temperature law",
+}
+
+
+def _swept(rows) -> str:
+    """The values each swept setting takes in ``rows``, for the caption."""
+    def values(key, numeric=True):
+        found = {r[key] for r in rows if r[key] not in ("", None)}
+        return ", ".join(f"{v:g}" if numeric else str(v)
+                         for v in sorted(found, key=lambda v: (str(type(v)), v)))
+    parts = [f"N ∈ {{{values('N')}}}", f"N_ρ ∈ {{{values('N_rho')}}}"]
+    rules = values("rule", numeric=False)
+    if rules:
+        parts.append(f"quadrature ∈ {{{rules}}}")
+    parts.append(f"precision ∈ {{{values('precision', numeric=False)}}}")
+    if any(r["dt"] not in ("", None) for r in rows):
+        parts.append(f"time step Δt ∈ {{{values('dt')}}}")
+    return "swept: " + "; ".join(parts) + f"; {len(rows)} configurations"
+
+
+def _log_ticks(axis, values) -> None:
+    """Labels at the powers of ten only, and at 2 and 5 times them where ``values`` span
+    less than two decades (no crowded minor labels)."""
+    values = numpy.asarray(values, dtype=float)
+    if numpy.log10(values.max() / values.min()) < 2:
+        axis.set_major_locator(ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(ticker.FuncFormatter(lambda value, _: f"{value:g}"))
+    axis.set_minor_formatter(ticker.NullFormatter())
+
+
 def _figure(name, scene, rows, out):
-    fig, ax = plt.subplots(figsize=(7.5, 5.5), constrained_layout=True)
-    styles = {("fast_spectral", "float64"): ("o", "C0", "fast, float64"),
-              ("fast_spectral", "float32"): ("s", "C1", "fast, float32"),
-              ("direct_spectral", "float64"): ("^", "C2", "direct, float64")}
+    fig, ax = plt.subplots(figsize=(8, 6), constrained_layout=True)
+    styles = {("fast_spectral", "float64"): ("o", "C0", "fast_spectral, float64"),
+              ("fast_spectral", "float32"): ("s", "C1", "fast_spectral, float32"),
+              ("direct_spectral", "float64"): ("^", "C2", "direct_spectral, float64")}
     for key, (marker, colour, label) in styles.items():
         chosen = [r for r in rows if (r["method"], r["precision"]) == key]
         if chosen:
             ax.loglog([r["seconds"] for r in chosen], [r["error"] for r in chosen], marker,
-                      color=colour, ms=4, alpha=0.6, label=label)
+                      color=colour, ms=4, alpha=0.6,
+                      label=f"{label} ({len(chosen)} configuration"
+                            f"{'s' if len(chosen) > 1 else ''})")
     front = sorted((r for r in rows if r["pareto"]), key=lambda r: r["seconds"])
     ax.loglog([r["seconds"] for r in front], [r["error"] for r in front], "k-", lw=1.2,
-              drawstyle="steps-post", label="Pareto front")
-    cost = "time per evaluation [s]" if scene["kind"] == "evaluation" else "time to solution [s]"
-    what = ("max |Q - Q_ref| / max |Q_ref|" if scene["kind"] == "evaluation"
-            else "max |T / T_exact - 1|, t in [0, 2]")
-    ax.set(xlabel=cost, ylabel=what, title=name)
+              drawstyle="steps-post", label="Pareto front (no cheaper configuration "
+                                            "within 10 % of its error)")
+    ax.loglog([r["seconds"] for r in front], [r["error"] for r in front], "kD", ms=3.5,
+              mfc="none", label="configurations on the front")
+    if scene["kind"] == "evaluation":
+        cost = "wall time of one evaluation of Q, median (s)"
+        what = r"relative error of Q, $\max|Q - Q_{ref}|\,/\,\max|Q_{ref}|$ (dimensionless)"
+    else:
+        cost = "wall time to solution, t from 0 to 2, set-up included (s)"
+        what = r"temperature error $\max_{t \in [0, 2]} |T/T_{exact} - 1|$ (dimensionless)"
+    lines = [f"{name}: {CAPTIONS.get(name, '')}", _swept(rows),
+             "errors floored at 1e-16 for the log scale; all quantities but the wall time "
+             "dimensionless"]
+    ax.set(xlabel=cost, ylabel=what,
+           title="\n".join(textwrap.fill(line, 118) for line in lines))
+    ax.title.set_fontsize(8)
+    _log_ticks(ax.xaxis, [r["seconds"] for r in rows])
     ax.grid(True, which="major", alpha=0.3)
-    ax.legend()
+    ax.legend(fontsize=8)
     save_figure(fig, out / f"{name}.png")
 
 

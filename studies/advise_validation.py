@@ -292,7 +292,8 @@ def run(out: pathlib.Path, quick: bool = False) -> dict:
     ax.plot([], [], ":", color="0.3", lw=1, label="tolerance")
     ax.set(xlabel="cost: evaluations × median wall time of one evaluation (s)",
            ylabel="measured error against the reference (dimensionless)\n"
-                  r"temperature: $\max_t|T/T_{ref} - 1|$; BKW: $\max|f - f_{exact}|/\max f_{exact}$",
+                  r"temperature: $\max_t|T/T_{ref} - 1|$; "
+                  r"BKW: $\max|f - f_{exact}|/\max f_{exact}$",
            title=f"granframe advise against a brute-force search, {len(rows)} "
                  f"scene{'s' if len(rows) > 1 else ''} (all quantities but the cost "
                  "dimensionless)\nsearch: N, S, N_ρ, M or Lebedev order, precision, RK4 / "

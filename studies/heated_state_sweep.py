@@ -68,22 +68,34 @@ def run(out: pathlib.Path, quick: bool = False) -> dict:
     rows = [{k: (str(v) if isinstance(v, numpy.str_) else v) for k, v in r.items()}
             for r in rows]
     write_csv(out / "heated_state.csv", rows)
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), constrained_layout=True)
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5), constrained_layout=True)
+    names = {"maxwell": "Maxwell molecules (λ = 0)", "hard_spheres": "hard spheres (λ = 1)"}
     for kernel, marker in (("maxwell", "o-"), ("hard_spheres", "s-")):
         chosen = sorted((r for r in rows if r["kernel"] == kernel),
                         key=lambda r: r["restitution.value"])
         e = [r["restitution.value"] for r in chosen]
-        axes[0].plot(e, [r["temperature"] for r in chosen], marker, label=kernel)
-        axes[1].plot(e, [r["kurtosis"] for r in chosen], marker, label=kernel)
-    axes[0].axhline(1.0, color="k", ls=":", lw=1, label="exact, Maxwell molecules")
-    axes[1].axhline(2.0, color="k", ls=":", lw=1, label="Maxwellian (2D)")
-    axes[0].set(xlabel="restitution coefficient e", ylabel=f"T at t = {study.base['final_time']:g}",
-                title="heated state, tau = (1 - e^2)/8")
-    axes[1].set(xlabel="restitution coefficient e", ylabel="kurtosis",
+        label = f"{names[kernel]}, one run per e"
+        axes[0].plot(e, [r["temperature"] for r in chosen], marker, label=label)
+        axes[1].plot(e, [r["kurtosis"] for r in chosen], marker, label=label)
+    axes[0].axhline(1.0, color="k", ls=":", lw=1,
+                    label="exact steady state of Maxwell molecules, T = 1")
+    axes[1].axhline(2.0, color="k", ls=":", lw=1, label="Maxwellian (2D), 2")
+    final = study.base["final_time"]
+    axes[0].set(xlabel="restitution coefficient e (dimensionless)",
+                ylabel=f"temperature T at t = {final:g} (dimensionless)",
+                title=r"heated state, heat bath $\tau = (1 - e^2)/8$")
+    axes[1].set(xlabel="restitution coefficient e (dimensionless)",
+                ylabel=rf"kurtosis $\kappa$ at t = {final:g} (dimensionless)",
                 title="heated state: overpopulated tails")
     for ax in axes:
         ax.grid(True, alpha=0.3)
         ax.legend()
+    grid, operator = study.base["grid"], study.base["operator"]
+    fig.suptitle(f"a sweep over e and the kernel: 2D, N = {grid['n_modes']}, S = "
+                 f"{grid['support_radius']:g}, fast_spectral, N_ρ = {operator['radial_points']}, "
+                 f"circle M = {operator['sphere']['n_points']};\nRK4, Δt = "
+                 f"{study.base['time_step']:g}, to t = {final:g}; constant e, Maxwellian "
+                 "T0 = 1; all quantities dimensionless", fontsize=10)
     save_figure(fig, out / "heated_state.png")
     maxwell = [r for r in rows if r["kernel"] == "maxwell"]
     summary = {"runs": len(rows), "finished": sum(r["status"] == "finished" for r in rows),

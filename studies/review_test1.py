@@ -37,6 +37,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
 import xarray  # noqa: E402
+from matplotlib import colormaps, ticker  # noqa: E402
 
 import granframe as gf  # noqa: E402
 from granframe.tools.analysis import exponential_rate, relative_entropy  # noqa: E402
@@ -44,6 +45,9 @@ from granframe.backends import preferred_backend  # noqa: E402
 from granframe.run.description import RunDescription  # noqa: E402
 from granframe.model.exact import heated_maxwell_temperature, maxwell_energy_dissipation  # noqa: E402
 from granframe.run.storage import RunStore  # noqa: E402
+from granframe.tools.plotting import caption  # noqa: E402
+
+_TIME = "time t (dimensionless)"
 
 W0 = 2 * math.sqrt(6)
 EDGE = 1.0   # c_smooth: the flat data's edges smoothed by a Gaussian of this deviation
@@ -160,31 +164,48 @@ def report(stores: dict, out) -> dict:
     for name, store in stores.items():
         summary[name], (t, T, exact, error, times, entropy, ds) = _analyse(name, store)
         s = summary[name]
-        fig, axes = plt.subplots(1, 4, figsize=(18, 4), constrained_layout=True)
-        axes[0].semilogy(times, entropy, "o", ms=3, label=r"$H(f\,|\,f_\infty)$")
+        fig, axes = plt.subplots(1, 4, figsize=(19, 5.6), constrained_layout=True)
+        end = s["final_time"]
+        axes[0].semilogy(times, numpy.where(entropy > 0, entropy, numpy.nan), "o", ms=3,
+                         label=r"$H(f(t)\,|\,f_\infty)$ at the snapshots")
         fit_t = numpy.linspace(*s["entropy_fit_window"], 20)
         use = (times >= s["entropy_fit_window"][0]) & (times <= s["entropy_fit_window"][1])
         scale = numpy.exp(numpy.mean(numpy.log(entropy[use]) + s["entropy_rate"] * times[use]))
+        low, high = s["entropy_fit_window"]
         axes[0].semilogy(fit_t, scale * numpy.exp(-s["entropy_rate"] * fit_t), "r--",
-                         label=f"fit: rate {s['entropy_rate']:.4f} ± {s['entropy_rate_stderr']:.1e}")
-        axes[0].set(xlabel="t", title=f"relative entropy, f_inf = f(t = {s['final_time']:g})")
-        axes[0].legend()
+                         label=f"fit on t ∈ [{low:g}, {high:g}]: rate {s['entropy_rate']:.4f} "
+                               f"± {s['entropy_rate_stderr']:.1e}")
+        axes[0].set(xlabel=_TIME, ylabel=r"relative entropy $H(f(t)\,|\,f_\infty)$ "
+                                         "(dimensionless)",
+                    title=f"relative entropy to f_inf = f(t_end), t_end = {end:g}\n(H = 0 at "
+                          "t_end by construction, not drawn; H ≤ 0 left out)")
+        axes[0].legend(fontsize=8)
         marks = max(1, len(t) // 50)
-        axes[1].plot(t, exact, lw=1.5, label="exact law")
-        axes[1].plot(t[::marks], T[::marks], "o", ms=3, label="granframe")
-        axes[1].set(xlabel="t", title=f"temperature (e = {s['e']}, tau = {s['tau']})")
-        axes[1].legend()
-        axes[2].semilogy(t[1:], numpy.maximum(error[1:], 1e-17))
-        axes[2].axhline(1e-5, color="k", ls=":", lw=1)
-        axes[2].set(xlabel="t", title=f"|T/T_exact - 1|, max {s['max_T_error']:.2e}")
+        axes[1].plot(t, exact, lw=1.5, label="exact law (review eq. (ext_temp))")
+        axes[1].plot(t[::marks], T[::marks], "o", ms=3,
+                     label=f"granframe, every {marks} steps" if marks > 1 else "granframe")
+        axes[1].set(xlabel=_TIME, ylabel="temperature T (dimensionless)",
+                    title=f"temperature (e = {s['e']}, heat bath τ = {s['tau']})")
+        axes[1].legend(fontsize=8)
+        axes[2].semilogy(t[1:], numpy.where(error[1:] > 0, error[1:], numpy.nan),
+                         label="granframe, every step")
+        axes[2].axhline(1e-5, color="k", ls=":", lw=1, label="1e-5")
+        axes[2].set(xlabel=_TIME, ylabel=r"$|T/T_{exact} - 1|$ (dimensionless)",
+                    title=f"relative error of T, max {s['max_T_error']:.2e} (zeros left out)")
+        axes[2].legend(fontsize=8)
         v1, v2 = ds.v1.values, ds.v2.values
         f_inf = ds.f.isel(time=-1).values
         reach = 4 * math.sqrt(s["T_final"]) + 1
-        filled = axes[3].contourf(v1, v2, f_inf.T, levels=20, cmap="viridis")
+        levels = ticker.MaxNLocator(nbins=12).tick_values(0.0, float(f_inf.max()))
+        cmap = colormaps["viridis"].with_extremes(under="0.8")
+        filled = axes[3].contourf(v1, v2, f_inf.T, levels=levels, cmap=cmap, extend="min")
         axes[3].set(xlim=(-reach, reach), ylim=(-reach, reach), aspect="equal",
-                    title=f"equilibrium profile f(t = {s['final_time']:g})")
-        plt.colorbar(filled, ax=axes[3], shrink=0.8)
-        fig.suptitle(ds.attrs["granframe"]["description"]["title"])
+                    xlabel="velocity v1 (dimensionless)", ylabel="velocity v2 (dimensionless)",
+                    title=f"equilibrium profile f(v1, v2) at t = {end:g}\n(filled from f = 0; "
+                          "grey: f < 0)")
+        fig.colorbar(filled, ax=axes[3], shrink=0.8, label="f (dimensionless)")
+        text = caption(ds)   # red, as the run figures, when the run ends under-resolved
+        fig.suptitle(text, fontsize=9, color="C3" if "UNDER-RESOLVED" in text else "black")
         fig.savefig(out / f"test1_{name}.png", dpi=100)
         plt.close(fig)
         numpy.savetxt(out / f"test1_{name}_temperature.csv",

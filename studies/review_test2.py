@@ -105,7 +105,9 @@ def _tail(name, store):
 def report(stores: dict, out) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     summary = {}
-    fig, axes = plt.subplots(1, 2, figsize=(13, 4.8), constrained_layout=True)
+    fig, axes = plt.subplots(1, 2, figsize=(14, 6), constrained_layout=True)
+    names = {"maxwell": "Maxwell molecules (kernel exponent λ = 0)",
+             "hard_spheres": "hard spheres (kernel exponent λ = 1)"}
     for column, kernel in enumerate(KERNELS):
         ax = axes[column]
         for e in RESTITUTION:
@@ -115,18 +117,33 @@ def report(stores: dict, out) -> dict:
             shown = numpy.where(line > 0, line, numpy.nan)
             label = f"e = {e}"
             if s.get("alpha") is not None:
-                label += f": alpha = {s['alpha']:.2f} ± {s['alpha_uncertainty']:.2f}"
-            ax.semilogy(v1, shown, label=label)
+                label += f": fitted α = {s['alpha']:.2f} ± {s['alpha_uncertainty']:.2f}"
+            else:
+                label += f": no fit ({s.get('why_no_fit', 'none')})"
+            ax.semilogy(v1, shown, "o-", ms=2, lw=0.8, label=label)
             if e == RESTITUTION[0]:
                 for sign in (1, -1):
-                    ax.axvspan(*(sign * x for x in s["fit_range"]), color="0.9", zorder=0)
+                    ax.axvspan(*(sign * x for x in s["fit_range"]), color="0.9", zorder=0,
+                               label=f"fit range of e = {e} (each e has its own, see "
+                                     "summary.json)" if sign == 1 else None)
             numpy.savetxt(out / f"test2_{name}_slice.csv", numpy.c_[v1, line], delimiter=",",
                           header=f"v1,f_inf(v1;v2={SLICE})", comments="")
-        ax.set(xlabel="v1", ylabel=f"f_inf(v1, {SLICE})",
-               title=f"{kernel.replace('_', ' ')}, f_inf = f(t = 55): tail exp(-c|v|^alpha), "
-                     f"theory alpha = {KERNELS[kernel]:g}\n(grey: fit range of e = "
-                     f"{RESTITUTION[0]}; each e has its own, see summary.json)")
+        final = xarray.open_zarr(stores[f"{kernel}_e{RESTITUTION[0]}"]).step_time.values[-1]
+        ax.set(xlabel="velocity v1 (dimensionless)",
+               ylabel=rf"$f_\infty(v_1, {SLICE})$ (dimensionless)",
+               title=f"{names[kernel]}: f_inf = f(t = {final:g})\ntail exp(-c|v|^α), theory "
+                     f"α = {KERNELS[kernel]:g}; a marker at each grid v1; f ≤ 0 left out")
+        ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8)
+    first = RunStore.open(stores[next(iter(stores))]).metadata["description"]
+    grid, operator = first["grid"], first["operator"]
+    fig.suptitle(f"Test 2: tails of the heated equilibrium, 2D, constant e, heat bath τ = "
+                 f"{first['heat_bath']:g}, flat initial data (w0 = 2√6)\nN = {grid['n_modes']}, "
+                 f"S = {grid['support_radius']:g}, fast_spectral, N_ρ = "
+                 f"{operator['radial_points']}, circle M = {operator['sphere']['n_points']}; "
+                 f"{first.get('integrator', {}).get('name', 'rk4')}, Δt = "
+                 f"{first['time_step']:g}; slice at v2 = {SLICE} (from the Fourier series); "
+                 "all quantities dimensionless", fontsize=10)
     fig.savefig(out / "test2_tails.png", dpi=100)
     plt.close(fig)
     return summary

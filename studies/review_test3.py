@@ -27,6 +27,7 @@ T0 / (1 + t/t0)^2 to the free-cooling runs and reports t0.
 from __future__ import annotations
 
 import math
+import textwrap
 
 import matplotlib
 
@@ -35,6 +36,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
 import scipy.optimize  # noqa: E402
 import xarray  # noqa: E402
+from matplotlib import ticker  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
 
 import granframe as gf  # noqa: E402
 from granframe.run.description import RunDescription  # noqa: E402
@@ -104,6 +107,43 @@ def haff_fit(t, T):
     return T0, t0, float(numpy.abs(numpy.expm1(-residual(fit.x))).max())
 
 
+_TIME = "time t (dimensionless)"
+
+
+def _describe(name: str) -> str:
+    """A run's name (``lambda0.5``, ``haff_tanh0.8``, ``heated_e0.9``) in words."""
+    if name.startswith("lambda"):
+        return f"heated, e = 0.5, λ = {name[len('lambda'):]}"
+    if name.startswith("haff_tanh"):
+        return f"free cooling, tanh law e0 = {name[len('haff_tanh'):]}"
+    if name.startswith("haff_const"):
+        return f"free cooling, e = {name[len('haff_const'):]}"
+    return f"heated, hard spheres, e = {name[len('heated_e'):]}"
+
+
+def _plain_log_labels(axis) -> None:
+    """Tick labels of a log axis spanning less than a decade as plain numbers (0.6, 2)."""
+    plain = ticker.FuncFormatter(lambda value, _: f"{value:g}")
+    axis.set_major_formatter(plain)
+    axis.set_minor_formatter(plain)
+
+
+def _caption(stores: dict) -> str:
+    """The numerical parameters the runs share (those of the first store), in words."""
+    first = RunStore.open(next(iter(stores.values()))).metadata["description"]
+    grid, operator = first["grid"], first["operator"]
+    sphere = operator["sphere"]
+    rule = (f"sphere product n_polar = {sphere['n_polar']}" if "n_polar" in sphere
+            else ", ".join(f"{k} = {v}" for k, v in sphere.items()))
+    integrator = first["integrator"]["name"] if isinstance(first["integrator"], dict) \
+        else first["integrator"]
+    return (f"3D, N = {grid['n_modes']}, S = {grid['support_radius']:g}, R = "
+            f"{grid['truncation_radius']:g}, L = {grid['half_width']:.3g};\nfast_spectral, "
+            f"N_ρ = {operator['radial_points']}, {rule}; {integrator}, Δt = "
+            f"{first['time_step']:g}; Maxwellian T0 = 2, u0 = (0.5, -0.5, 0); all quantities "
+            "dimensionless")
+
+
 def report(stores: dict, out) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     data, summary = {}, {}
@@ -118,15 +158,27 @@ def report(stores: dict, out) -> dict:
                          "wall_seconds": progress.get("wall_seconds"),
                          "max_negative_mass_share": float(ds.negative_mass_fraction.max()),
                          "kurtosis_final": float(ds.kurtosis.values[-1])}
-    fig, axes = plt.subplots(1, 3, figsize=(17, 4.5), constrained_layout=True)
+    common = _caption(stores)
+
+    def stopped(name, t):
+        if summary[name]["status"] == "finished":
+            return ""
+        why = ("by the health check" if (summary[name]["message"] or "").startswith(
+            "health check") else f"({summary[name]['status']})")
+        return f", stopped {why} at t = {t[-1]:.3g}"
+
+    fig, axes = plt.subplots(1, 3, figsize=(17, 5.6), constrained_layout=True)
     speed = numpy.linspace(0.0, 8.0, 400)
     for e0 in (0.8, 0.2):   # the review's left panels: the restitution laws themselves
         axes[0].plot(speed, gf.restitution_law("tanh", asymptotic_value=e0, **TANH)(speed),
-                     label=f"e(|g|), e0 = {e0}")
-        axes[0].axhline(e0, ls="--", lw=1, color="C0" if e0 == 0.8 else "C1")
-    axes[0].set(xlabel="|g|", ylabel="e", title="restitution: tanh law (solid), constant "
-                                               "(dashed)")
-    axes[0].legend()
+                     label=f"tanh law e(|g|), e0 = {e0}")
+        axes[0].axhline(e0, ls="--", lw=1, color="C0" if e0 == 0.8 else "C1",
+                        label=f"constant e = {e0}")
+    axes[0].set(xlabel="relative speed |g| (dimensionless)",
+                ylabel="restitution coefficient e (dimensionless)",
+                title="restitution: e(|g|) = (e0 - 1)/2 tanh(|g| - 4) + (e0 + 1)/2 (solid),\n"
+                      "constant e = e0 (dashed)")
+    axes[0].legend(fontsize=8)
     for ax, e0 in zip(axes[1:], (0.8, 0.2)):
         for kind, style in (("tanh", "-"), ("const", "--")):
             name = f"haff_{kind}{e0}"
@@ -135,47 +187,78 @@ def report(stores: dict, out) -> dict:
             T0, t0, misfit = haff_fit(t[valid], T[valid])
             summary[name].update(haff_T0=T0, haff_t0=t0, haff_max_misfit=misfit,
                                  haff_fit_until=float(t[valid][-1]))
-            label = (f"e(|g|) tanh law, e0 = {e0}" if kind == "tanh" else f"constant e = {e0}")
-            if summary[name]["status"] != "finished":
-                label += f", stopped at t = {t[-1]:.3g}"
-            line, = ax.plot(t, T, style, label=f"{label} (Haff fit t0 = {t0:.3g})")
-            ax.plot(t[valid][-1], T[valid][-1], "o", color=line.get_color(), ms=5)
-        ax.set(xlabel="t", ylabel="T", title=f"free cooling, review grid, e0 = {e0}\n(dot: "
-                                               f"negative mass reaches {VALID_NEGATIVE_SHARE:.0%}; "
-                                               "Haff fit before it)")
-        ax.legend()
+            label = (f"tanh law, e0 = {e0}" if kind == "tanh" else f"constant e = {e0}")
+            line, = ax.plot(t, T, style, label=f"{label}{stopped(name, t)}\n(Haff fit "
+                                                f"t0 = {t0:.3g} on t ≤ {t[valid][-1]:.3g})")
+            ax.plot(t[valid][-1], T[valid][-1], "o", color=line.get_color(), ms=7, mec="k",
+                    zorder=5)
+        ax.plot([], [], "o", color="0.6", mec="k", ms=7,
+                label=f"negative mass share reaches {VALID_NEGATIVE_SHARE:.0%}: end of the fit")
+        ax.set(xlabel=_TIME, ylabel="temperature T (dimensionless)",
+               title=f"free cooling (τ = 0), hard spheres (λ = 1), review grid, e0 = {e0}\n"
+                     "Haff's law T0/(1 + t/t0)² fitted before the dot")
+        ax.title.set_fontsize(10)
+        ax.legend(fontsize=8, loc="upper right")
+    fig.suptitle(common, fontsize=9)
     fig.savefig(out / "test3_haff.png", dpi=100)
     plt.close(fig)
-    fig, ax = plt.subplots(figsize=(6, 4.5), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(7.5, 5.2), constrained_layout=True)
     for lam in (0.0, 0.5, 1.0):
-        t, T, _ = data[f"lambda{lam:g}"]
-        ax.semilogy(t, T, label=f"lambda = {lam:g}")
-    ax.set(xlabel="t", ylabel="T", title="heated (tau = 0.1), e = 0.5: VHS exponent lambda")
-    ax.legend()
+        name = f"lambda{lam:g}"
+        t, T, _ = data[name]
+        ax.semilogy(t, T, label=f"λ = {lam:g}{stopped(name, t)}")
+    ax.set(xlabel=_TIME, ylabel="temperature T (dimensionless)",
+           title="heated (τ = 0.1), constant e = 0.5, variable hard spheres |g|^λ / (4π):\n"
+                 "kernel exponent λ")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    _plain_log_labels(ax.yaxis)
+    fig.suptitle(textwrap.fill(common.replace("\n", " "), 105), fontsize=8)
     fig.savefig(out / "test3_lambda.png", dpi=100)
     plt.close(fig)
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), constrained_layout=True)
+    fig, axes = plt.subplots(1, 2, figsize=(13, 5.4), constrained_layout=True)
     for e in HEATED:
-        t, T, _ = data["lambda1" if e == 0.5 else f"heated_e{e}"]
-        axes[0].plot(t, T, label=f"e = {e}")
+        name = "lambda1" if e == 0.5 else f"heated_e{e}"
+        t, T, _ = data[name]
+        axes[0].plot(t, T, label=f"e = {e}{stopped(name, t)}")
         axes[1].loglog(t[1:], T[1:], label=f"e = {e}")
-    axes[0].set(xlabel="t", ylabel="T", title="heated Haff's law (tau = 0.1), hard spheres")
-    axes[1].set(xlabel="t", ylabel="T", title="log-log")
-    axes[0].legend()
+    axes[0].set(xlabel=_TIME, ylabel="temperature T (dimensionless)",
+                title="heated Haff's law: hard spheres (λ = 1), τ = 0.1, constant e")
+    axes[1].set(xlabel=_TIME, ylabel="temperature T (dimensionless)",
+                title="the same, log-log (t = 0 left out)")
+    _plain_log_labels(axes[1].yaxis)
+    for ax in axes:
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(common, fontsize=9)
     fig.savefig(out / "test3_heated.png", dpi=100)
     plt.close(fig)
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), constrained_layout=True)
+    fig, axes = plt.subplots(1, 2, figsize=(14, 5.6), constrained_layout=True)
     for i, name in enumerate(RESOLVED):
         for suffix, style, where in (("", "--", "review grid"), ("_S5", "-", "S = 5 grid")):
             t, T, negative = data[name + suffix]
-            label = f"{name}, {where}" + ("" if summary[name + suffix]["status"] == "finished"
-                                          else f" (stopped, t = {t[-1]:.3g})")
+            label = f"{_describe(name)}, {where}" + (
+                "" if summary[name + suffix]["status"] == "finished"
+                else f" (stopped, t = {t[-1]:.3g})")
             axes[0].plot(t, T, style, color=f"C{i}", label=label)
-            axes[1].semilogy(t, numpy.maximum(negative, 1e-17), style, color=f"C{i}")
-    axes[0].set(xlabel="t", ylabel="T", title="temperature: review grid (dashed) and S = 5 "
-                                             "grid (solid)")
-    axes[1].set(xlabel="t", title="negative-mass share int max(-f,0) / int |f|")
+            axes[1].semilogy(t, numpy.where(negative > 0, negative, numpy.nan), style,
+                             color=f"C{i}")
+    positivity = RunStore.open(stores[RESOLVED[0]]).metadata["description"]["health"]
+    axes[1].axhline(positivity["positivity_tolerance"], color="k", ls=":", lw=1)
+    axes[0].set(xlabel=_TIME, ylabel="temperature T (dimensionless)",
+                title="temperature: review grid S = 4 (dashed) and S = 5 grid (solid)")
+    axes[1].set(xlabel=_TIME,
+                ylabel=r"negative mass share $\int f^- / \int |f|$ (dimensionless)",
+                title="positivity, colours as on the left (zeros left out)")
     axes[0].legend(fontsize=7)
+    axes[1].legend(handles=[Line2D([], [], color="0.3", ls="--", label="review grid, S = 4"),
+                            Line2D([], [], color="0.3", ls="-", label="S = 5 grid"),
+                            Line2D([], [], color="k", ls=":", lw=1,
+                                   label=f"health limit {positivity['positivity_tolerance']:g}")],
+                   fontsize=8)
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+    fig.suptitle(common.replace("S = 4", "S = 4 (review grid) or 5"), fontsize=9)
     fig.savefig(out / "test3_resolution.png", dpi=100)
     plt.close(fig)
     for name, (t, T, _) in data.items():

@@ -32,6 +32,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
+from matplotlib import ticker  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
 
 import granframe as gf  # noqa: E402
 from granframe.equations.homogeneous import HomogeneousBoltzmann  # noqa: E402
@@ -97,27 +99,52 @@ def maps(quick: bool) -> dict:
 MARKERS = {"accurate": ("o", "C2"), "inaccurate": ("s", "C1"), "unstable": ("x", "C3")}
 
 
+#: The axis label of each map's swept parameter.
+AXES = {"eps": "Knudsen number ε (dimensionless)", "N": "number of modes N per dimension"}
+#: What each map solves.
+PHYSICS = {
+    "collisions": r"$\partial_t f = Q(f, f)/\varepsilon$, elastic (e = 1), no heat bath, N = 32",
+    "heat_bath": r"$\partial_t f = Q(f, f) + \tau\Delta_v f$, e = 0.5, heat bath τ = 0.1, "
+                 "ε = 1",
+}
+LEGEND = {"accurate": f"accurate: max |T/T_exact - 1| ≤ {ACCURATE:g}",
+          "inaccurate": f"inaccurate: stable, max |T/T_exact - 1| > {ACCURATE:g}",
+          "unstable": "unstable: f not finite, or max |f| > 10 × max(max f0, peak of the "
+                      "Maxwellian at the exact T)"}
+
+
 def _figure(name, spec, rows, out):
     schemes = spec["schemes"]
-    fig, axes = plt.subplots(1, len(schemes), figsize=(4.2 * len(schemes), 4),
+    fig, axes = plt.subplots(1, len(schemes), figsize=(4.3 * len(schemes), 4.9),
                              constrained_layout=True, sharey=True, squeeze=False)
     for ax, scheme in zip(axes[0], schemes):
         chosen = [r for r in rows if r["scheme"] == scheme]
         for verdict, (marker, colour) in MARKERS.items():
             pts = [r for r in chosen if r["verdict"] == verdict]
             ax.loglog([r[spec["axis"]] for r in pts], [r["dt"] for r in pts], marker,
-                      color=colour, label=verdict)
+                      color=colour, label=LEGEND[verdict])
         predicted = sorted((r[spec["axis"]], r["predicted_limit"]) for r in chosen
                            if r["predicted_limit"] is not None and r["dt"] == chosen[0]["dt"])
         if predicted:
             x, y = zip(*predicted)
-            ax.loglog(x, y, "k--", lw=1, label="predicted limit")
-        ax.set(xlabel=spec["axis"], title=scheme)
+            ax.loglog(x, y, "k--", lw=1, label="predicted explicit limit Δt = interval / rate")
+        ax.set(xlabel=AXES[spec["axis"]], title=f"integrator {scheme}")
+        if spec["axis"] == "N":     # the swept N, without crowded minor labels
+            ax.set_xticks(spec["values"], [str(v) for v in spec["values"]])
+            ax.xaxis.set_minor_formatter(ticker.NullFormatter())
         ax.set_ylim(min(spec["dts"]) / 1.5, max(spec["dts"]) * 1.5)
-    axes[0][0].set_ylabel("dt")
-    axes[0][0].legend(loc="lower right", fontsize=8)
-    fig.suptitle(f"{name}: {STEPS if spec['steps'] == STEPS else spec['steps']} steps, "
-                 f"accurate = max |T/T_exact - 1| <= {ACCURATE:g}")
+        ax.grid(True, alpha=0.3)
+    axes[0][0].set_ylabel("time step Δt (dimensionless)")
+    handles = [Line2D([], [], ls="none", marker=marker, color=colour, label=LEGEND[verdict])
+               for verdict, (marker, colour) in MARKERS.items()]
+    handles.append(Line2D([], [], color="k", ls="--", lw=1,
+                          label="predicted explicit limit Δt = interval / rate"))
+    fig.legend(handles=handles, loc="outside lower center", ncols=2 if len(schemes) > 2 else 1,
+               fontsize=8)
+    fig.suptitle(f"{name}: {PHYSICS.get(name, '')}\n2D Maxwell molecules (kernel exponent "
+                 f"λ = 0), S = 4, N_ρ = 16, circle M = 16, f0 two Maxwellians\n"
+                 f"{spec['steps']} fixed steps per point, one marker per run; all quantities "
+                 "dimensionless", fontsize=10)
     save_figure(fig, out / f"{name}.png")
 
 

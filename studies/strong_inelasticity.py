@@ -64,18 +64,36 @@ def run(out: pathlib.Path, quick: bool = False) -> dict:
     final = 1.0 if quick else FINAL
     rows = [steady_state(k, e, n, final) for k in kernels for n in sizes for e in restitutions]
     write_csv(out / "inelasticity.csv", rows)
-    fig, axes = plt.subplots(1, len(kernels), figsize=(6.5 * len(kernels), 4.5),
+    fig, axes = plt.subplots(1, len(kernels), figsize=(7 * len(kernels), 5.2),
                              constrained_layout=True, squeeze=False)
+    names = {"maxwell": "Maxwell molecules (kernel exponent λ = 0)",
+             "hard_spheres": "hard spheres (kernel exponent λ = 1)"}
+    floor = 1e-17
     for ax, kernel in zip(axes[0], kernels):
-        for n in sizes:
+        zeros = False
+        for colour, n in enumerate(sizes):
             chosen = [r for r in rows if r["kernel"] == kernel and r["N"] == n]
-            ax.semilogy([r["e"] for r in chosen],
-                        [max(r["negative_share"], 1e-17) for r in chosen], "o-", label=f"N = {n}")
+            share = numpy.array([r["negative_share"] for r in chosen])
+            e = numpy.array([r["e"] for r in chosen])
+            ax.semilogy(e, numpy.where(share > 0, share, numpy.nan), "o-", color=f"C{colour}",
+                        label=f"N = {n} (h = {chosen[0]['h']:.2f})")
+            if (share <= 0).any():
+                zeros = True
+                ax.semilogy(e[share <= 0], numpy.full((share <= 0).sum(), floor), "v",
+                            mfc="none", ms=7, color=f"C{colour}")
+        if zeros:
+            ax.semilogy([], [], "v", mfc="none", ms=7, color="0.4",
+                        label=f"share exactly 0 (f ≥ 0 on the grid), drawn at {floor:g}")
         ax.axhline(1e-2, color="k", ls=":", lw=1, label="runner's default limit (1 %)")
-        ax.set(xlabel="restitution coefficient e", ylabel="negative-mass share at t = %g" % final,
-               title=f"{kernel}, tau = {TAU}, S = 6")
+        ax.set(xlabel="restitution coefficient e (dimensionless)",
+               ylabel=rf"negative mass share $\int f^- / \int |f|$ at t = {final:g} "
+                      "(dimensionless)",
+               title=f"{names[kernel]}: one run per (e, N)")
         ax.grid(True, alpha=0.3)
-        ax.legend()
+        ax.legend(fontsize=8)
+    fig.suptitle(f"heated state, 2D: heat bath τ = {TAU}, constant e, Maxwellian T0 = 1, "
+                 f"S = 6;\nfast_spectral, N_ρ = 32, circle M = 16; RK4, Δt = {DT}, to "
+                 f"t = {final:g}; all quantities dimensionless", fontsize=10)
     save_figure(fig, out / "inelasticity.png")
     summary = {"rows": rows}
     write_summary(out, summary)
