@@ -15,7 +15,7 @@ from granframe.run.runner import Simulation
 from granframe.run.storage import RunStore, StoreDamagedError, StoreError
 from test_runner import heated
 from test_store_safety import flip
-from test_unbuilt_description import _refuse_building_cupy
+from test_unbuilt_description import _refuse_building_cupy, write_gpu_store
 
 VARIABLES = {"f", "snapshot_step", "snapshot_dt_next", "step", "dt", "mass", "temperature",
              "kinetic_energy", "min_f", "negative_mass_fraction", "kurtosis", "sonine_a2",
@@ -183,12 +183,7 @@ def test_a_replacement_cut_short_and_other_paths_are_refused(copy, tmp_path):
 
 def test_a_cupy_store_opens_without_building_its_backend(tmp_path, monkeypatch):
     store = tmp_path / "gpu.zarr"
-    Simulation(heated(final_time=0.5, backend={"name": "cupy", "module": "numpy"})).run(
-        store, progress=False)
-    written = RunStore.open(store, mode="r+")
-    meta = written.metadata
-    meta["description"]["backend"] = {"name": "cupy"}
-    written.group.attrs["granframe"] = meta
+    write_gpu_store(store)
     _refuse_building_cupy(monkeypatch)
     ds = gf.open_run(store)
     assert ds.sizes["time"] == 3 and ds.attrs["provenance_backend"].startswith("cupy")

@@ -9,12 +9,11 @@ from matplotlib.figure import Figure
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
-from granframe.run.storage import RunStore
 from granframe.tools import plotting
 from granframe.tools.cli import main
 
 from test_runner import heated
-from test_unbuilt_description import _refuse_building_cupy
+from test_unbuilt_description import _refuse_building_cupy, write_gpu_store
 
 #: Every plotting function that draws one panel, with the options it is drawn with.
 PANELS = {"temperature": (plotting.temperature, {}),
@@ -230,13 +229,7 @@ def test_plot_refuses_an_unknown_format_naming_the_option(store, tmp_path, capsy
 def test_the_figures_of_a_store_written_with_the_cupy_backend_are_drawn_on_a_cpu(
         tmp_path, monkeypatch):
     path = tmp_path / "gpu.zarr"
-    Simulation(heated(final_time=0.5, backend={"name": "cupy", "module": "numpy"})).run(
-        path, progress=False)
-    written = RunStore.open(path, mode="r+")
-    meta = written.metadata
-    meta["description"]["backend"] = {"name": "cupy"}
-    meta["description_toml"] = RunDescription.from_dict(meta["description"]).to_toml()
-    written.group.attrs.update({"granframe": meta, "description_toml": meta["description_toml"]})
+    write_gpu_store(path)
     _refuse_building_cupy(monkeypatch)
     with xarray.open_zarr(path, consolidated=False) as data:
         assert RunDescription.from_toml(data.attrs["description_toml"]).backend.name == "cupy"

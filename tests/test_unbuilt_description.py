@@ -22,15 +22,22 @@ def _refuse_building_cupy(monkeypatch):
     monkeypatch.setattr(granframe_cupy, "_import", refuse)
 
 
-def test_a_cupy_store_is_read_without_building_its_backend(tmp_path, capsys, monkeypatch):
-    store = tmp_path / "gpu.zarr"
-    # the CuPy backend's host path writes the store; its description is then the GPU one's
+def write_gpu_store(path) -> dict:
+    """A store as a GPU run leaves it for a CPU machine: written by the CuPy backend's host
+    path, its description (table and TOML) then made the GPU one's. Returns its metadata."""
     Simulation(heated(final_time=0.5, backend={"name": "cupy", "module": "numpy"})).run(
-        store, progress=False)
-    written = RunStore.open(store, mode="r+")
+        path, progress=False)
+    written = RunStore.open(path, mode="r+")
     meta = written.metadata
     meta["description"]["backend"] = {"name": "cupy"}
-    written.group.attrs["granframe"] = meta
+    meta["description_toml"] = RunDescription.from_dict(meta["description"]).to_toml()
+    written.group.attrs.update({"granframe": meta, "description_toml": meta["description_toml"]})
+    return meta
+
+
+def test_a_cupy_store_is_read_without_building_its_backend(tmp_path, capsys, monkeypatch):
+    store = tmp_path / "gpu.zarr"
+    meta = write_gpu_store(store)
     _refuse_building_cupy(monkeypatch)
     description = RunDescription.from_dict(meta["description"])
     assert description.backend.name == "cupy"
