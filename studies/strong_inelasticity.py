@@ -1,6 +1,6 @@
 """Positivity of the heated steady state as e -> 0 (sticky collisions), against N.
 
-    python studies/strong_inelasticity.py --out docs/figures/inelasticity   # ~5 min, 2 cores
+    python studies/strong_inelasticity.py --out docs/figures/inelasticity   # ~10 min, 2 cores
 
 d_t f = Q(f, f) + 0.1 Delta f in 2D, Maxwell molecules and hard spheres, constant e from 0
 (sticky) to 0.95, from a Maxwellian T0 = 1 to t = 10 (RK4, dt = 0.02) on S = 6 with
