@@ -1,6 +1,6 @@
 """Free cooling: concentration on a fixed grid, the rescaled formulation, the cooling state.
 
-    python studies/free_cooling.py --out docs/figures/cooling   # ~4 min, 2 cores
+    python studies/free_cooling.py --out docs/figures/cooling   # ~8 min, 2 cores
 
 Without a heat bath the gas cools for ever (Haff's law T ~ t^-2 for hard spheres) and f
 concentrates at its mean velocity. Three parts (``--only``):
@@ -37,6 +37,7 @@ import granframe as gf  # noqa: E402
 from granframe.backends import preferred_backend  # noqa: E402
 from granframe.equations.homogeneous import HomogeneousBoltzmann  # noqa: E402
 from granframe.equations.rescaled import RescaledBoltzmann  # noqa: E402
+from granframe.errors import NonFiniteError  # noqa: E402
 from granframe.run.runner import moments  # noqa: E402
 from granframe.tools.studykit import (command, read_summary, save_figure, write_csv,  # noqa: E402
                                 write_summary)
@@ -65,7 +66,11 @@ def _march(equation, f, dt, steps, every=1):
     rows = [dict(moments(grid, f, numpy), step=0)]
     for i in range(1, steps + 1):
         with numpy.errstate(over="ignore", invalid="ignore"):   # the unscaled runs blow up
-            f = rk4.step(equation, (i - 1) * dt, f, dt)
+            try:
+                f = rk4.step(equation, (i - 1) * dt, f, dt)
+            except NonFiniteError:   # a stage overflowed: the operator refuses that stage
+                rows.append(dict(moments(grid, numpy.full_like(f, numpy.nan), numpy), step=i))
+                break
         if i % every == 0 or i == steps:
             state = moments(grid, f, numpy)
             rows.append(dict(state, step=i))
