@@ -1,6 +1,6 @@
 """Free cooling: concentration on a fixed grid, the rescaled formulation, the cooling state.
 
-    python studies/free_cooling.py --out docs/figures/cooling   # ~8 min, 2 cores
+    python studies/free_cooling.py --out docs/figures/cooling   # ~4 min, 2 cores
 
 Without a heat bath the gas cools for ever (Haff's law T ~ t^-2 for hard spheres) and f
 concentrates at its mean velocity. Three parts (``--only``):

@@ -1,6 +1,6 @@
 """Where time integrators fail: stability maps over (dt, eps) and (dt, tau) (docs/stability.md).
 
-    python studies/stability_map.py --out docs/figures/stability      # about 25 min, 2 cores
+    python studies/stability_map.py --out docs/figures/stability      # about 18 min, 2 cores
     python studies/stability_map.py --out /tmp/stability --quick      # seconds (CI)
 
 2D Maxwell molecules on S = 4 (N_rho = 16, M = 16), 200 fixed steps per point.
