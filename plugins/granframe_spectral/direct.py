@@ -180,7 +180,7 @@ class DirectSpectral(CollisionOperator):
         u_km = unique % (2 * top + 1) - top
         coeffs, degree = angular_coefficients(self.kernel, d, self.angular_degree)
         rho, scale = self._radial()
-        gain = self._gain_weights(numpy.sqrt(u_kk), numpy.sqrt(u_mm), u_km.astype(float),
+        gain = self._gain_weights(u_kk, numpy.sqrt(u_mm), u_km.astype(float),
                                   rho, scale, coeffs, degree)
         loss = self._loss_weights(numpy.sqrt(numpy.arange(top + 1)), rho, scale, coeffs[0])
         weights = (gain[inverse.reshape(count, count)] - loss[kk][None, :]) * valid
@@ -196,16 +196,21 @@ class DirectSpectral(CollisionOperator):
         scale = w * rho ** (d - 1) * self.kernel.prefactor(d) * self.kernel.speed_part(rho)
         return rho, scale
 
-    def _gain_weights(self, k_norm, m_norm, k_dot_m, rho, scale, coeffs, degree):
+    def _gain_weights(self, k_squared, m_norm, k_dot_m, rho, scale, coeffs, degree):
+        """The gain weights on the unique (|k|^2, |m|, k.m) keys; the factors of x = a|k|
+        are tabulated over the |k|^2 <= max(k_squared) and gathered, since they depend on
+        |k| alone (half of the Bessel evaluations)."""
         d, L = self.grid.dimension, self.grid.half_width
         e = self.restitution(rho)
-        out = numpy.zeros(k_norm.shape)
+        norms = numpy.sqrt(numpy.arange(int(k_squared.max()) + 1))
+        out = numpy.zeros(k_squared.shape)
         for r, s, e_r in zip(rho, scale, e):
             a, b = math.pi * r * (1.0 + e_r) / (4.0 * L), math.pi * r / L
-            x = a * k_norm
+            x = (a * norms)[k_squared]
             y = numpy.sqrt(numpy.maximum(x ** 2 - 2 * a * b * k_dot_m + (b * m_norm) ** 2, 0.0))
             if degree == 0:
-                series = coeffs[0] * isotropic_sphere_average(x, d) * isotropic_sphere_average(y, d)
+                series = (coeffs[0] * isotropic_sphere_average(a * norms, d)[k_squared]
+                          * isotropic_sphere_average(y, d))
             else:
                 with numpy.errstate(invalid="ignore", divide="ignore"):
                     cos = numpy.where((x > 0) & (y > 0), (x ** 2 - a * b * k_dot_m) / (x * y), 1.0)
@@ -214,12 +219,13 @@ class DirectSpectral(CollisionOperator):
                 for order in range(degree + 1):
                     if d == 3:
                         term = ((2 * order + 1) * coeffs[order]
-                                * scipy.special.spherical_jn(order, x)
+                                * scipy.special.spherical_jn(order, a * norms)[k_squared]
                                 * scipy.special.spherical_jn(order, y)
                                 * scipy.special.eval_legendre(order, cos))
                     else:
                         term = ((1 if order == 0 else 2) * coeffs[order]
-                                * scipy.special.jv(order, x) * scipy.special.jv(order, y)
+                                * scipy.special.jv(order, a * norms)[k_squared]
+                                * scipy.special.jv(order, y)
                                 * scipy.special.eval_chebyt(order, cos))
                     series += term
             out += s * series
