@@ -69,6 +69,9 @@ TABLE_MOMENTS = ("temperature", "kurtosis", "sonine_a2", "mass", "negative_mass_
 #: (:func:`granframe.velocity.estimators.resolution_report`), and its warnings as one text
 TABLE_RESOLUTION = ("tail_error", "pairs_beyond_support")
 _NO_RESOLUTION = {**{name: math.nan for name in TABLE_RESOLUTION}, "resolution_warning": ""}
+#: the table row of a run not run yet (or cut short); every column of the table
+_PENDING = {"status": "pending", "message": "", "wall_seconds": math.nan, "steps": 0,
+            "time": math.nan, **{name: math.nan for name in TABLE_MOMENTS}, **_NO_RESOLUTION}
 
 
 def _axes(owner: str, name: str, value) -> dict:
@@ -209,8 +212,8 @@ REFUSED = "refused: "
 
 
 def _failed(message: str) -> dict:
-    return {"status": "failed", "message": message, "wall_seconds": 0.0, "steps": 0,
-            "time": 0.0, **{name: math.nan for name in TABLE_MOMENTS}, **_NO_RESOLUTION}
+    return {**_PENDING, "status": "failed", "message": message, "wall_seconds": 0.0,
+            "time": 0.0}
 
 
 def run_point(description: dict, path: str, poll: float = 1.0,
@@ -291,10 +294,8 @@ def _write_table(root: zarr.Group, names, points, rows) -> None:
         numeric = all(isinstance(v, (int, float)) for v in values)      # bool is an int
         columns[key] = numpy.array([float(v) for v in values] if numeric
                                    else [_text(v) for v in values])
-    empty = {"status": "pending", "message": "", "wall_seconds": math.nan, "steps": 0,
-             "time": math.nan, **{m: math.nan for m in TABLE_MOMENTS}, **_NO_RESOLUTION}
-    for field, default in empty.items():
-        values = [rows.get(n, empty)[field] for n in names]
+    for field, default in _PENDING.items():
+        values = [rows.get(n, _PENDING)[field] for n in names]
         columns[field] = numpy.array(values, dtype=str if isinstance(default, str) else float)
     group = root.require_group("table")
     for key, values in columns.items():
@@ -520,10 +521,6 @@ _RESULTS = {
                                         "(grid.n_modes, grid.support_radius); empty when f "
                                         "was resolved"},
 }
-_PENDING = {"status": "pending", "message": "", "wall_seconds": math.nan, "steps": 0,
-            "time": math.nan, **{name: math.nan for name in TABLE_MOMENTS}, **_NO_RESOLUTION}
-
-
 def _sweep_metadata(path, owner: str) -> dict:
     """The ``granframe_sweep`` attributes of the sweep store at ``path``, or a clear error."""
     if not isinstance(path, (str, os.PathLike)):
