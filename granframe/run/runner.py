@@ -373,8 +373,8 @@ class HealthObserver(Observer):
 
 class ResolutionObserver(Observer):
     """At every output point: the resolution indicators of f
-    (:func:`~granframe.velocity.estimators.resolution_report`: one FFT and two sums) into
-    ``state.resolution``, which the next commit keeps."""
+    (:func:`~granframe.velocity.estimators.resolution_report`: an FFT of f, and one of |f|
+    padded to 2N per axis) into ``state.resolution``, which the next commit keeps."""
 
     def __init__(self, grid, xp, tolerance: float):
         self.grid, self.xp, self.tolerance = grid, xp, tolerance
