@@ -30,6 +30,9 @@ _EXPORTS = {
     "CollisionKernel": "granframe.abc",
     "open_run": "granframe.run.dataset",
     "open_sweep": "granframe.run.sweep",
+    "ConservativeCorrection": "granframe.equations.conservative",
+    "run_in_memory": "granframe.run.runner",
+    "time_step_limit": "granframe.stepping.stability",
 }
 
 
@@ -98,4 +101,7 @@ __all__ = [
     "collision_operator", "CollisionKernel",
     "open_run",
     "open_sweep",
+    "ConservativeCorrection",
+    "run_in_memory",
+    "time_step_limit",
 ]

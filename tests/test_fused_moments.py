@@ -21,6 +21,9 @@ def test_fused_moments_match_the_single_moment_methods(dimension, n_modes, veloc
     numpy.testing.assert_allclose(fused["momentum"], grid.momentum(f), rtol=1e-13, atol=1e-15)
     numpy.testing.assert_allclose(fused["bulk_velocity"], grid.bulk_velocity(f), rtol=1e-12,
                                   atol=1e-15)
+    for name in ("pressure_tensor", "heat_flux"):
+        numpy.testing.assert_allclose(fused[name], getattr(grid, name)(f), rtol=1e-11,
+                                      atol=1e-14, err_msg=name)
     assert fused["min_f"] == f.min()
     assert fused["negative_mass_fraction"] == pytest.approx(
         numpy.maximum(-f, 0.0).sum() / numpy.abs(f).sum(), rel=1e-13)

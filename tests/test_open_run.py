@@ -19,7 +19,7 @@ from test_unbuilt_description import _refuse_building_cupy, write_gpu_store
 
 VARIABLES = {"f", "snapshot_step", "snapshot_dt_next", "step", "dt", "mass", "temperature",
              "kinetic_energy", "min_f", "negative_mass_fraction", "kurtosis", "sonine_a2",
-             "momentum"}
+             "momentum", "pressure_tensor", "heat_flux"}
 
 
 @pytest.fixture(scope="module")
@@ -46,18 +46,21 @@ def netcdf_value(value) -> bool:
 def test_open_run_labels_every_array_with_dimensions_coordinates_and_units(finished):
     ds = gf.open_run(finished)
     assert "open_run" in gf.__all__
-    assert dict(ds.sizes) == {"time": 5, "step_time": 21, "v1": 32, "v2": 32, "axis": 2}
-    assert set(ds.coords) == {"time", "step_time", "v1", "v2", "axis"}
+    assert dict(ds.sizes) == {"time": 5, "step_time": 21, "v1": 32, "v2": 32, "axis": 2,
+                              "axis2": 2}
+    assert set(ds.coords) == {"time", "step_time", "v1", "v2", "axis", "axis2"}
     assert set(ds.data_vars) == VARIABLES
     assert ds.f.dims == ("time", "v1", "v2") and ds.momentum.dims == ("step_time", "axis")
     assert ds.temperature.dims == ds.step.dims == ("step_time",)
     assert ds.snapshot_step.dims == ("time",)
-    assert list(ds.axis.values) == ["v1", "v2"]
+    assert list(ds.axis.values) == list(ds.axis2.values) == ["v1", "v2"]
+    assert ds.pressure_tensor.dims == ("step_time", "axis", "axis2")
+    assert ds.heat_flux.dims == ("step_time", "axis")
     assert ds.f.dtype == ds.time.dtype == ds.mass.dtype == numpy.float64
     assert ds.step.dtype == ds.snapshot_step.dtype == numpy.int64
     numpy.testing.assert_allclose(ds.time.values, [0, 0.25, 0.5, 0.75, 1.0], atol=1e-14)
     for name, variable in ds.variables.items():
-        if name != "axis":
+        if name not in ("axis", "axis2"):
             assert variable.attrs["units"] == "1", name
         assert variable.attrs["long_name"], name
     assert ds.f.attrs["long_name"] == "distribution function f(t, v)"
@@ -90,7 +93,7 @@ def test_open_run_gives_flat_cf_root_attributes(finished):
 def test_open_run_values_are_the_stores_arrays(finished):
     ds = gf.open_run(finished)
     group = zarr.open_group(str(finished), mode="r")
-    assert sorted(group.array_keys()) == sorted(set(ds.variables) - {"axis"})
+    assert sorted(group.array_keys()) == sorted(set(ds.variables) - {"axis", "axis2"})
     for name in group.array_keys():
         numpy.testing.assert_array_equal(ds[name].values, group[name][:], err_msg=name)
 

@@ -176,9 +176,14 @@ class RescaledBoltzmann(HomogeneousBoltzmann):
         g(0) = f0 (backend array): fixes u and a_0.
     knudsen, penalty : float
         As for :class:`~granframe.equations.homogeneous.HomogeneousBoltzmann`.
+    dissipation : float or None
+        int Q(g0, g0) |xi - u|^2 dxi, the numerator of a_0 (before the 1/eps); None: from
+        the operator, one evaluation of Q. :func:`granframe.stepping.stability.time_step_limit`
+        gives an estimate in closed form, to have the step limit without the operator.
     """
 
-    def __init__(self, operator, initial, knudsen: float = 1.0, penalty: float = 2.0):
+    def __init__(self, operator, initial, knudsen: float = 1.0, penalty: float = 2.0,
+                 dissipation: float | None = None):
         kernel = operator.kernel
         degree = check_rescalable(kernel, operator.restitution, 0.0, "RescaledBoltzmann")
         super().__init__(operator, 0.0, knudsen, penalty)
@@ -206,7 +211,9 @@ class RescaledBoltzmann(HomogeneousBoltzmann):
             derivative.append(backend.asarray(symbol))
         self._derivative = derivative
         weight = backend.asarray(radius ** 2 * grid.cell_volume)
-        dissipation = float(xp.sum(operator(initial) * weight)) / self.knudsen
+        if dissipation is None:
+            dissipation = float(xp.sum(operator(initial) * weight))
+        dissipation = dissipation / self.knudsen
         transport = float(xp.sum(self.divergence(initial) * weight))
         rate = dissipation / transport if transport else 0.0
         if not (math.isfinite(rate) and rate >= 0.0):

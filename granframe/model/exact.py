@@ -109,3 +109,161 @@ def heated_maxwell_law(kernel, restitution, heat_bath: float, knudsen: float = 1
                                           heat_bath, density / knudsen)
 
     return law
+
+
+def _maxwell_pressure_coefficients(kernel, restitution: float, dimension: int):
+    """(a1, a2) with int Q(f,f) v_i v_j dv = rho (a1 P_ij + a2 tr(P) delta_ij) for Maxwell
+    molecules B = C b(cos theta) and a constant restitution e (see
+    :func:`maxwell_pressure_rate`)."""
+    if not kernel.is_maxwellian or getattr(kernel, "energy_exponent", 0.0) != 0.0:
+        check.reject("maxwell_pressure_rate", "kernel", kernel,
+                     "must be a Maxwell-molecule kernel (constant speed part, no energy factor)")
+    if not check.is_real(restitution) or not 0.0 <= restitution <= 1.0:
+        check.reject("maxwell_pressure_rate", "restitution", restitution,
+                     "must be a constant restitution coefficient in [0, 1]")
+    d, e = dimension, float(restitution)
+    b0 = kernel.angular_integral(d)
+    b1 = kernel.angular_integral(d, lambda t: t)
+    b2 = kernel.angular_integral(d, lambda t: t * t)
+    alpha1, alpha2 = (b0 - b2) / (d - 1), (d * b2 - b0) / (d - 1)
+    a, b = (1.0 - e) / 4.0, (1.0 + e) / 4.0
+    C = kernel.prefactor(d)
+    return (C * (2 * a * a * b0 + 4 * a * b * b1 + 2 * b * b * alpha2 - b0 / 2),
+            C * 2 * b * b * alpha1)
+
+
+def _pressure_argument(owner, pressure):
+    try:
+        P = numpy.asarray(pressure, dtype=float)
+    except (TypeError, ValueError):
+        P = numpy.empty(0)
+    if (P.ndim != 2 or P.shape[0] != P.shape[1] or P.shape[0] not in (2, 3)
+            or not numpy.isfinite(P).all()):
+        shown = P.tolist() if P.size else pressure
+        check.reject(owner, "pressure", shown, "must be a 2 x 2 or 3 x 3 matrix of finite "
+                     "real numbers")
+    return P
+
+
+def maxwell_pressure_rate(pressure, density: float, restitution: float, kernel,
+                          heat_bath: float = 0.0, knudsen: float = 1.0):
+    """Exact dP/dt of the pressure tensor for Maxwell molecules and a constant e.
+
+    For d_t f = Q(f,f)/eps + tau Delta f, P_ij = int (v-u)_i (v-u)_j f dv obeys the closed
+    linear ODE
+
+        dP/dt = (rho/eps) (a1 P + a2 tr(P) I) + 2 tau rho I,
+
+    which for the review's kernel (B = 1/(2 pi) in 2D, 1/(4 pi) in 3D, b = 1) reads
+
+        dP/dt = (rho/eps) (-(1+e)(3-e)/8 P + (1+e)^2/(8d) tr(P) I) + 2 tau rho I.
+
+    Derivation (weak form, sigma-representation). With g = v - v_*, V = (v + v_*)/2 and
+    w = (1-e)/4 g + (1+e)/4 |g| sigma, v' = V + w and v'_* = V - w, so
+
+        v'_i v'_j + v'_*i v'_*j - v_i v_j - v_*i v_*j = 2 w_i w_j - g_i g_j / 2.
+
+    Over the sphere, with t = ghat.sigma, int b sigma dsigma = beta1 ghat and
+    int b sigma_i sigma_j dsigma = alpha1 delta_ij + alpha2 ghat_i ghat_j, where
+    beta0 = int b, beta1 = int b t, beta2 = int b t^2, alpha1 = (beta0 - beta2)/(d-1),
+    alpha2 = (d beta2 - beta0)/(d-1) (alpha1 = |S^{d-1}|/d, alpha2 = beta1 = 0 for b = 1).
+    Writing a = (1-e)/4, b = (1+e)/4 and using int int f f_* g_i g_j = 2 rho P_ij
+    (momentum is conserved),
+
+        int Q v_i v_j = (C/2) int int f f_* int_S b (2 w_i w_j - g_i g_j/2) dsigma
+                      = rho (a1 P_ij + a2 tr(P) delta_ij),
+        a1 = C (2 a^2 beta0 + 4 a b beta1 + 2 b^2 alpha2 - beta0/2),  a2 = 2 C b^2 alpha1,
+
+    and int Delta f v_i v_j = 2 rho delta_ij; mass and momentum are conserved, so
+    dP/dt = d/dt int v_i v_j f. The trace, a1 + d a2 = -(1-e^2) C (beta0 - beta1)/4, is
+    :func:`maxwell_energy_dissipation` (C |S^{d-1}| = 1 for the review's kernel).
+
+    Parameters
+    ----------
+    pressure : array_like
+        P, d x d.
+    density : float
+        rho (constant in time).
+    restitution : float
+        The constant e in [0, 1].
+    kernel : granframe.model.kernels.VariableHardSpheres
+        A Maxwell-molecule kernel (its C and b enter through a1 and a2).
+    heat_bath, knudsen : float
+        tau and eps.
+
+    Returns
+    -------
+    numpy.ndarray
+        dP/dt, d x d.
+    """
+    P = _pressure_argument("maxwell_pressure_rate", pressure)
+    d = len(P)
+    a1, a2 = _maxwell_pressure_coefficients(kernel, restitution, d)
+    return (density / knudsen * (a1 * P + a2 * numpy.trace(P) * numpy.eye(d))
+            + 2.0 * heat_bath * density * numpy.eye(d))
+
+
+def maxwell_pressure_tensor(time, initial_pressure, density: float, restitution: float,
+                            kernel, heat_bath: float = 0.0, knudsen: float = 1.0):
+    """The pressure tensor P(t) of Maxwell molecules with a constant e, in closed form.
+
+    Solves the ODE of :func:`maxwell_pressure_rate`, dP/dt = (rho/eps)(a1 P + a2 tr(P) I)
+    + 2 tau rho I, from P(0) = P0. Its isotropic part tr(P)/d I = rho T I and its
+    traceless part D = P - tr(P)/d I decouple:
+
+        T(t) = T0 exp(-k_T t) + 2 tau (1 - exp(-k_T t)) / k_T,   k_T = -(rho/eps)(a1 + d a2),
+        D(t) = D0 exp(-k_D t),                                     k_D = -(rho/eps) a1,
+
+    (T = T0 + 2 tau t when k_T = 0, e = 1). For the review's kernel k_T = rho (1-e^2)/(4 eps),
+    the law of :func:`heated_maxwell_temperature`, and
+
+        k_D = rho (1+e)(3-e) / (8 eps)
+
+    in 2D and 3D alike (rho/(2 eps) when elastic): the anisotropy relaxes faster than the
+    temperature cools, so an anisotropic state tends to the isotropic homogeneous cooling
+    (or heated) state.
+
+    Parameters
+    ----------
+    time : float or array_like
+        Times t >= 0.
+    initial_pressure : array_like
+        P0, d x d.
+    density, restitution, kernel, heat_bath, knudsen
+        As for :func:`maxwell_pressure_rate`.
+
+    Returns
+    -------
+    numpy.ndarray
+        P(t), of shape ``numpy.shape(time) + (d, d)``.
+    """
+    P0 = _pressure_argument("maxwell_pressure_tensor", initial_pressure)
+    d = len(P0)
+    a1, a2 = _maxwell_pressure_coefficients(kernel, restitution, d)
+    t = numpy.asarray(time, dtype=float)[..., None, None]
+    k_T, k_D = -density / knudsen * (a1 + d * a2), -density / knudsen * a1
+    T0 = numpy.trace(P0) / (d * density)
+    growth = t if k_T == 0.0 else -numpy.expm1(-k_T * t) / k_T      # int_0^t exp(-k_T s) ds
+    T = T0 * numpy.exp(-k_T * t) + 2.0 * heat_bath * growth
+    identity = numpy.eye(d)
+    return density * T * identity + (P0 - T0 * density * identity) * numpy.exp(-k_D * t)
+
+
+def maxwell_pressure_law(kernel, restitution, heat_bath: float, knudsen: float = 1.0):
+    """The exact pressure-tensor law P(t, P0, rho0) of a run, or ``None`` where none is known.
+
+    It exists for Maxwell molecules (any constant C and angular part b, no energy factor)
+    and a constant restitution coefficient: :func:`maxwell_pressure_tensor`.
+    """
+    from granframe.model.kernels import VariableHardSpheres
+    from granframe.model.restitution import Constant
+
+    if (not isinstance(kernel, VariableHardSpheres) or not kernel.is_maxwellian
+            or kernel.energy_exponent != 0.0 or not isinstance(restitution, Constant)):
+        return None
+
+    def law(time, initial_pressure, density):
+        return maxwell_pressure_tensor(time, initial_pressure, density, restitution.value,
+                                       kernel, heat_bath, knudsen)
+
+    return law

@@ -132,24 +132,129 @@ class BKWProfile(InitialCondition):
         return 1.0
 
 
+def _covariance(value):
+    """A nested list or array of real numbers as a tuple of tuples of floats (hashable, so
+    the initial condition stays frozen); anything else passes to the validator."""
+    try:
+        array = numpy.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return value
+    if array.ndim != 2 or isinstance(value, str):
+        return value
+    return tuple(tuple(float(x) for x in row) for row in array)
+
+
+#: Largest asymmetry max |Sigma - Sigma^T| / max |Sigma| of a covariance accepted as
+#: symmetric: the round-off of a matrix computed in float64, far below any data.
+SYMMETRY_TOLERANCE = 1e-12
+
+
+def _check_covariance(instance, attribute, value):
+    owner = type(instance).__name__
+    try:
+        array = numpy.asarray(value, dtype=object)
+    except ValueError:      # ragged rows
+        array = numpy.empty(0, dtype=object)
+    if (array.ndim != 2 or array.shape[0] != array.shape[1] or array.shape[0] not in (2, 3)
+            or not all(check.is_real(x) and math.isfinite(float(x)) for x in array.flat)):
+        check.reject(owner, attribute.name, value, "must be a 2 x 2 or 3 x 3 matrix (a list "
+                     "of rows) of finite real numbers")
+    matrix = array.astype(float)
+    asymmetry = float(numpy.abs(matrix - matrix.T).max())
+    if asymmetry > SYMMETRY_TOLERANCE * float(numpy.abs(matrix).max()):
+        check.reject(owner, attribute.name, value,
+                     f"must be symmetric (max |Sigma - Sigma^T| = {asymmetry:.3g})")
+    smallest = float(numpy.linalg.eigvalsh(matrix).min())
+    if not smallest > 0.0:
+        check.reject(owner, attribute.name, value, "must be positive definite (a covariance); "
+                     f"its smallest eigenvalue is {smallest:.6g}")
+    if instance.velocity is not None and len(instance.velocity) != len(matrix):
+        check.reject(owner, attribute.name, value, f"must be {len(instance.velocity)} x "
+                     f"{len(instance.velocity)}, as the velocity has "
+                     f"{len(instance.velocity)} components")
+
+
+@attrs.frozen
+class Gaussian(InitialCondition):
+    """An anisotropic Gaussian of covariance Sigma (a component of :class:`GaussianMixture`):
+
+        G(v) = rho (2 pi)^{-d/2} det(Sigma)^{-1/2} exp(-(v - u)^T Sigma^{-1} (v - u) / 2).
+
+    Its pressure tensor is rho Sigma, its temperature tr(Sigma) / d and its heat flux 0;
+    Sigma = T I is the Maxwellian of temperature T.
+
+    Parameters
+    ----------
+    covariance : list of lists of float
+        Sigma, a symmetric positive-definite d x d matrix (d = 2 or 3, the grid's
+        dimension), given as a list of rows.
+    density : float
+        rho > 0.
+    velocity : list of float, optional
+        u (d components); 0 by default.
+    """
+
+    covariance: tuple = attrs.field(converter=_covariance)
+    density: float = attrs.field(default=1.0, converter=check.to_float,
+                                 validator=check.real(0.0, math.inf, lower_open=True))
+    velocity: tuple | None = attrs.field(default=None, converter=_tuple_or_none,
+                                         validator=_velocity)
+
+    def __attrs_post_init__(self):     # after velocity, against which Sigma is checked
+        _check_covariance(self, attrs.fields(Gaussian).covariance, self.covariance)
+
+    def sample(self, grid):
+        _check_dimension("Gaussian", self.velocity, grid)
+        sigma = numpy.array(self.covariance)
+        d = grid.dimension
+        if sigma.shape != (d, d):
+            check.reject("Gaussian", "covariance", [list(row) for row in self.covariance],
+                         f"must be a {d} x {d} matrix (the grid's dimension is {d})")
+        inverse = numpy.linalg.inv(sigma)
+        u = self.velocity or (0.0,) * d
+        c = [component - ui for component, ui in zip(grid.mesh(), u)]
+        exponent = sum(inverse[i, j] * c[i] * c[j] for i in range(d) for j in range(d))
+        norm = self.density / math.sqrt((2 * math.pi) ** d * numpy.linalg.det(sigma))
+        return norm * numpy.exp(-0.5 * exponent)
+
+    @property
+    def intended_mass(self):
+        return self.density
+
+
 def _components(value):
-    if isinstance(value, (list, tuple)):
-        return tuple(check.from_table(Maxwellian, c, "GaussianMixture") if isinstance(c, dict)
-                     else c for c in value)
-    return value
+    """Tables of a mixture as its components: a :class:`Gaussian` where the table gives a
+    covariance, a :class:`Maxwellian` otherwise."""
+    if not isinstance(value, (list, tuple)):
+        return value
+    components = []
+    for index, c in enumerate(value):
+        if isinstance(c, dict) and "covariance" in c:
+            if "temperature" in c:
+                check.reject("GaussianMixture", f"components[{index}].temperature",
+                             c["temperature"], "must not be given together with a covariance: "
+                             "a component has a temperature T (covariance T I) or a "
+                             "covariance matrix, not both")
+            c = check.from_table(Gaussian, c, "GaussianMixture")
+        elif isinstance(c, dict):
+            c = check.from_table(Maxwellian, c, "GaussianMixture")
+        components.append(c)
+    return tuple(components)
 
 
 def _check_components(instance, attribute, value):
     if (not isinstance(value, tuple) or not value
-            or not all(isinstance(c, Maxwellian) for c in value)):
+            or not all(isinstance(c, (Maxwellian, Gaussian)) for c in value)):
         check.reject("GaussianMixture", "components", value,
                      "must be a non-empty list of Maxwellians (tables with density, "
-                     "velocity, temperature)", error=TypeError)
+                     "velocity, temperature) or Gaussians (tables with density, velocity, "
+                     "covariance)", error=TypeError)
 
 
 @attrs.frozen
 class GaussianMixture(InitialCondition):
-    """Sum of Maxwellians, f0 = sum_i M_i (each given by density, velocity, temperature)."""
+    """Sum of Gaussians, f0 = sum_k G_k: Maxwellians (density, velocity, temperature) or
+    anisotropic Gaussians (density, velocity, covariance; :class:`Gaussian`)."""
 
     components: tuple = attrs.field(converter=_components, validator=_check_components)
 
@@ -159,6 +264,47 @@ class GaussianMixture(InitialCondition):
     @property
     def intended_mass(self):
         return sum(c.density for c in self.components)
+
+    def exact_moments(self, dimension: int) -> dict:
+        """Mass, momentum, pressure tensor and heat flux of f0 in R^d, in closed form.
+
+        With rho_k, u_k, Sigma_k the density, velocity and covariance of component k
+        (Sigma_k = T_k I for a Maxwellian), rho = sum_k rho_k, u = sum_k rho_k u_k / rho
+        and d_k = u_k - u, the Gaussian moments E[z] = 0, E[z z^T] = Sigma_k,
+        E[z_i z_j z_l] = 0 give
+
+            P = sum_k rho_k (Sigma_k + d_k d_k^T),
+            q = (1/2) sum_k rho_k (d_k (|d_k|^2 + tr Sigma_k) + 2 Sigma_k d_k).
+
+        Returns
+        -------
+        dict
+            ``mass`` (float), ``momentum`` (length d), ``pressure_tensor`` (d x d) and
+            ``heat_flux`` (length d), NumPy arrays.
+        """
+        if dimension not in (2, 3):
+            check.reject("GaussianMixture.exact_moments", "dimension", dimension, "must be 2 or 3")
+        rho, u, sigma = [], [], []
+        for c in self.components:
+            velocity = (0.0,) * dimension if c.velocity is None else c.velocity
+            covariance = (numpy.array(c.covariance) if isinstance(c, Gaussian)
+                          else c.temperature * numpy.eye(dimension))
+            if len(velocity) != dimension or covariance.shape != (dimension, dimension):
+                check.reject("GaussianMixture.exact_moments", "dimension", dimension,
+                             f"must be the dimension of the component {c!r}")
+            rho.append(c.density)
+            u.append(numpy.array(velocity))
+            sigma.append(covariance)
+        mass = sum(rho)
+        momentum = sum(r * v for r, v in zip(rho, u))
+        mean = momentum / mass
+        pressure, flux = numpy.zeros((dimension, dimension)), numpy.zeros(dimension)
+        for r, v, s in zip(rho, u, sigma):
+            shift = v - mean
+            pressure += r * (s + numpy.outer(shift, shift))
+            flux += 0.5 * r * (shift * (shift @ shift + numpy.trace(s)) + 2.0 * s @ shift)
+        return {"mass": mass, "momentum": momentum, "pressure_tensor": pressure,
+                "heat_flux": flux}
 
 
 def resolve_callable(owner: str, name: str, value) -> Callable:

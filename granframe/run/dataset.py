@@ -38,9 +38,17 @@ def open_run(path) -> xarray.Dataset:
         read when used):
 
         - dimensions ``time`` (committed snapshots), ``step_time`` (committed moment
-          records, one per step, t = 0 first), ``v1`` ... ``vd`` and ``axis`` (d);
-        - coordinates ``time``, ``step_time``, ``v1`` ... ``vd`` (the grid points) and
-          ``axis`` (the names ``v1`` ... ``vd``, the components of ``momentum``);
+          records, one per step, t = 0 first), ``v1`` ... ``vd``, ``axis`` (d) and
+          ``axis2`` (d, the second index of ``pressure_tensor``);
+        - coordinates ``time``, ``step_time``, ``v1`` ... ``vd`` (the grid points),
+          ``axis`` (the names ``v1`` ... ``vd``, the components of ``momentum``,
+          ``heat_flux`` and the rows of ``pressure_tensor``) and ``axis2`` (the same names,
+          the columns of ``pressure_tensor``);
+        - the moment records along ``step_time``: the scalars (``mass``, ``temperature``,
+          ...), ``momentum`` and ``heat_flux`` q_i = int (v-u)_i |v-u|^2 f dv / 2
+          (``step_time``, ``axis``) and ``pressure_tensor``
+          P_ij = int (v-u)_i (v-u)_j f dv (``step_time``, ``axis``, ``axis2``); a store
+          written before granframe recorded the last two has neither (nor ``axis2``);
         - per variable, ``long_name`` and ``units`` ("1": every quantity is
           dimensionless, the root attribute ``nondimensionalisation`` says in which
           units);
@@ -49,7 +57,10 @@ def open_run(path) -> xarray.Dataset:
           ``description_toml`` (the run's description as TOML text), the flattened
           ``provenance_*``, ``rescaling_*`` (rescaled runs) and ``f0_projection_*``,
           and ``progress_*``, the state of the last commit (``progress_status``:
-          finished, running, interrupted or failed).
+          finished, running, interrupted or failed; ``progress_resolution_*`` and
+          ``progress_accuracy_*``, the resolution indicators and the accuracy monitors
+          of :mod:`granframe.run.monitors`: ``progress_accuracy_values_temperature``,
+          ``progress_accuracy_flagged_step``, ``progress_accuracy_warnings``, ...).
 
     Raises
     ------
@@ -79,19 +90,32 @@ def open_run(path) -> xarray.Dataset:
     if problems:
         raise StoreDamagedError(f"open_run: store '{path}' is damaged: {summarise(problems)} "
                                 "(granframe check lists every problem)", problems)
-    meta = store.metadata
-    snapshots, records = store.snapshot_count, int(store.progress["records"])
-    if snapshots == 0:
+    if store.snapshot_count == 0:
         raise StoreDamagedError(f"open_run: store '{path}' holds no commit: its creation was "
                                 "cut short (a store is put in place with its first commit); "
                                 "run it again")
-    dataset = xarray.open_zarr(store.path, consolidated=False, chunks=None)
+    return run_dataset(store)
+
+
+def run_dataset(store: RunStore) -> xarray.Dataset:
+    """The committed contents of an open :class:`RunStore` (on disk or in memory), labelled
+    as :func:`open_run` describes; ``f`` is read lazily from the store."""
+    meta = store.metadata
+    snapshots, records = store.snapshot_count, int(store.progress["records"])
+    dataset = xarray.open_zarr(store.group.store if store.path is None else store.path,
+                               consolidated=False, chunks=None)
     dataset = dataset.isel(time=slice(0, snapshots), step_time=slice(0, records))
     dataset = dataset.drop_encoding()       # the zarr codecs and chunks: no netCDF encoding
-    dimension = dataset.sizes["axis"]
-    dataset = dataset.assign_coords(axis=[f"v{i + 1}" for i in range(dimension)])
+    names = [f"v{i + 1}" for i in range(dataset.sizes["axis"])]
+    dataset = dataset.assign_coords(axis=names)
+    if "axis2" in dataset.dims:
+        dataset = dataset.assign_coords(axis2=names)
     for name, variable in dataset.variables.items():
         variable.attrs = array_attributes(name)
-    dataset["axis"].attrs = {"long_name": "velocity component of momentum"}
+    dataset["axis"].attrs = {"long_name": "velocity component of momentum, heat flux and "
+                                          "the first index of the pressure tensor"}
+    if "axis2" in dataset.dims:
+        dataset["axis2"].attrs = {"long_name": "velocity component of the second index of "
+                                               "the pressure tensor"}
     dataset.attrs = {**root_attributes(meta), **flat_attributes("progress", meta["progress"])}
     return dataset

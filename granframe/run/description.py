@@ -55,9 +55,26 @@ from granframe.velocity.grid import VelocityGrid
 from granframe.model.initial import callable_reference, resolve_callable
 from granframe.registry import default_registries
 from granframe.equations.rescaled import check_rescalable
+from granframe.equations.conservative import WEIGHTS as CONSERVATIVE_WEIGHTS
 
 #: Tolerance on "final_time and snapshot_interval are whole multiples of time_step".
 _MULTIPLE_TOLERANCE = 1e-9
+
+
+def fixed_steps(final_time: float, time_step: float) -> tuple[int, float]:
+    """The full steps of a fixed-step run to ``final_time``, and the short last step.
+
+    Returns ``(full, last)``: ``full`` steps of ``time_step`` (step n ends at t = n
+    time_step), then, when ``final_time`` is not a whole multiple of ``time_step``, one
+    step of ``last`` = final_time - full time_step < time_step that ends at final_time
+    exactly (``last`` = 0.0 when there is none), as ODE solvers shorten their last step. A
+    ratio within :data:`_MULTIPLE_TOLERANCE` (relative) of a whole number counts as one.
+    """
+    ratio = final_time / time_step
+    if abs(ratio - round(ratio)) <= _MULTIPLE_TOLERANCE * max(1.0, ratio):
+        return round(ratio), 0.0
+    full = math.floor(ratio)
+    return full, final_time - full * time_step
 
 #: Most fixed steps of a run. Every step writes a moment record (about 100 bytes) to the
 #: store and takes at least a few operator evaluations (0.1 ms each on the smallest grids),
@@ -198,6 +215,20 @@ class Health:
         Refuse, before the first step, a fixed time step above the integrator's
         explicit stability limit (:mod:`granframe.stepping.stability`). Set it false only to
         study the instability itself; the step-by-step checks then stop the run.
+    accuracy_tolerance : float
+        Largest value of each accuracy monitor (:mod:`granframe.run.monitors`) before the
+        run warns: the momentum drift |J - J(0)| / (rho(0) sqrt T), the relative distance
+        |T / T_law - 1| of the temperature from its exact law (where the run has one),
+        the shares of mass and energy beyond the edge radius 2L - R - S, and the error the
+        spectral tail predicts. The default 1e-3 is the resolution tolerance's: a
+        converged run stays far below it (the heated 2D Maxwell law of the tests holds to
+        5e-6), while the run-away of a rescaled 3D Maxwell run with Lebedev 11 passes it
+        with a2 1.4 % off (docs/runner.md, "Accuracy monitors"). The warnings are kept with
+        each commit and shown by ``granframe info`` and the figures' captions, naming the
+        setting to raise.
+    stop_on_accuracy : bool
+        Stop the run (a failed health check, :class:`~granframe.run.runner.HealthError`)
+        when a monitor exceeds ``accuracy_tolerance``, instead of warning.
     """
 
     mass_tolerance: float = attrs.field(default=1e-8, converter=check.to_float,
@@ -216,6 +247,21 @@ class Health:
         default=1.0, converter=check.to_float,
         validator=check.real(0.0, math.inf, lower_open=True))
     step_limit: bool = attrs.field(default=True, validator=check.boolean)
+    accuracy_tolerance: float = attrs.field(default=1e-3, converter=check.to_float,
+                                            validator=check.real(0.0, 1.0, lower_open=True))
+    stop_on_accuracy: bool = attrs.field(default=False, validator=check.boolean)
+
+    def to_dict(self) -> dict:
+        """The options as a table; those added after stores began recording them
+        (:data:`_LATER_HEALTH`) only when set, so that a store written before them is
+        the same description and resumes."""
+        return {key: value for key, value in attrs.asdict(self).items()
+                if not (key in _LATER_HEALTH
+                        and value == attrs.fields_dict(Health)[key].default)}
+
+
+#: Health options a store written before them does not name (left out at their default).
+_LATER_HEALTH = ("accuracy_tolerance", "stop_on_accuracy")
 
 
 def _table(cls):
@@ -296,6 +342,21 @@ def _check_fields(cls, params: dict) -> None:
             field.validator(stub, field, getattr(stub, field.name))
 
 
+def _conservative_weight(value):
+    """``conservative`` as the weight name it means: true -> the default weight, false ->
+    None (no correction); anything else is left for :func:`_check_conservative`."""
+    if value is True:
+        return CONSERVATIVE_WEIGHTS[0]
+    return None if value is False else value
+
+
+def _check_conservative(instance, attribute, value):
+    """Refuse a ``conservative`` that is neither None nor a weight name."""
+    if value is not None and (not isinstance(value, str) or value not in CONSERVATIVE_WEIGHTS):
+        check.reject("RunDescription", attribute.name, value, "must be true, false or a "
+                     f"weight name: {', '.join(CONSERVATIVE_WEIGHTS)}")
+
+
 @attrs.frozen(kw_only=True)
 class RunDescription:
     r"""A run of :math:`\partial_t f = Q(f, f)/\varepsilon + \tau \Delta_v f` from f0 to ``final_time``.
@@ -316,8 +377,9 @@ class RunDescription:
         Registered time integrator (default ``rk4``, the review's).
     time_step : float or None
         dt of fixed-step integrators (required for them); the first trial step
-        of adaptive ones. final_time and the snapshot interval must be whole
-        multiples of it, so that outputs fall on steps.
+        of adaptive ones. The snapshot interval must be a whole multiple of it, so
+        that outputs fall on steps; a final_time that is not one ends with a shorter
+        step (:func:`fixed_steps`).
     tolerance : float or None
         Error tolerance of adaptive integrators (required for them).
     heat_bath : float
@@ -329,6 +391,15 @@ class RunDescription:
         the stored f is g(s, xi) and the run's times are the rescaled time s
         (final_time, time_step and the snapshot interval too); the map to the physical
         t and f is stored with the run (``RunStore.metadata["rescaling"]``).
+    conservative : bool or str
+        Correct Q so that the grid conserves mass and momentum exactly and dissipates
+        exactly the energy D(f) of the continuous operator
+        (:class:`~granframe.equations.conservative.ConservativeCorrection`). ``true``
+        takes the default weight ``"maxwellian"``; a weight name (``"maxwellian"``,
+        ``"distribution"``, ``"uniform"``) chooses it; ``false`` (the default) leaves Q
+        as the operator computes it. Stored as the weight name. The penalised
+        integrators at dt >> eps need it: they amplify Q's energy defect by dt/eps
+        (docs/conservative.md).
     output : Output
     health : Health
     title : str
@@ -353,6 +424,8 @@ class RunDescription:
     knudsen: float = attrs.field(default=1.0, converter=check.to_float,
                                  validator=check.real(0.0, math.inf, lower_open=True))
     rescaled: bool = attrs.field(default=False, validator=check.boolean)
+    conservative: str | None = attrs.field(default=None, converter=_conservative_weight,
+                                           validator=_check_conservative)
     output: Output = attrs.field(factory=Output, converter=_table(Output),
                                  validator=instance_of(Output, "an Output table"))
     health: Health = attrs.field(factory=Health, converter=_table(Health),
@@ -407,16 +480,20 @@ class RunDescription:
             if self.tolerance is not None:
                 check.reject(owner, "tolerance", self.tolerance,
                              f"applies to adaptive integrators only, not to '{name}'")
-            for field in ("final_time", "snapshot_interval"):
-                value = (self.final_time if field == "final_time"
-                         else self.output.snapshot_interval)
-                if value is None:
-                    continue
-                ratio = value / self.time_step
+            # final_time need not be a multiple: the last step is shortened (fixed_steps).
+            # Snapshot times must be step ends: shortening a step before each of them
+            # would make the solution depend on the output schedule.
+            interval = self.output.snapshot_interval
+            if interval is not None:
+                ratio = interval / self.time_step
                 if (round(ratio) < 1
                         or abs(ratio - round(ratio)) > _MULTIPLE_TOLERANCE * max(1.0, ratio)):
-                    check.reject(owner, field, value, f"must be a whole multiple (>= 1) of "
-                                 f"time_step = {self.time_step!r} (ratio {ratio:.12g})")
+                    whole = max(1, round(ratio))
+                    check.reject(owner, "snapshot_interval", interval,
+                                 f"must be a whole multiple (>= 1) of time_step = "
+                                 f"{self.time_step!r} (ratio {ratio:.12g}), so that snapshots "
+                                 f"fall on step ends and the output schedule never changes "
+                                 f"the steps; e.g. {whole * self.time_step:.12g}")
         interval = self.output.snapshot_interval
         if interval is not None and interval > self.final_time:
             check.reject(owner, "output.snapshot_interval", interval,
@@ -462,9 +539,10 @@ class RunDescription:
         data = {"title": self.title, "final_time": self.final_time, "time_step": self.time_step,
                 "tolerance": self.tolerance, "heat_bath": self.heat_bath,
                 "knudsen": self.knudsen, "rescaled": self.rescaled or None,
+                "conservative": self.conservative,
                 "grid": attrs.asdict(self.grid),
                 **{field: getattr(self, field).to_dict(field) for field in COMPONENT_FAMILIES},
-                "output": attrs.asdict(self.output), "health": attrs.asdict(self.health)}
+                "output": attrs.asdict(self.output), "health": self.health.to_dict()}
         return json.loads(json.dumps(_plain("RunDescription", "description", data)))
 
     @classmethod

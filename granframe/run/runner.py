@@ -31,7 +31,8 @@ import zarr
 
 from granframe._version import __version__
 from granframe.backends import available_cpus
-from granframe.run.description import COMPONENT_FAMILIES, RunDescription
+from granframe.run.description import COMPONENT_FAMILIES, RunDescription, fixed_steps
+from granframe.equations.conservative import ConservativeCorrection
 from granframe.equations.homogeneous import HomogeneousBoltzmann
 from granframe.errors import NonFiniteError
 from granframe.model.initial import check_fits, check_projection
@@ -40,9 +41,10 @@ from granframe.memory import check_run_memory
 from granframe.stepping.stability import check_time_step
 from granframe.registry import default_registries
 from granframe.equations.rescaled import RescaledBoltzmann
-from granframe.run.storage import SCALAR_MOMENTS, RunStore, StoreExistsError
+from granframe.run.storage import SCALAR_MOMENTS, TENSOR_MOMENTS, RunStore, StoreExistsError
 from granframe.validators import distinct, reject
 from granframe.velocity.estimators import resolution_report
+from granframe.run.monitors import AccuracyMonitors
 
 _RUN_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 
@@ -139,6 +141,20 @@ def load_description(source, quick: bool = False) -> RunDescription:
     return study.runs[""]
 
 
+def run_in_memory(description: RunDescription, *, progress: bool | None = None):
+    """Run ``description`` in memory and return it as an :class:`xarray.Dataset`, equal to
+    what :func:`granframe.open_run` gives for the same run on disk
+    (:meth:`Simulation.run_in_memory`)."""
+    return Simulation(description).run_in_memory(progress=progress)
+
+
+def _dataset(store: RunStore):
+    """:func:`granframe.run.dataset.run_dataset` (xarray is imported on first use)."""
+    from granframe.run.dataset import run_dataset
+
+    return run_dataset(store)
+
+
 def check_run_modes(resume: bool, overwrite: bool) -> None:
     """Refuse ``resume`` together with ``overwrite``."""
     if resume and overwrite:
@@ -147,17 +163,28 @@ def check_run_modes(resume: bool, overwrite: bool) -> None:
 
 
 class HealthError(RuntimeError):
-    """A run stopped by a health check; the message says which check, when and by how much."""
+    """A run stopped by a health check; the message says which check, when and by how much.
+
+    ``dataset``: for a run held in memory, its contents up to the failing step (the
+    snapshots the last healthy states, the moments to the failing step); None otherwise.
+    """
+
+    dataset = None
+
+
+#: the moments recorded after every step (:func:`moments`)
+RECORDED_MOMENTS = ("momentum",) + SCALAR_MOMENTS + TENSOR_MOMENTS
 
 
 def moments(grid, f, xp) -> dict:
-    """Mass, momentum, temperature, energy, min f, negative-mass share, kurtosis, a2 of f.
+    """Mass, momentum, temperature, energy, min f, negative-mass share, kurtosis, a2,
+    pressure tensor and heat flux of f.
 
     One fused pass over f and one transfer to the host (:meth:`VelocityGrid.moments`);
     NaN where a moment is undefined (a zero mass).
     """
     fused = grid.moments(f, xp)
-    return {name: fused[name] for name in ("momentum",) + SCALAR_MOMENTS}
+    return {name: fused[name] for name in RECORDED_MOMENTS}
 
 
 def health_problem(record: dict, mass0: float, health) -> str | None:
@@ -192,6 +219,11 @@ class RunResult:
     #: the resolution warnings of the last output point
     #: (:func:`granframe.velocity.estimators.resolution_report`)
     warnings: tuple = ()
+    #: a run held in memory (``out`` None): its contents, as :func:`granframe.open_run`
+    #: gives them for a store on disk
+    dataset: object = attrs.field(default=None, repr=False, eq=False)
+    #: the accuracy warnings of the last output point (:mod:`granframe.run.monitors`)
+    accuracy_warnings: tuple = ()
 
 
 class _Records:
@@ -202,13 +234,13 @@ class _Records:
 
     @staticmethod
     def _empty():
-        return {name: [] for name in ("step_time", "step", "dt", "momentum") + SCALAR_MOMENTS}
+        return {name: [] for name in ("step_time", "step", "dt") + RECORDED_MOMENTS}
 
     def add(self, step: int, t: float, dt: float, record: dict) -> None:
         self.columns["step_time"].append(t)
         self.columns["step"].append(step)
         self.columns["dt"].append(dt)
-        for name in ("momentum",) + SCALAR_MOMENTS:
+        for name in RECORDED_MOMENTS:
             self.columns[name].append(record[name])
 
     def take(self) -> dict:
@@ -241,6 +273,8 @@ class RunState:
     record: dict | None = None
     #: the resolution indicators of f at the last output point
     resolution: dict | None = None
+    #: the accuracy monitors (:meth:`AccuracyMonitors.report`) at the last output point
+    accuracy: dict | None = None
 
     def progress(self, status: str, **extra) -> dict:
         """The progress entry of a commit made now."""
@@ -248,6 +282,7 @@ class RunState:
                 "dt_next": self.dt_next, "resumes": self.resumes,
                 **({"rollbacks": self.rollbacks} if self.rollbacks else {}),
                 **({"resolution": self.resolution} if self.resolution else {}),
+                **({"accuracy": self.accuracy} if self.accuracy else {}),
                 "wall_seconds": self.wall_before + time.perf_counter() - self.started, **extra}
 
 
@@ -269,7 +304,10 @@ class Stepper:
     Fixed steps land on the step indices of the output points; an adaptive scheme's
     :class:`StepController` shortens the step that would pass an output time. Fixed
     steps put t = step * time_step (not a sum), so a resumed run takes exactly the
-    steps of an uninterrupted one.
+    steps of an uninterrupted one; when final_time is not a whole multiple of
+    time_step, the last step is shortened to end on it exactly
+    (:func:`~granframe.run.description.fixed_steps`) and its size is given to the
+    integrator, so schemes that cache factors of dt (exp(dt L)) use the short one.
 
     Parameters
     ----------
@@ -284,13 +322,27 @@ class Stepper:
         Error tolerance of an adaptive scheme.
     xp : module
         The backend's array namespace.
+    final_time : float or None
+        Where a fixed-step run ends (its last step may be shorter than ``time_step``);
+        None: at the last target, a whole number of steps.
     """
 
-    def __init__(self, integrator, equation, targets, time_step, tolerance, xp):
+    def __init__(self, integrator, equation, targets, time_step, tolerance, xp,
+                 final_time=None):
         self.integrator, self.equation, self.xp = integrator, equation, xp
         self.adaptive = integrator.adaptive
         self.targets, self.time_step = targets, time_step
         self.controller = StepController(tolerance) if self.adaptive else None
+        self.full_steps, self.final_time = math.inf, final_time
+        if not self.adaptive and final_time is not None:
+            self.full_steps = fixed_steps(final_time, time_step)[0]
+
+    def _fixed_step(self, step: int) -> tuple[float, float]:
+        """(dt, t at its end) of fixed step number ``step`` (1 first): a full step ends at
+        step * time_step, the short last one at final_time."""
+        if step <= self.full_steps:
+            return self.time_step, step * self.time_step
+        return self.final_time - self.full_steps * self.time_step, self.final_time
 
     def _before(self, state: RunState, target) -> bool:
         return state.t < target if self.adaptive else state.step < target
@@ -317,7 +369,8 @@ class Stepper:
                     self.integrator, self.equation, state.t, state.f, state.dt_next, target,
                     self.xp)
             else:
-                state.f = self.integrator.step(self.equation, state.t, state.f, self.time_step)
+                dt, t_end = self._fixed_step(state.step + 1)
+                state.f = self.integrator.step(self.equation, state.t, state.f, dt)
         except (NonFiniteError, StepSizeError) as exc:   # a stage blew up, or dt fell to
             problem = (exc if isinstance(exc, StepSizeError)   # round-off
                        else "f is not finite (NaN or Inf) within the step")
@@ -325,7 +378,7 @@ class Stepper:
                           f"{problem}") from exc
         state.step += 1
         if not self.adaptive:
-            state.dt, state.t = self.time_step, state.step * self.time_step
+            state.dt, state.t = dt, t_end
 
 
 class Observer:
@@ -385,6 +438,36 @@ class ResolutionObserver(Observer):
                                              self.tolerance, self.xp)
 
 
+class AccuracyObserver(Observer):
+    """The accuracy monitors (:mod:`granframe.run.monitors`): after every step the drifts
+    of momentum and temperature (from the step's moments, no pass over f); at every output
+    point, after the :class:`ResolutionObserver`, the edge shares (one pass over f) and
+    the spectral tail (the resolution report's), and their report into ``state.accuracy``,
+    which the next commit keeps. With ``health.stop_on_accuracy`` a monitor above
+    ``health.accuracy_tolerance`` stops the run."""
+
+    def __init__(self, monitors: AccuracyMonitors, xp):
+        self.monitors, self.xp = monitors, xp
+
+    def _stop(self, state, problem):
+        if problem is not None:
+            state.accuracy = self.monitors.report()
+            raise Stopped(f"health check failed at step {state.step}, t = {state.t:.6g}: "
+                          f"{problem}")
+
+    def after_step(self, state):
+        monitors = self.monitors
+        self._stop(state, monitors.update(monitors.drifts(state.record, state.t),
+                                          state.step, state.t))
+
+    def at_output(self, state, final):
+        monitors = self.monitors
+        problem = monitors.update(monitors.shape(state.f, state.record, state.resolution,
+                                                 self.xp), state.step, state.t)
+        state.accuracy = monitors.report()
+        self._stop(state, problem)
+
+
 class ProgressObserver(Observer):
     """After every step: the progress bar (t, step, T and the mass drift).
 
@@ -429,7 +512,10 @@ class StorageObserver(Observer):
         """
         message = str(stop)
         self.store.commit([], self.records.take(), state.progress("failed", message=message))
-        raise HealthError(message) from stop.__cause__
+        error = HealthError(message)
+        if self.store.path is None:
+            error.dataset = _dataset(self.store)
+        raise error from stop.__cause__
 
     def interrupt(self):
         """After a Ctrl-C: the last commit stays what a resume continues from; only its
@@ -458,6 +544,8 @@ class Simulation:
         check_run_memory(d, self.backend)   # before anything of the grid's size is allocated
         self.operator = d.build("operator", grid=d.grid, kernel=d.build("kernel"),
                                 restitution=d.build("restitution"), backend=self.backend)
+        if d.conservative is not None:      # docs/conservative.md
+            self.operator = ConservativeCorrection(self.operator, d.conservative)
         self.integrator = d.build("integrator")
         initial = d.build("initial")
         sampled = initial.sample(d.grid)
@@ -494,11 +582,16 @@ class Simulation:
 
     # -- schedule ---------------------------------------------------------------------
     def output_points(self):
-        """Output points after t = 0: step indices (fixed step) or times (adaptive)."""
+        """Output points after t = 0: step indices (fixed step) or times (adaptive).
+
+        A fixed-step run's last point is its last step, a short one when final_time is
+        not a whole multiple of time_step (:func:`~granframe.run.description.fixed_steps`).
+        """
         d = self.description
         interval = d.output.snapshot_interval
         if not self.integrator.adaptive:
-            total = round(d.final_time / d.time_step)
+            full, last = fixed_steps(d.final_time, d.time_step)
+            total = full + (1 if last else 0)
             every = total if interval is None else round(interval / d.time_step)
             return sorted(set(range(every, total, every)) | {total})
         count = 0 if interval is None else int(math.floor(d.final_time / interval * (1 + 1e-12)))
@@ -518,7 +611,13 @@ class Simulation:
 
         The :class:`Stepper` yields the steps; the observers (moments, health, progress
         bar, storage) act on them, each on its schedule.
+
+        ``out`` None holds the run in memory (:meth:`run_in_memory`): the same steps,
+        checks and records, in a store no file backs; the result's ``dataset`` holds it.
         """
+        if out is None and resume:
+            reject("Simulation.run", "resume", resume, "needs a store on disk to continue "
+                   "(out = None holds a run in memory, from t = 0)")
         check_run_modes(resume, overwrite)
         started = time.perf_counter()
         store, state = self._open(out, resume, overwrite, rollback, protect, started)
@@ -530,13 +629,14 @@ class Simulation:
                              progress_entry.get("wall_seconds", 0.0))
         d = self.description
         stepper = Stepper(self.integrator, self.equation, self.output_points(), d.time_step,
-                          d.tolerance, self.backend.xp)
+                          d.tolerance, self.backend.xp, d.final_time)
         records = _Records()
         storage = StorageObserver(store, records, self.backend)
         observers = [MomentsObserver(self.grid, self.backend.xp, records),
                      HealthObserver(d.health), ProgressObserver(state, d.final_time, progress),
                      ResolutionObserver(self.grid, self.backend.xp,
                                         d.health.resolution_tolerance),
+                     AccuracyObserver(self._monitors(store), self.backend.xp),
                      storage]
         try:
             try:
@@ -554,9 +654,40 @@ class Simulation:
         finally:
             for observer in observers:
                 observer.close()
-        return RunResult(str(out), "finished", state.step, state.t, store.snapshot_count,
-                         store.progress["wall_seconds"],
-                         tuple(store.progress.get("resolution", {}).get("warnings", ())))
+        return RunResult("memory" if out is None else str(out), "finished", state.step,
+                         state.t, store.snapshot_count, store.progress["wall_seconds"],
+                         tuple(store.progress.get("resolution", {}).get("warnings", ())),
+                         dataset=_dataset(store) if out is None else None,
+                         accuracy_warnings=tuple(
+                             store.progress.get("accuracy", {}).get("warnings", ())))
+
+    def _monitors(self, store) -> AccuracyMonitors:
+        """The accuracy monitors of a run in ``store``, from its first record (t = 0) and,
+        for a resumed run, the monitors' state at the last commit."""
+        group = store.group
+        initial = {name: group[name][0] for name in ("mass", "momentum", "temperature")}
+        return AccuracyMonitors(self.description, self.operator, initial,
+                                store.progress.get("accuracy"))
+
+    def run_in_memory(self, *, progress: bool | None = None):
+        """Run to ``final_time`` in memory and return the run as an :class:`xarray.Dataset`.
+
+        For notebooks: nothing is written to disk, and the dataset equals what
+        :func:`granframe.open_run` gives for the same run written to a store (the same
+        variables, coordinates and attributes; only the creation time and the wall
+        seconds differ). The steps, the health checks and the resolution indicators are
+        those of :meth:`run`; a health check that fails raises :class:`HealthError`, whose
+        ``dataset`` holds the run up to the failing step.
+
+        Examples
+        --------
+        >>> import granframe
+        >>> from granframe.run.description import RunDescription
+        >>> d = RunDescription.from_toml(open("heated.toml").read())  # doctest: +SKIP
+        >>> ds = granframe.Simulation(d).run_in_memory()                       # doctest: +SKIP
+        >>> ds.temperature.plot()                                              # doctest: +SKIP
+        """
+        return self.run(None, progress=progress).dataset
 
     def _open(self, out, resume, overwrite, rollback, protect, started):
         """The store of the run and the state it starts from: a new store with the moments

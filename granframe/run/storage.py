@@ -19,7 +19,13 @@ moments                step_time                    mass, temperature, kinetic_e
                                                     min_f, negative_mass_fraction,
                                                     kurtosis, sonine_a2
 ``momentum``           step_time, axis              int v f dv
+``heat_flux``          step_time, axis              int (v-u)_i |v-u|^2 f dv / 2
+``pressure_tensor``    step_time, axis, axis2       int (v-u)_i (v-u)_j f dv
 =====================  ===========================  ===================================
+
+A store written before granframe recorded the heat flux and the pressure tensor lacks
+both and names no ``record_arrays`` in its metadata (:attr:`RunStore.record_arrays`); it is
+read, checked and resumed in that layout.
 
 What is stored can be trusted:
 
@@ -80,7 +86,12 @@ SCALAR_MOMENTS = ("mass", "temperature", "kinetic_energy", "min_f", "negative_ma
                   "kurtosis", "sonine_a2")
 #: arrays along the snapshot dimension ``time`` and along ``step_time``
 SNAPSHOT_ARRAYS = ("f", "time", "snapshot_step", "snapshot_dt_next")
-RECORD_ARRAYS = ("step_time", "step", "dt", "momentum") + SCALAR_MOMENTS
+#: moments with d or d x d components, recorded every step beside ``momentum``
+TENSOR_MOMENTS = ("pressure_tensor", "heat_flux")
+RECORD_ARRAYS = ("step_time", "step", "dt", "momentum") + SCALAR_MOMENTS + TENSOR_MOMENTS
+#: the records of a store whose metadata names none (``record_arrays``): written before
+#: granframe recorded the pressure tensor and heat flux; it keeps that layout when resumed
+FIRST_RECORD_ARRAYS = ("step_time", "step", "dt", "momentum") + SCALAR_MOMENTS
 _LONG_NAMES = {
     "f": "distribution function f(t, v)", "time": "time of the snapshot",
     "snapshot_step": "step index of the snapshot",
@@ -92,6 +103,8 @@ _LONG_NAMES = {
     "kurtosis": "kurtosis rho int |v-u|^4 f / (int |v-u|^2 f)^2",
     "sonine_a2": "second Sonine coefficient d/(d+2) kurtosis - 1",
     "momentum": "momentum int v f dv",
+    "pressure_tensor": "pressure tensor int (v-u)_i (v-u)_j f dv",
+    "heat_flux": "heat flux int (v-u)_i |v-u|^2 f dv / 2",
 }
 #: CF version whose attribute names the stores and :func:`granframe.open_run` use
 CONVENTIONS = "CF-1.10"
@@ -162,9 +175,10 @@ def fill_value(dtype) -> float | int:
 
 
 def consolidate(path) -> None:
+    """Consolidate the metadata of the store at ``path`` (a path, or a zarr store object)."""
     with warnings.catch_warnings():  # zarr: consolidated metadata is not in the v3 spec (yet)
         warnings.simplefilter("ignore", category=UserWarning)
-        zarr.consolidate_metadata(str(path))
+        zarr.consolidate_metadata(str(path) if isinstance(path, (str, os.PathLike)) else path)
 
 
 def _now() -> str:
@@ -476,11 +490,13 @@ def _chunk_file(root: pathlib.Path, name: str, index) -> pathlib.Path:
 class RunStore:
     """A run's store, opened for writing (:meth:`create`, :meth:`resume`) or reading (:meth:`open`).
 
-    A store opened for writing holds the :class:`WriterLock` until :meth:`close`.
+    A store opened for writing holds the :class:`WriterLock` until :meth:`close`. A store
+    created with ``path`` None is held in memory (a :class:`zarr.storage.MemoryStore`):
+    the same layout, commits and metadata, no file, no lock; its ``path`` is None.
     """
 
     def __init__(self, path, group: zarr.Group, lock: WriterLock | None = None):
-        self.path = pathlib.Path(path)
+        self.path = None if path is None else pathlib.Path(path)
         self.group = group
         self.lock = lock
         self._target = None      # a staged store: where publish() puts it
@@ -494,6 +510,8 @@ class RunStore:
                protect=(), projection: dict | None = None) -> "RunStore":
         """A new store for ``description``, staged beside ``path``; see :meth:`publish`.
 
+        ``path`` None: a store in memory, which nothing else can see (no lock, nothing
+        to publish or replace).
         Refuses an existing store unless ``overwrite``, and anything but a granframe
         store or an empty directory even then (:func:`check_replaceable`, ``protect``:
         paths that must not be inside it). ``rescaling`` (rescaled runs) is the map to
@@ -501,16 +519,22 @@ class RunStore:
         ``projection`` the moments of f0 before and after its Nyquist projection
         (:func:`granframe.model.initial.check_projection`), both kept in the metadata. The first :meth:`commit` and :meth:`publish` put it in place.
         """
-        path = pathlib.Path(path)
-        _check_creatable(path, overwrite, protect)   # refused before anything is written
-        lock, staging = WriterLock(path).acquire(), None
+        memory = path is None
+        path = None if memory else pathlib.Path(path)
+        if not memory:
+            _check_creatable(path, overwrite, protect)   # refused before anything is written
+        lock, staging = (None if memory else WriterLock(path).acquire()), None
         try:
-            recover(path)
-            kind = store_kind(path)
-            _check_creatable(path, overwrite, protect)
-            token = uuid.uuid4().hex[:12]
-            staging = _sibling(path, _STAGING, token)
-            group = zarr.create_group(str(staging), zarr_format=3)
+            if memory:
+                kind, token = None, None
+                group = zarr.create_group(zarr.storage.MemoryStore(), zarr_format=3)
+            else:
+                recover(path)
+                kind = store_kind(path)
+                _check_creatable(path, overwrite, protect)
+                token = uuid.uuid4().hex[:12]
+                staging = _sibling(path, _STAGING, token)
+                group = zarr.create_group(str(staging), zarr_format=3)
             d = grid.dimension
             axes = [f"v{i + 1}" for i in range(d)]
             points = grid.points()
@@ -523,9 +547,13 @@ class RunStore:
             for name, dtype in (("step_time", "f8"), ("step", "i8"), ("dt", "f8")) + tuple(
                     (m, "f8") for m in SCALAR_MOMENTS):
                 _create(group, name, (0,), (MOMENT_CHUNK,), dtype, ["step_time"])
-            _create(group, "momentum", (0, d), (MOMENT_CHUNK, d), "f8", ["step_time", "axis"])
+            for name in ("momentum", "heat_flux"):
+                _create(group, name, (0, d), (MOMENT_CHUNK, d), "f8", ["step_time", "axis"])
+            _create(group, "pressure_tensor", (0, d, d), (MOMENT_CHUNK, d, d), "f8",
+                    ["step_time", "axis", "axis2"])
             meta = {
                 "schema": SCHEMA, "version": __version__, "description": description,
+                "record_arrays": list(RECORD_ARRAYS),
                 "description_toml": description_toml, "provenance": provenance,
                 "created": _now(),
                 "progress": {"snapshots": 0, "records": 0, "status": "created"},
@@ -536,7 +564,8 @@ class RunStore:
         except BaseException:
             if staging is not None:
                 shutil.rmtree(staging, ignore_errors=True)
-            lock.release()
+            if lock is not None:
+                lock.release()
             raise
         store = cls(staging, group, lock)
         store._target, store._token = path, token
@@ -667,6 +696,12 @@ class RunStore:
         return self.metadata["progress"]
 
     @property
+    def record_arrays(self) -> tuple:
+        """The moment records of this store: :data:`RECORD_ARRAYS`, or
+        :data:`FIRST_RECORD_ARRAYS` for a store written before the metadata named them."""
+        return tuple(self.metadata.get("record_arrays", FIRST_RECORD_ARRAYS))
+
+    @property
     def snapshot_count(self) -> int:
         return int(self.progress["snapshots"])
 
@@ -692,7 +727,7 @@ class RunStore:
         """Arrays of the layout that are not in the store at all."""
         d = len(self.group["f"].shape) - 1 if "f" in self._names() else \
             int(self.metadata["description"]["grid"]["dimension"])
-        expected = set(SNAPSHOT_ARRAYS + RECORD_ARRAYS) | {f"v{i + 1}" for i in range(d)}
+        expected = set(SNAPSHOT_ARRAYS + self.record_arrays) | {f"v{i + 1}" for i in range(d)}
         return [{"array": name, "chunk": [], "first": 0, "kind": "missing array",
                  "detail": ""} for name in sorted(expected - set(self._names()))]
 
@@ -767,7 +802,7 @@ class RunStore:
         Chunk files wholly beyond it are deleted too, so that no stale chunk is ever
         merged into a later write.
         """
-        for name in SNAPSHOT_ARRAYS + RECORD_ARRAYS:
+        for name in SNAPSHOT_ARRAYS + self.record_arrays:
             array = self.group[name]
             extent = self._extent(name)
             if array.shape[0] != extent:
@@ -779,8 +814,11 @@ class RunStore:
 
     # -- writing ----------------------------------------------------------------------
     def commit(self, snapshots, records: dict, progress: dict) -> None:
-        """Append snapshots [(t, f)] and moment records (name -> 1-D/2-D arrays), then mark them.
+        """Append snapshots [(t, f)] and moment records (name -> arrays along step_time),
+        then mark them.
 
+        Records that the store's layout lacks (:attr:`record_arrays`: the pressure tensor
+        and heat flux of a store written before granframe recorded them) are left out.
         ``progress`` (JSON-ready) is stored together with the new counts; the
         store is consistent before and after, whatever happens in between. Each
         snapshot is stored with the step and the proposed next step size of
@@ -801,7 +839,10 @@ class RunStore:
         n = int(self.progress["records"])
         count = len(records["step_time"]) if records else 0
         if count:
+            layout = self.record_arrays
             for name, values in records.items():
+                if name not in layout:
+                    continue
                 array = group[name]
                 array.resize((n + count,) + array.shape[1:])
                 array[n:] = numpy.asarray(values)
@@ -817,7 +858,7 @@ class RunStore:
         meta["progress"] = progress
         meta["updated"] = _now()
         self.group.attrs["granframe"] = meta
-        consolidate(self.path)
+        consolidate(self.group.store if self.path is None else self.path)
 
 
 def _check_creatable(path: pathlib.Path, overwrite: bool, protect) -> None:
@@ -940,6 +981,10 @@ def describe(path) -> str:
                      f"{resolution['negative_mass_fraction']:.3g}, share of pairs beyond 2S "
                      f"{resolution['pairs_beyond_support']:.3g}")
         lines.extend(f"  warning: {warning}" for warning in resolution["warnings"])
+    if progress.get("accuracy"):
+        from granframe.run.monitors import describe as describe_accuracy
+
+        lines.extend(describe_accuracy(progress["accuracy"], progress["time"]))
     if meta.get("f0_projection"):
         lines.append("f0 projection (moments before -> after; the run starts after)")
         for name, m in meta["f0_projection"].items():

@@ -31,6 +31,9 @@ sweep SWEEP.toml --out STORE [--scheduler ADDRESS] [--workers N] [--overwrite]
 advise SCENE.toml [--out DESCRIPTION.toml] [--json]
     Propose the cheapest configuration predicted to meet the scene's tolerance
     (docs/advise.md); --out writes it as a run description for ``granframe run``.
+limits SOURCE [--quick] [--set KEY=VALUE ...] [--json]
+    The explicit time-step limit of each run of a description, and the rates behind it,
+    without building the operator; exit status 3 when a fixed time step is above it.
 """
 
 from __future__ import annotations
@@ -147,7 +150,7 @@ def _bench(args) -> int:
     configs = ([bench.parse_config(c) for c in args.config] if args.config
                else list(bench.DEFAULT_CONFIGS))
     records = bench.run(configs, backend, args.threads, args.repeats, args.precision,
-                        batches=args.batch or (1,))
+                        batches=args.batch or (1,), quadratures=args.quadrature or (None,))
     if args.json:
         json.dump({"schema": "granframe.tools.bench/1", "granframe_version": __version__,
                    "records": records}, sys.stdout, indent=2)
@@ -387,6 +390,8 @@ def _run_one(description, out, args) -> int:
     for warning in result.warnings:
         print(f"granframe: warning: f at t = {result.time:g} is under-resolved: {warning}",
               file=sys.stderr)
+    for warning in result.accuracy_warnings:
+        print(f"granframe: warning: at t = {result.time:g}: {warning}", file=sys.stderr)
     return 0
 
 
@@ -507,6 +512,64 @@ def _sweep(args) -> int:
     return 3 if result.failed else 0
 
 
+def _limits(args) -> int:
+    from granframe.registry import default_registries
+    from granframe.run.runner import load_study
+    from granframe.stepping.stability import PART_NAMES, time_step_limit
+
+    runs = load_study(args.source, quick=args.quick).runs
+    if args.set:
+        runs = {name: _with_settings(d, args.set) for name, d in runs.items()}
+    status, document = 0, {}
+    for name, d in runs.items():
+        limit = time_step_limit(d)
+        adaptive = d.build("integrator").adaptive
+        above = limit is not None and not adaptive and d.time_step > limit.limit
+        status = 3 if above else status
+        document[name] = {
+            "integrator": d.integrator.name, "time_step": d.time_step, "adaptive": adaptive,
+            "limit": None if limit is None or adaptive else limit.limit,
+            "interval": None if limit is None or adaptive else limit.interval,
+            "dominant": None if limit is None else str(limit.dominant),
+            "rates": {} if limit is None else {str(k): v for k, v in limit.rates.items()},
+            "within": None if limit is None or adaptive else not above}
+        if args.json:
+            continue
+        head = (f"[{name}] " if name else "") + f"'{d.integrator.name}': "
+        if limit is None:
+            print(head + "no explicit step limit (the scheme treats none of the equation's "
+                  "stiff parts explicitly)")
+            continue
+        radii = ", ".join(f"{PART_NAMES.get(part, part)} = {rate:.4g}" for part, rate in
+                          sorted(limit.rates.items(), key=lambda x: -x[1]))
+        if limit.interval == 0.0:
+            registry = default_registries()
+            stable = sorted(n for n in registry.names("time_integrators") if getattr(
+                registry.get("time_integrators", n).factory, "imaginary_interval", 0.0) > 0.0)
+            print(head + f"unstable at any step: {PART_NAMES['drift']} has an imaginary "
+                  f"spectrum (radii: {radii}) and the scheme is not stable on the imaginary "
+                  f"axis; use one that is: {', '.join(stable)}")
+            continue
+        if adaptive:
+            print(head + f"adaptive: its error control keeps the steps stable (spectral "
+                  f"radii: {radii})")
+            continue
+        print(head + f"dt <= {limit.limit:.4g}, set by {PART_NAMES.get(limit.dominant)} "
+              f"(spectral radii: {radii}; stable for dt * (sum of radii) <= "
+              f"{limit.interval:g})")
+        if above:
+            print(f"  time_step = {d.time_step:g}: ABOVE the limit ("
+                  + ("granframe run refuses it)" if d.health.step_limit else
+                     "health.step_limit = false: granframe run does not check it)"))
+        else:
+            print(f"  time_step = {d.time_step:g}: within it ({d.time_step / limit.limit:.3g} "
+                  "of the limit)")
+    if args.json:
+        json.dump({"schema": "granframe.limits/1", "runs": document}, sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    return status
+
+
 def _advise(args) -> int:
     import tomllib
 
@@ -612,6 +675,7 @@ avoid (docs/benchmarks.md). --batch evaluates stacks of B distributions at once 
 time and floor per distribution.""",
               """\
   granframe bench --config 2:64 --config 3:32 --repeats 5
+  granframe bench --config 3:32 --quadrature auto review
   granframe bench --json --backend numpy --batch 1 8 64"""),
     "run": ("""\
 Run a description (a .toml file, or a study module defining description(quick) or
@@ -631,7 +695,8 @@ moments) into a folder.""",
   granframe plot runs/h.zarr --out figures/h"""),
     "info": ("""\
 Say what is in a store. A run store: status, snapshots, moments, the resolution of the last
-commit and its warnings, provenance and the description; with --json, its metadata and
+commit and its warnings, the accuracy monitors (their values, largest values, first excess
+and warnings), provenance and the description; with --json, its metadata and
 progress as stored and the range of its snapshots and moments, as one JSON document. A
 sweep store: its axes, how many points finished, failed or are pending, its failures, the
 runs that end under-resolved, and its base description.""",
@@ -661,6 +726,17 @@ scene's tolerance on its temperature or distribution (docs/advise.md).""",
                """\
   granframe advise scene.toml
   granframe advise scene.toml --out desc.toml && granframe run desc.toml --out runs/a.zarr"""),
+    "limits": ("""\
+Report the explicit time-step limit of each run of a description (a .toml file or a study
+module) and the spectral radii behind it (heat bath, collisions, energy dissipation, and the
+drift of a rescaled run), from the description alone: the operator is not built, so it
+takes a fraction of a second where building it takes seconds to minutes. It is the limit
+granframe run checks before the first step (docs/runner.md, docs/stability.md). Exit status
+3 when the description's fixed time step is above it.""",
+               """\
+  granframe limits studies/heated_maxwell.py
+  granframe limits desc.toml --set time_step=0.05 --set grid.n_modes=64
+  granframe limits desc.toml --json"""),
 }
 
 
@@ -692,6 +768,11 @@ def build_parser() -> argparse.ArgumentParser:
                        help="stack sizes: evaluate B distributions at once and report the "
                             "time and FFT floor per distribution (e.g. --batch 1 8 64); "
                             "default: one distribution")
+    bench.add_argument("--quadrature", action="extend", nargs="+", metavar="PRESET",
+                       choices=["auto", "review"],
+                       help="time each configuration D:N with the rules of these presets of "
+                            "fast_spectral's quadrature option (e.g. --quadrature auto "
+                            "review) instead of its N_RHO and M")
     bench.set_defaults(handler=_bench)
     run = commands.add_parser("run", help="run a description (TOML or study module) into a store")
     run.add_argument("source", metavar="STUDY_OR_TOML",
@@ -757,6 +838,16 @@ def build_parser() -> argparse.ArgumentParser:
                         help="write the proposed run description")
     advise.add_argument("--json", action="store_true", help="machine-readable output")
     advise.set_defaults(handler=_advise)
+    limits = commands.add_parser("limits", help="the explicit time-step limit of a run, "
+                                 "without building the operator")
+    limits.add_argument("source", metavar="STUDY_OR_TOML",
+                        help="a .toml description or a study module (.py)")
+    limits.add_argument("--quick", action="store_true",
+                        help="the study's quick runs (study modules only)")
+    limits.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="override a key of the description, as for run (repeatable)")
+    limits.add_argument("--json", action="store_true", help="machine-readable output")
+    limits.set_defaults(handler=_limits)
     for name, command in commands.choices.items():
         command.description, examples = COMMAND_HELP[name]
         command.epilog = f"examples:\n{examples}"

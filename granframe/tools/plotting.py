@@ -128,6 +128,11 @@ class _Run:
         warnings = (progress.get("resolution") or {}).get("warnings",
                                                            progress.get("resolution_warnings"))
         self.warnings = [warnings] if isinstance(warnings, str) else list(warnings or ())
+        # the same for the accuracy monitors' warnings (granframe.run.monitors)
+        accuracy = (progress.get("accuracy") or {}).get("warnings",
+                                                         progress.get("accuracy_warnings"))
+        self.accuracy_warnings = ([accuracy] if isinstance(accuracy, str)
+                                  else list(accuracy or ()))
         self.step_time = self.ds["step_time"].values
         self.moments = {key: self.ds[key].values for key in
                         ("mass", "temperature", "kurtosis", "min_f", "negative_mass_fraction")}
@@ -229,7 +234,8 @@ def caption(ds) -> str:
         dt and integrator, heat bath tau and Knudsen number; the operator; the
         restitution law e and the kernel exponent lambda, and that every quantity is
         dimensionless. Then one line per resolution warning of the last commit
-        (:func:`granframe.velocity.estimators.resolution_report`), which names what to raise.
+        (:func:`granframe.velocity.estimators.resolution_report`) and one per accuracy
+        warning (:mod:`granframe.run.monitors`), each naming what to raise.
     """
     run = _Run.of(ds)
     d, grid = run.description, run.grid
@@ -254,7 +260,8 @@ def caption(ds) -> str:
         f"restitution e: {_component(d.restitution)}; kernel {_component(d.kernel)}, "
         f"exponent λ = {exponent:g}" + (f", energy exponent γ = {energy:g}" if energy else "")
         + "; all quantities dimensionless"]
-        + [f"UNDER-RESOLVED: {warning}" for warning in run.warnings])
+        + [f"UNDER-RESOLVED: {warning}" for warning in run.warnings]
+        + [f"INACCURATE: {warning}" for warning in run.accuracy_warnings])
 
 
 def _axes(ax, run):
@@ -620,7 +627,7 @@ def figures(ds) -> dict:
         for ax, draw in zip(numpy.atleast_1d(fig.subplots(*layout)), draws):
             draw(run, ax)
         fig.suptitle(text, fontsize=8, color="C3" if run.status not in (None, "finished")
-                     or run.warnings else "black")
+                     or run.warnings or run.accuracy_warnings else "black")
         drawn[name] = fig
     return drawn
 

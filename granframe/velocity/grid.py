@@ -262,6 +262,36 @@ class VelocityGrid:
         """Second Sonine coefficient a2 = d/(d+2) kappa - 1 (0 for a Maxwellian)."""
         return self.dimension / (self.dimension + 2.0) * self.kurtosis(f, xp) - 1.0
 
+    def _peculiar_velocity(self, f, xp):
+        """The components of c = v - u on the grid (refused for a zero mass)."""
+        u = self.bulk_velocity(f, xp)
+        return [c - float(ui) for c, ui in zip(self.mesh(xp), u)]
+
+    def pressure_tensor(self, f, xp=numpy):
+        """P_ij = int (v - u)_i (v - u)_j f dv, a d x d NumPy array (refused for a zero mass).
+
+        By the rectangle rule, P_ij = h^d sum_j c_i c_j f_j with c = v_j - u; its trace is
+        d rho T, and P = rho T I for a Maxwellian.
+        """
+        c = self._peculiar_velocity(f, xp)
+        d = self.dimension
+        pressure = numpy.empty((d, d))
+        for i in range(d):
+            for j in range(i, d):
+                pressure[i, j] = pressure[j, i] = float(xp.sum(c[i] * c[j] * f))
+        return pressure * self.cell_volume
+
+    def heat_flux(self, f, xp=numpy):
+        """q_i = (1/2) int (v - u)_i |v - u|^2 f dv, a length-d NumPy array (refused for a
+        zero mass).
+
+        By the rectangle rule, q_i = (h^d / 2) sum_j c_i |c|^2 f_j with c = v_j - u; q = 0
+        for any f that is even about u (a Maxwellian, an anisotropic Gaussian).
+        """
+        c = self._peculiar_velocity(f, xp)
+        c2f = functools.reduce(lambda a, b: a + b, (ci * ci for ci in c)) * f
+        return 0.5 * numpy.array([float(xp.sum(ci * c2f)) for ci in c]) * self.cell_volume
+
     def moments(self, f, xp=numpy) -> dict:
         """Every moment the runner records, from one pass over f and one transfer to the host.
 
@@ -269,23 +299,34 @@ class VelocityGrid:
         each a_i <= 4 are d contractions of f with the power matrix (v_j / L)^k, k = 0..4
         (:meth:`power_matrix`; one N x 5 matrix per axis, the velocities scaled by L so no
         power overflows); stacked with min f, sum |f| and sum max(-f, 0), they reach the
-        host as one array. The central quantities follow on the host from the raw ones,
-        with |v - u|^2 = |v|^2 - 2 u.v + |u|^2.
+        host as one array. The central moments C_a = h^d sum_j (v_j - u)^a f_j follow on
+        the host from the raw ones by the binomial shift of each axis,
+
+            C_a = sum_{b <= a} prod_i binom(a_i, b_i) (-u_i)^{a_i - b_i} M_b,
+
+        and from them, with e_i the unit exponent of axis i,
+
+            T = sum_i C_{2 e_i} / (d rho),
+            kappa = rho sum_{i,k} C_{2 e_i + 2 e_k} / (sum_i C_{2 e_i})^2,
+            P_ij = C_{e_i + e_j}                  (the pressure tensor),
+            q_i = (1/2) sum_k C_{e_i + 2 e_k}     (the heat flux).
 
         Returns
         -------
         dict
             ``mass``, ``momentum`` (a length-d NumPy array), ``bulk_velocity``,
-            ``kinetic_energy``, ``temperature``, ``kurtosis``, ``sonine_a2``, ``min_f`` and
-            ``negative_mass_fraction`` (int max(-f, 0) / int |f|), as floats. Where the
-            single-moment methods refuse (a zero mass, a zero second central moment) the
-            value is NaN.
+            ``kinetic_energy``, ``temperature``, ``kurtosis``, ``sonine_a2``, ``min_f``,
+            ``negative_mass_fraction`` (int max(-f, 0) / int |f|), as floats, and
+            ``pressure_tensor`` (d x d) and ``heat_flux`` (length d) as NumPy arrays.
+            Where the single-moment methods refuse (a zero mass, a zero second central
+            moment) the value is NaN.
 
         Notes
         -----
-        They equal :meth:`mass`, :meth:`momentum`, :meth:`temperature`, ... to round-off
-        relative to the raw moments: the central moments lose about (|u|^2 / T)^2 of
-        relative accuracy to cancellation, nothing at u = 0.
+        They equal :meth:`mass`, :meth:`momentum`, :meth:`temperature`,
+        :meth:`pressure_tensor`, :meth:`heat_flux`, ... to round-off relative to the raw
+        moments: a central moment of order n loses about (|u|^2 / T)^{n/2} of relative
+        accuracy to cancellation, nothing at u = 0.
         """
         self.check_shape(f)
         d = self.dimension
@@ -304,35 +345,34 @@ class VelocityGrid:
             M = M * numpy.reshape(scales, [5 if a == axis else 1 for a in range(d)])
         min_f, absolute, negative = (float(x) for x in host[5 ** d:])
 
-        def raw_moment(*axes):
-            """M_a for the exponent a that counts each axis in ``axes`` once."""
-            exponent = [0] * d
-            for axis in axes:
-                exponent[axis] += 1
-            return float(M[tuple(exponent)])
-
         with numpy.errstate(all="ignore"):
-            rho = raw_moment()
-            momentum = numpy.array([raw_moment(i) for i in range(d)])
-            second = sum(raw_moment(i, i) for i in range(d))      # int |v|^2 f
-            nan = math.nan
-            u = momentum / rho if rho != 0.0 else numpy.full(d, nan)
-            q = float(u @ u)
-            central2 = second - rho * q if rho != 0.0 else nan
-            fourth = sum(raw_moment(i, i, j, j) for i in range(d) for j in range(d))
-            uu = sum(u[i] * u[j] * raw_moment(i, j) for i in range(d) for j in range(d))
-            su = sum(u[i] * raw_moment(i, j, j) for i in range(d) for j in range(d))
-            central4 = (fourth + 4.0 * uu - 4.0 * su + 2.0 * q * second
-                        - 4.0 * q * float(u @ momentum) + q * q * rho)
+            rho = float(M[(0,) * d])
+            unit = numpy.eye(d, dtype=int)
+            momentum = numpy.array([M[tuple(unit[i])] for i in range(d)])
+            u = momentum / rho if rho != 0.0 else numpy.full(d, math.nan)
+            C = _binomial_shift(M, u)
+
+            def central(exponent):
+                return float(C[tuple(exponent)])
+
+            second = sum(float(M[tuple(2 * unit[i])]) for i in range(d))      # int |v|^2 f
+            central2 = sum(central(2 * unit[i]) for i in range(d))
+            central4 = sum(central(2 * unit[i] + 2 * unit[k]) for i in range(d)
+                           for k in range(d))
+            pressure = numpy.array([[central(unit[i] + unit[j]) for j in range(d)]
+                                    for i in range(d)])
+            flux = numpy.array([0.5 * sum(central(unit[i] + 2 * unit[k]) for k in range(d))
+                                for i in range(d)])
             kurtosis = (rho * central4 / (central2 * central2)
-                        if rho != 0.0 and central2 != 0.0 else nan)
+                        if rho != 0.0 and central2 != 0.0 else math.nan)
         return {"mass": rho, "momentum": momentum, "bulk_velocity": u,
                 "kinetic_energy": 0.5 * second,
-                "temperature": central2 / (d * rho) if rho != 0.0 else nan,
+                "temperature": central2 / (d * rho) if rho != 0.0 else math.nan,
                 "kurtosis": float(kurtosis),
                 "sonine_a2": float(d / (d + 2.0) * kurtosis - 1.0),
                 "min_f": min_f,
-                "negative_mass_fraction": negative / absolute if absolute != 0.0 else nan}
+                "negative_mass_fraction": negative / absolute if absolute != 0.0 else math.nan,
+                "pressure_tensor": pressure, "heat_flux": flux}
 
     def power_matrix(self, xp=numpy):
         """(v_j / L)^k for j = 0..N-1 and k = 0..4, an N x 5 array in ``xp`` (computed once
@@ -358,3 +398,17 @@ class VelocityGrid:
 def _power_matrix(grid: VelocityGrid, xp):
     x = grid.points(numpy) / grid.half_width
     return xp.asarray(x[:, None] ** numpy.arange(5.0))
+
+
+def _binomial_shift(raw, shift):
+    """Central moments C_a = sum_{b <= a} prod_i binom(a_i, b_i) (-s_i)^{a_i - b_i} M_b
+    from the raw moments ``raw`` (M_a, a 5 x ... x 5 NumPy array) about the point ``shift``
+    (s, length d): one 5 x 5 lower-triangular matrix per axis."""
+    k = numpy.arange(5)
+    binomial = numpy.array([[math.comb(a, b) for b in k] for a in k], dtype=float)
+    central = raw
+    for axis, s in enumerate(shift):
+        exponents = numpy.clip(k[:, None] - k[None, :], 0, None)
+        matrix = numpy.where(k[:, None] >= k[None, :], binomial * (-s) ** exponents, 0.0)
+        central = numpy.moveaxis(numpy.tensordot(matrix, central, axes=([1], [axis])), 0, axis)
+    return central
