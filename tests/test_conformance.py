@@ -299,7 +299,7 @@ def test_a_non_power_law_kernel_runs_in_the_operators(example_plugin):
 
 class TestFastSpectralThroughTheKit(kit.CollisionOperatorTests):
     factory = default_registries().get("collision_operators", "fast_spectral").factory
-    examples = [{}, {"radial_points": 24}]
+    examples = [{}, {"radial_points": 24}, {"quadrature": "review"}]
 
 
 class TestNumpyBackendThroughTheKit(kit.ArrayBackendTests):

@@ -17,6 +17,11 @@ transform of the T = D max(1, B / D) grids of one pipeline call
 (:meth:`~granframe_spectral.FastSpectral.stack_transforms`), times D P / T calls, / D,
 i.e. ``fft_batch_s * P / T``. D = 1 is the floor above (T = B).
 
+With ``quadrature`` (``--quadrature auto review``) a configuration D:N is timed with the
+rules the operator takes from that preset of its ``quadrature`` option (the default ``auto``,
+chosen from the grid, or the review's), instead of the configuration's N_rho and M; the
+record gives the rules taken.
+
 Evaluations and floor are timed in alternating rounds (one evaluation, then the floor's
 ceil(D P / T) transform calls), so that a machine whose speed drifts between minutes
 moves both medians together instead of the ratio.
@@ -68,11 +73,12 @@ def median_time(function, repeats: int, backend) -> float:
 def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int,
             backend: str, threads: int, repeats: int, method: str = "fast_spectral",
             precision: str = "float64", options: dict | None = None,
-            distributions: int = 1) -> dict:
+            distributions: int = 1, quadrature: str | None = None) -> dict:
     """Build and time one operator in this process; returns a JSON-ready record.
     ``options`` are further parameters of the array backend (e.g. ``{"fused": False}``);
     ``distributions`` D > 1 times stacks of D distributions, per distribution (module
-    notes)."""
+    notes); ``quadrature`` (``auto`` or ``review``) takes the rules of that preset instead
+    of ``radial_points`` and ``sphere_points``."""
     import granframe as gf
     from granframe.velocity.quadratures import CircleTrapezoid, SphereProduct
 
@@ -82,19 +88,20 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
     takes_threads = "threads" in inspect.signature(factory).parameters
     array_backend = gf.array_backend(backend, **({"threads": threads} if takes_threads else {}),
                                      **(options or {}))
-    if dimension == 2:
-        sphere = CircleTrapezoid(sphere_points)
+    if quadrature is not None:
+        rules = {"quadrature": quadrature}
+    elif dimension == 2:
+        rules = {"radial_points": radial_points, "sphere": CircleTrapezoid(sphere_points)}
     else:
         n_polar = int(round((sphere_points / 2) ** 0.5))
         if 2 * n_polar ** 2 != sphere_points:
             raise ValueError(f"bench: parameter 'sphere_points' = {sphere_points} is invalid; "
                              "in 3D it must be 2 n^2 (Gauss product rule), e.g. 32")
-        sphere = SphereProduct(n_polar)
+        rules = {"radial_points": radial_points, "sphere": SphereProduct(n_polar)}
     start = time.perf_counter()
     operator = gf.collision_operator(method, grid, gf.collision_kernel("hard_spheres"),
                                      gf.restitution_law("constant", value=0.8),
-                                     backend=array_backend, radial_points=radial_points,
-                                     sphere=sphere,
+                                     backend=array_backend, **rules,
                                      **({} if precision == "float64" else {"precision": precision}))
     precompute = time.perf_counter() - start
     if distributions == 1:
@@ -130,8 +137,10 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
     peak = peak_rss_kib()
     device = array_backend.device_memory()
     return {
-        "dimension": dimension, "n_modes": n_modes, "radial_points": radial_points,
-        "sphere_points": sphere_points, "method": method, "backend": backend, "threads": threads,
+        "dimension": dimension, "n_modes": n_modes, "radial_points": operator.radial_points,
+        "sphere_points": operator.sphere.n_points, "quadrature": quadrature,
+        "sphere_rule": _rule_name(operator.sphere), "method": method, "backend": backend,
+        "threads": threads,
         "precision": precision, "backend_options": options or {},
         "transform_pairs": operator.transform_pairs, "batch": batch,
         "distributions": distributions, "stack_transforms": transforms,
@@ -163,52 +172,83 @@ def check_options(backend: str, threads: int, repeats: int) -> None:
 
 def run(configs, backend: str, threads: int, repeats: int,
         precision: str = "float64", options: dict | None = None,
-        batches=(1,)) -> list[dict]:
-    """Measure each configuration, for each stack size D of ``batches``, in its own
-    subprocess (``options``, D: see :func:`measure`); records in the order configuration,
-    then D.
+        batches=(1,), quadratures=(None,)) -> list[dict]:
+    """Measure each configuration, for each quadrature of ``quadratures`` and each stack
+    size D of ``batches``, in its own subprocess (``options``, D, a quadrature: see
+    :func:`measure`; ``None`` times the configuration's own N_rho and M); records in the
+    order configuration, quadrature, then D.
 
-    The options, every configuration and every D (an integer >= 1) are checked first
+    The options, every configuration, every quadrature (``None`` or a value of
+    fast_spectral's ``quadrature``) and every D (an integer >= 1) are checked first
     (:func:`check_options`, :func:`check_config`); a configuration that fails in its
     subprocess is reported by its last line, the error, not by the subprocess's traceback.
     """
+    from granframe_spectral.fast import QUADRATURES
+
     check_options(backend, threads, repeats)
     for config in configs:
         check_config(config)
     for stack in batches:
         if not check.is_integer(stack) or not 1 <= stack <= MAX_BATCH:
             check.reject("bench", "batch", stack, f"must be an integer >= 1 and <= {MAX_BATCH}")
+    for quadrature in quadratures:
+        if quadrature is not None and quadrature not in QUADRATURES:
+            check.reject("bench", "quadrature", quadrature,
+                         f"must be one of {', '.join(QUADRATURES)}")
     records = []
     for dimension, n_modes, radial, sphere in configs:
-        for stack in batches:
-            command = [sys.executable, "-c",
-                       "import json, sys; from granframe.tools.bench import measure; "
-                       f"print(json.dumps(measure({dimension}, {n_modes}, {radial}, {sphere}, "
-                       f"{backend!r}, {threads}, {repeats}, precision={precision!r}, "
-                       f"options={options!r}, distributions={int(stack)})))"]
-            done = subprocess.run(command, capture_output=True, text=True)
-            if done.returncode != 0:
-                lines = done.stderr.strip().splitlines() or [f"exit status {done.returncode}"]
-                raise ValueError(f"bench: configuration d={dimension} N={n_modes} "
-                                 f"batch={stack} failed: {lines[-1]}")
-            records.append(json.loads(done.stdout.strip().splitlines()[-1]))
+        for quadrature in quadratures:
+            for stack in batches:
+                command = [sys.executable, "-c",
+                           "import json, sys; from granframe.tools.bench import measure; "
+                           f"print(json.dumps(measure({dimension}, {n_modes}, {radial}, "
+                           f"{sphere}, {backend!r}, {threads}, {repeats}, "
+                           f"precision={precision!r}, options={options!r}, "
+                           f"distributions={int(stack)}, quadrature={quadrature!r})))"]
+                done = subprocess.run(command, capture_output=True, text=True)
+                if done.returncode != 0:
+                    lines = (done.stderr.strip().splitlines()
+                             or [f"exit status {done.returncode}"])
+                    raise ValueError(f"bench: configuration d={dimension} N={n_modes} "
+                                     f"batch={stack} failed: {lines[-1]}")
+                records.append(json.loads(done.stdout.strip().splitlines()[-1]))
     return records
 
 
+def _rule_name(rule) -> str:
+    """A sphere rule as the table names it: ``circle 16``, ``Lebedev 23``, ``product 4``."""
+    from granframe.velocity.quadratures import CircleTrapezoid, Lebedev, SphereProduct
+
+    if isinstance(rule, Lebedev):
+        return f"Lebedev {rule.order}"
+    if isinstance(rule, SphereProduct):
+        return f"product {rule.n_polar}"
+    if isinstance(rule, CircleTrapezoid):
+        return f"circle {rule.n_points}"
+    return type(rule).__name__
+
+
 def table(records) -> str:
-    """Markdown table of bench records (with the device memory of device backends, and
-    the stack size D, time and floor per distribution, when a record has D > 1)."""
+    """Markdown table of bench records (with the device memory of device backends, the
+    stack size D, time and floor per distribution, when a record has D > 1, and the preset
+    and sphere rule when a record was timed with a ``quadrature`` preset)."""
     device = any(r.get("device_memory_gib") is not None for r in records)
     stacks = any(r.get("distributions", 1) > 1 for r in records)
-    lines = ["| d | N | N_rho | M | precision | pairs | batch |" + (" B |" if stacks else "")
+    presets = any(r.get("quadrature") is not None for r in records)
+    lines = ["| d | N |" + (" quadrature | sphere rule |" if presets else "")
+             + " N_rho | M | precision | pairs | batch |" + (" B |" if stacks else "")
              + " precompute | " + ("time / distribution" if stacks else "time / eval")
              + (" | floor / distribution" if stacks else " | FFT floor")
              + " | time/floor | peak RSS |" + (" device memory |" if device else ""),
              "|---|---|---|---|---|---|---|---|---|---|---|---|" + ("---|" if stacks else "")
+             + ("---|---|" if presets else "")
              + ("---|" if device else "")]
     for r in records:
         lines.append(
-            f"| {r['dimension']} | {r['n_modes']} | {r['radial_points']} | {r['sphere_points']} "
+            f"| {r['dimension']} | {r['n_modes']} |"
+            + (f" {r.get('quadrature') or '—'} | {r.get('sphere_rule', '—')} |" if presets
+               else "")
+            + f" {r['radial_points']} | {r['sphere_points']} "
             f"| {r.get('precision', 'float64')} "
             f"| {r['transform_pairs']} | {r['batch']} |"
             + (f" {r.get('distributions', 1)} |" if stacks else "")

@@ -18,16 +18,95 @@ from granframe import validators as check
 from granframe.abc import PRECISIONS
 from granframe import memory
 from granframe.abc import CollisionOperator, check_arguments
-from granframe.velocity.quadratures import (MAX_GAUSS_POINTS, CircleTrapezoid, SphereProduct,
-                                   SurfaceQuadrature, antipodal_pairs, sphere_area)
+from granframe.velocity.grid import ANTI_ALIASING_FACTOR
+from granframe.velocity.quadratures import (LEBEDEV_ORDERS, MAX_GAUSS_POINTS,
+                                            MAX_SURFACE_POINTS, CircleTrapezoid, Lebedev,
+                                            SphereProduct, SurfaceQuadrature, antipodal_pairs,
+                                            sphere_area)
 
 from granframe_spectral._common import (check_operands, energy_factor, isotropic_sphere_average,
                                         radial_rule)
 
-#: Default quadratures: the review's N_rho = 32, M = 16 in 2D and N_rho = 30, M = 32 in 3D.
-DEFAULT_RADIAL = {2: 32, 3: 30}
-DEFAULT_SPHERE = {2: CircleTrapezoid(16), 3: SphereProduct(4)}
-DEFAULT_SIGMA = {2: CircleTrapezoid(32), 3: SphereProduct(8)}
+#: Values of the option ``quadrature``: ``auto`` chooses the rules from the grid
+#: (:func:`default_quadratures`), ``review`` takes the review's.
+QUADRATURES = ("auto", "review")
+#: The review's quadratures (section 2.2 and its Tests 1-3): N_rho = 32 and M = 16 in 2D;
+#: N_rho = 30 and the 32-point Gauss product rule (n = 4, degree 7) in 3D. The sigma rules
+#: (anisotropic b only; the review's kernels are isotropic) are granframe's former defaults.
+REVIEW_RADIAL = {2: 32, 3: 30}
+REVIEW_SPHERE = {2: CircleTrapezoid(16), 3: SphereProduct(4)}
+REVIEW_SIGMA = {2: CircleTrapezoid(32), 3: SphereProduct(8)}
+#: R/L of the default grid (R = 2S, L = (3 + sqrt 2) S / 2): the rules of ``auto`` are
+#: calibrated on it and scale with N R/L on other grids.
+DEFAULT_REACH = 2.0 / ANTI_ALIASING_FACTOR
+#: The rules of ``auto``, (a, b) of a n + b in the effective modes per axis
+#: n = N (R/L) / DEFAULT_REACH: N_rho = ceil4(a n + b) Gauss-Legendre points; the ghat rule
+#: and the sigma rule have ceil4(a n + b) equispaced points (2D) or the smallest Lebedev order
+#: >= a n + b (3D), the sigma rule at least the review's (32 points, degree 15). Measured by
+#: studies/default_quadrature.py (docs/accuracy-vs-cost.md, "Default quadratures").
+AUTO_RADIAL = {2: (0.5, 8.0), 3: (0.5, 4.0)}
+AUTO_SPHERE = {2: (1.0, 8.0), 3: (1.0, 3.0)}
+AUTO_SIGMA = {2: (0.5, 8.0), 3: (0.5, 4.0)}
+
+
+def default_quadratures(grid, quadrature: str = "auto") -> tuple:
+    r"""The rules (N_rho, sphere, sigma) that ``fast_spectral`` takes by default on ``grid``.
+
+    Parameters
+    ----------
+    grid : VelocityGrid
+    quadrature : {"auto", "review"}
+        ``review``: the review's rules (:data:`REVIEW_RADIAL`, :data:`REVIEW_SPHERE`,
+        :data:`REVIEW_SIGMA`), whatever the grid. ``auto``: rules that grow with the grid,
+        so that the quadrature error stays below what N resolves. The phases
+        pi rho m.ghat / L of the ghat-integrand reach pi R N / (2L), so the rules follow
+        the effective modes per axis n = N (R/L) / (2 / 2.207) (n = N on the default grid,
+        R = 2S, L = (3 + sqrt 2) S / 2):
+
+        - 2D: N_rho = ceil4(n/2 + 8) Gauss-Legendre points; M = ceil4(n + 8) equispaced
+          directions for ghat; ceil4(n/2 + 8), and at least 32, for sigma;
+        - 3D: N_rho = ceil4(n/2 + 4); the Lebedev rules of the smallest orders >= n + 3
+          for ghat and >= n/2 + 4, and at least 15, for sigma
+          (:data:`AUTO_RADIAL`, :data:`AUTO_SPHERE`, :data:`AUTO_SIGMA`),
+
+        with ceil4 the next multiple of 4. Measured by studies/default_quadrature.py on
+        data scaled to the coldest the grid resolves (docs/accuracy-vs-cost.md, "Default
+        quadratures"): the operator then differs from a reference with far more points by
+        less than 1e-7 of max |Q|, or less than a tenth of N's own error on grids too
+        coarse to resolve any data to 1e-7.
+
+    Returns
+    -------
+    tuple
+        (radial_points, sphere, sigma).
+    """
+    d = grid.dimension
+    if quadrature == "review":
+        return REVIEW_RADIAL[d], REVIEW_SPHERE[d], REVIEW_SIGMA[d]
+    modes = grid.n_modes * grid.truncation_radius / grid.half_width / DEFAULT_REACH
+
+    def size(rule):
+        slope, offset = rule[d]
+        return slope * modes + offset
+
+    radial = min(_ceil_to(size(AUTO_RADIAL), 4), MAX_GAUSS_POINTS)
+    if d == 2:
+        points = min(_ceil_to(size(AUTO_SPHERE), 4), MAX_SURFACE_POINTS)
+        sigma = min(max(_ceil_to(size(AUTO_SIGMA), 4), REVIEW_SIGMA[2].n_points),
+                    MAX_SURFACE_POINTS)
+        return radial, CircleTrapezoid(points), CircleTrapezoid(sigma)
+    return (radial, Lebedev(_lebedev_order(size(AUTO_SPHERE))),
+            Lebedev(_lebedev_order(max(size(AUTO_SIGMA), REVIEW_SIGMA[3].degree))))
+
+
+def _lebedev_order(degree: float) -> int:
+    """The smallest Lebedev order >= ``degree`` (the largest there is beyond them)."""
+    return next((o for o in LEBEDEV_ORDERS if o >= degree), LEBEDEV_ORDERS[-1])
+
+
+def _ceil_to(value: float, step: int) -> int:
+    """The smallest multiple of ``step`` >= ``value`` (at least ``step``)."""
+    return max(step, step * math.ceil(value / step - 1e-9))
 
 
 class FastSpectral(CollisionOperator):
@@ -38,14 +117,24 @@ class FastSpectral(CollisionOperator):
     grid, kernel, restitution, backend
         See :class:`granframe.CollisionOperator`.
     radial_points : int
-        N_rho, Gauss-Legendre points for rho = |g| on [0, R] (default: 32 in
-        2D, 30 in 3D, as in the review).
+        N_rho, Gauss-Legendre points for rho = |g| on [0, R] (default: from
+        ``quadrature``).
     sphere : SurfaceQuadrature
-        Rule for ghat on S^{d-1} (default: 16 equispaced points in 2D, the
-        32-point Gauss product rule of degree 7 in 3D).
+        Rule for ghat on S^{d-1} (default: from ``quadrature``).
     sigma : SurfaceQuadrature
         Rule for the sigma-integral when b(cos theta) is not constant
-        (ignored for isotropic kernels, whose sigma-integral is exact).
+        (ignored for isotropic kernels, whose sigma-integral is exact; default:
+        from ``quadrature``).
+    quadrature : {"auto", "review"}
+        Where the rules not given come from (:func:`default_quadratures`).
+        ``auto`` (default): chosen from the grid so that the operator is converged
+        for it: N_rho ~ N/2 and circle or Lebedev rules whose degree grows with N
+        (2D N = 64: N_rho = 40, M = 72; 3D N = 32: N_rho = 20, Lebedev 35; the
+        measured errors are in docs/accuracy-vs-cost.md, "Default quadratures").
+        ``review``: the review's N_rho = 32, M = 16 in 2D and N_rho = 30, the
+        32-point product rule of degree 7 in 3D, for reproducing its numbers
+        (docs/reproduction.md); it limits 3D to about 1e-2. ``radial_points``,
+        ``sphere`` and ``sigma``, when given, take precedence over either.
     batch : int or None
         Pairs (rho, ghat) transformed together for one distribution; ``None`` chooses
         from the grid size and the backend's ``batch_bytes`` (a few MiB on a CPU,
@@ -104,11 +193,13 @@ class FastSpectral(CollisionOperator):
     DEFAULT_MEMORY_BUDGET = 2 ** 31
 
     def __init__(self, grid, kernel, restitution, backend, *, radial_points=None, sphere=None,
-                 sigma=None, batch=None, memory_budget=None, precision="float64"):
+                 sigma=None, quadrature="auto", batch=None, memory_budget=None,
+                 precision="float64"):
         super().__init__(grid, kernel, restitution, backend)
-        self._options = (radial_points, sphere, sigma, batch, memory_budget, precision)
+        self._options = (radial_points, sphere, sigma, quadrature, batch, memory_budget,
+                         precision)
         plan = _plan(grid, kernel, backend, *self._options)
-        self.precision = precision
+        self.precision, self.quadrature = precision, quadrature
         self._real_dtype, self._complex_dtype = PRECISIONS[precision]
         self._itemsize = numpy.dtype(self._real_dtype).itemsize
         self.radial_points, self.sphere, self.sigma = plan.radial_points, plan.sphere, plan.sigma
@@ -117,8 +208,8 @@ class FastSpectral(CollisionOperator):
 
     @classmethod
     def estimate_memory(cls, grid, kernel, restitution, backend, *, radial_points=None,
-                        sphere=None, sigma=None, batch=None, memory_budget=None,
-                        precision="float64", distributions=1) -> int:
+                        sphere=None, sigma=None, quadrature="auto", batch=None,
+                        memory_budget=None, precision="float64", distributions=1) -> int:
         """Bytes the operator would hold for these arguments, evaluating stacks of
         ``distributions`` distributions, found without allocating.
 
@@ -128,8 +219,8 @@ class FastSpectral(CollisionOperator):
         check_arguments(cls.name, grid, kernel, restitution, backend)
         if not check.is_integer(distributions) or distributions < 1:
             check.reject(cls.name, "distributions", distributions, "must be an integer >= 1")
-        return _plan(grid, kernel, backend, radial_points, sphere, sigma, batch, memory_budget,
-                     precision, int(distributions)).memory_bytes
+        return _plan(grid, kernel, backend, radial_points, sphere, sigma, quadrature, batch,
+                     memory_budget, precision, int(distributions)).memory_bytes
 
     # -- precomputation -------------------------------------------------------------------
     def _build(self, plan):
@@ -290,8 +381,8 @@ class _Plan:
     memory_bytes: int
 
 
-def _plan(grid, kernel, backend, radial_points, sphere, sigma, batch, memory_budget,
-          precision, distributions=1) -> _Plan:
+def _plan(grid, kernel, backend, radial_points, sphere, sigma, quadrature, batch,
+          memory_budget, precision, distributions=1) -> _Plan:
     """Validate the options and size everything the operator will allocate for stacks of
     D = ``distributions`` distributions.
 
@@ -309,12 +400,15 @@ def _plan(grid, kernel, backend, radial_points, sphere, sigma, batch, memory_bud
     stack, D > 1, that does not fit is refused naming ``f``).
     """
     owner, d = "fast_spectral", grid.dimension
-    radial_points = DEFAULT_RADIAL[d] if radial_points is None else radial_points
+    if not isinstance(quadrature, str) or quadrature not in QUADRATURES:
+        check.reject(owner, "quadrature", quadrature, f"must be one of {list(QUADRATURES)}")
+    default_radial, default_sphere, default_sigma = default_quadratures(grid, quadrature)
+    radial_points = default_radial if radial_points is None else radial_points
     if not check.is_integer(radial_points) or not 1 <= radial_points <= MAX_GAUSS_POINTS:
         check.reject(owner, "radial_points", radial_points,
                      f"must be an integer >= 1 and <= {MAX_GAUSS_POINTS}")
-    sphere = DEFAULT_SPHERE[d] if sphere is None else sphere
-    sigma = DEFAULT_SIGMA[d] if sigma is None else sigma
+    sphere = default_sphere if sphere is None else sphere
+    sigma = default_sigma if sigma is None else sigma
     for name, rule in (("sphere", sphere), ("sigma", sigma)):
         if not isinstance(rule, SurfaceQuadrature) or rule.dimension != d:
             check.reject(owner, name, rule, f"must be a quadrature on S^{d - 1} "
@@ -353,7 +447,9 @@ def _plan(grid, kernel, backend, radial_points, sphere, sigma, batch, memory_bud
             check.reject(owner, "memory_budget", memory_budget,
                          f"is too small: one pair per pipeline needs "
                          f"{memory.gib(fixed + tables + pipelines * per_pair)} GiB (d = {d}, "
-                         f"N = {grid.n_modes}); use a smaller N, or raise memory_budget")
+                         f"N = {grid.n_modes}); use a smaller N, fewer radial_points (the "
+                         f"radial weights take {memory.gib(complex_ * half * radial_points)} "
+                         "GiB), or raise memory_budget")
     steady = fixed + tables + pipelines * batch * per_pair
     if not precompute:      # a block holds the pairs of whole rho values
         steady += pipelines * max(0, n_pairs - batch) * table_per_pair
@@ -371,7 +467,9 @@ def _plan(grid, kernel, backend, radial_points, sphere, sigma, batch, memory_bud
     if memory_bytes > budget:
         check.reject(owner, "memory_budget", memory_budget,
                      f"is too small: the operator needs {memory.gib(memory_bytes)} GiB (d = {d}, "
-                     f"N = {grid.n_modes}); use a smaller N, or raise memory_budget")
+                     f"N = {grid.n_modes}); use a smaller N, fewer radial_points (the "
+                     f"radial weights take {memory.gib(complex_ * half * radial_points)} GiB), "
+                     "or raise memory_budget")
     return _Plan(radial_points, sphere, sigma, reps, w_plus, w_minus, pipelines, int(batch),
                  precompute, int(memory_bytes))
 
