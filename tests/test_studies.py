@@ -118,8 +118,45 @@ def test_free_cooling_quick_unscaled_fails_where_rescaled_holds(tmp_path):
     assert rows["rescaled"]["final_negative_share"] < 1e-5
     assert summary["hcs"][0]["a2"] > 0.02               # e = 0.5: overpopulated tails
     assert summary["maxwell"][0]["max_T_error"] < 5e-3
-    for name in ("concentration.png", "hcs.png", "maxwell_tails.png"):
+    for name in ("concentration.png", "hcs.png", "maxwell_tails.png", "sonine.csv"):
         assert (tmp_path / name).exists()
+
+
+def test_sonine_moments_reproduce_the_first_sonine_approximation():
+    """The quadrature of the collisional moments gives van Noije & Ernst's closed form of the
+    first Sonine a2 and their cooling-rate factor mu_2 = mu_2^0 (1 + 3 a2/16 + a3/64) in 3D;
+    the second approximation lowers a2 where a3 < 0 (strong inelasticity)."""
+    study = _load_study("free_cooling")
+    for e in (0.3, 0.8):
+        first, second, a3 = study.sonine_approximations(e)
+        assert abs(first - study.sonine_a2(e, 3)) < 1e-12
+    moments = study.sonine_collision_moments(0.5)
+    assert abs(moments[(2, 2)] / moments[(2, 0)] - 3 / 16) < 1e-12
+    assert abs(moments[(2, 3)] / moments[(2, 0)] - 1 / 64) < 1e-12
+    first, second, a3 = study.sonine_approximations(0.3)
+    assert a3 < 0 and second < first
+
+
+def test_maxwell_moment_equations_match_the_operator():
+    """The exact m_2 and m_4 equations of 2D inelastic Maxwell molecules (the reference of the
+    kurtosis table in docs/stability.md) against the resolved spectral Q of a non-Maxwellian
+    isotropic f (N = 64, S = 6); elastic limit: the Maxwellian kurtosis 2 is stationary."""
+    import granframe as gf
+
+    study = _load_study("free_cooling")
+    operator = study._operator("maxwell", 2, 64, 6.0, 0.5, 32, gf.CircleTrapezoid(32))
+    grid = operator.grid
+    f = 0.5 * grid.maxwellian(temperature=0.6) + 0.5 * grid.maxwellian(temperature=1.4)
+    q, speed2 = operator(f), grid.speed_squared()
+    m2, m4, dm2, dm4 = ((speed2 ** k * g).sum() * grid.cell_volume
+                        for g, k in ((f, 1), (f, 2), (q, 1), (q, 2)))
+    rate, a, b = study.maxwell_moment_rates(0.5)
+    assert abs(dm2 / (-rate * m2) - 1) < 1e-5
+    assert abs(dm4 / (a * m4 + b * m2 * m2) - 1) < 1e-4
+    assert abs(study.maxwell_kurtosis(50.0, 1.0) - 2.0) < 1e-12
+    # the m_4 coefficient two ways; at e = 0.5 the scaled 6th moment settles, the 8th grows
+    assert abs(study.maxwell_moment_growth(4, 0.5) - (a + 2 * rate)) < 1e-12
+    assert study.maxwell_moment_growth(6, 0.5) < 0 < study.maxwell_moment_growth(8, 0.5)
 
 
 def test_advise_validation_quick_meets_the_tolerance(tmp_path):
