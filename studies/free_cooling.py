@@ -1,6 +1,6 @@
 """Free cooling: concentration on a fixed grid, the rescaled formulation, the cooling state.
 
-    python studies/free_cooling.py --out docs/figures/cooling   # about 30 min, 2 idle cores
+    python studies/free_cooling.py --out docs/figures/cooling   # 18 min 40 s on 2 cores
 
 (``--only hcs`` or ``--only maxwell`` measures one part again; the 3D cooling states take
 most of the time.) Without a heat bath the gas cools for ever (Haff's law T ~ t^-2 for hard
