@@ -482,7 +482,9 @@ class ProgressObserver(Observer):
                                         "[{elapsed}<{remaining}]{postfix}")
 
     def after_step(self, state):
-        self.bar.update(state.t - self.bar.n)
+        # t = step * dt may pass final_time by round-off (3 * 0.1 > 0.3): the bar stops at
+        # its total instead of warning that it clamps
+        self.bar.update(min(state.t, self.bar.total) - self.bar.n)
         self.bar.set_postfix_str(f"step {state.step}, T={state.record['temperature']:.6g}, "
                                  f"mass drift {state.record['mass'] / state.mass0 - 1:+.1e}",
                                  refresh=False)
