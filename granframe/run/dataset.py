@@ -102,8 +102,7 @@ def run_dataset(store: RunStore) -> xarray.Dataset:
     as :func:`open_run` describes; ``f`` is read lazily from the store."""
     meta = store.metadata
     snapshots, records = store.snapshot_count, int(store.progress["records"])
-    dataset = xarray.open_zarr(store.group.store if store.path is None else store.path,
-                               consolidated=False, chunks=None)
+    dataset = xarray.open_zarr(store.location, consolidated=False, chunks=None)
     dataset = dataset.isel(time=slice(0, snapshots), step_time=slice(0, records))
     dataset = dataset.drop_encoding()       # the zarr codecs and chunks: no netCDF encoding
     names = [f"v{i + 1}" for i in range(dataset.sizes["axis"])]

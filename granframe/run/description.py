@@ -485,9 +485,9 @@ class RunDescription:
             # would make the solution depend on the output schedule.
             interval = self.output.snapshot_interval
             if interval is not None:
-                ratio = interval / self.time_step
-                if (round(ratio) < 1
-                        or abs(ratio - round(ratio)) > _MULTIPLE_TOLERANCE * max(1.0, ratio)):
+                whole, rest = fixed_steps(interval, self.time_step)
+                if whole < 1 or rest:
+                    ratio = interval / self.time_step
                     whole = max(1, round(ratio))
                     check.reject(owner, "snapshot_interval", interval,
                                  f"must be a whole multiple (>= 1) of time_step = "

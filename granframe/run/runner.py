@@ -41,7 +41,7 @@ from granframe.memory import check_run_memory
 from granframe.stepping.stability import check_time_step
 from granframe.registry import default_registries
 from granframe.equations.rescaled import RescaledBoltzmann
-from granframe.run.storage import SCALAR_MOMENTS, TENSOR_MOMENTS, RunStore, StoreExistsError
+from granframe.run.storage import RECORD_ARRAYS, RECORDED_MOMENTS, RunStore, StoreExistsError
 from granframe.validators import distinct, reject
 from granframe.velocity.estimators import resolution_report
 from granframe.run.monitors import AccuracyMonitors
@@ -172,10 +172,6 @@ class HealthError(RuntimeError):
     dataset = None
 
 
-#: the moments recorded after every step (:func:`moments`)
-RECORDED_MOMENTS = ("momentum",) + SCALAR_MOMENTS + TENSOR_MOMENTS
-
-
 def moments(grid, f, xp) -> dict:
     """Mass, momentum, temperature, energy, min f, negative-mass share, kurtosis, a2,
     pressure tensor and heat flux of f.
@@ -234,7 +230,7 @@ class _Records:
 
     @staticmethod
     def _empty():
-        return {name: [] for name in ("step_time", "step", "dt") + RECORDED_MOMENTS}
+        return {name: [] for name in RECORD_ARRAYS}
 
     def add(self, step: int, t: float, dt: float, record: dict) -> None:
         self.columns["step_time"].append(t)

@@ -88,7 +88,9 @@ SCALAR_MOMENTS = ("mass", "temperature", "kinetic_energy", "min_f", "negative_ma
 SNAPSHOT_ARRAYS = ("f", "time", "snapshot_step", "snapshot_dt_next")
 #: moments with d or d x d components, recorded every step beside ``momentum``
 TENSOR_MOMENTS = ("pressure_tensor", "heat_flux")
-RECORD_ARRAYS = ("step_time", "step", "dt", "momentum") + SCALAR_MOMENTS + TENSOR_MOMENTS
+#: the moments recorded after every step, and the record arrays: the step and its moments
+RECORDED_MOMENTS = ("momentum",) + SCALAR_MOMENTS + TENSOR_MOMENTS
+RECORD_ARRAYS = ("step_time", "step", "dt") + RECORDED_MOMENTS
 #: the records of a store whose metadata names none (``record_arrays``): written before
 #: granframe recorded the pressure tensor and heat flux; it keeps that layout when resumed
 FIRST_RECORD_ARRAYS = ("step_time", "step", "dt", "momentum") + SCALAR_MOMENTS
@@ -702,6 +704,11 @@ class RunStore:
         return tuple(self.metadata.get("record_arrays", FIRST_RECORD_ARRAYS))
 
     @property
+    def location(self):
+        """Where zarr finds the store: its path, or the in-memory zarr store."""
+        return self.group.store if self.path is None else self.path
+
+    @property
     def snapshot_count(self) -> int:
         return int(self.progress["snapshots"])
 
@@ -858,7 +865,7 @@ class RunStore:
         meta["progress"] = progress
         meta["updated"] = _now()
         self.group.attrs["granframe"] = meta
-        consolidate(self.group.store if self.path is None else self.path)
+        consolidate(self.location)
 
 
 def _check_creatable(path: pathlib.Path, overwrite: bool, protect) -> None:
