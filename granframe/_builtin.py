@@ -8,6 +8,8 @@ import numpy
 
 from granframe import backends
 from granframe.model import initial, kernels, restitution
+from granframe.space import boundaries, reconstruction
+from granframe.space import initial as space_initial
 from granframe.stepping import integrators
 from granframe.velocity import quadratures
 from granframe.hookspecs import hookimpl
@@ -21,6 +23,11 @@ def _forward_peaked(cos_theta):
 def _gaussian(*velocity):
     """exp(-|v|^2/2): the callable initial condition's example."""
     return numpy.exp(-0.5 * sum(v * v for v in velocity))
+
+
+def _space_gaussian(x, *velocity):
+    """(1 + sin(2 pi x)/2) exp(-|v|^2/2): the space function initial condition's example."""
+    return (1.0 + 0.5 * numpy.sin(2.0 * numpy.pi * x)) * _gaussian(*velocity)
 
 
 @hookimpl
@@ -98,3 +105,36 @@ def granframe_register_initial_conditions(registry):
                                            {"density": 0.5, "temperature": 1.5}]}])
     registry.add("callable", initial.FromCallable,
                  examples=[{"function": _gaussian, "mass": None}])
+    registry.add("riemann", space_initial.RiemannProblem,
+                 description="Maxwellians of (rho, u, T) left and right of x = interface ell "
+                             "(space runs)",
+                 examples=[{"left": {"density": 1.0, "temperature": 1.0},
+                            "right": {"density": 0.125, "temperature": 0.8}}])
+    registry.add("sinusoidal_mode", space_initial.SinusoidalMode,
+                 description="uniform Maxwellian with rho, u_1 or T times 1 + A sin(2 pi k x/ell) "
+                             "(space runs)",
+                 examples=[{"field": "density", "amplitude": 0.2},
+                           {"field": "temperature", "amplitude": 0.3, "mode": 2}])
+    registry.add("space_function", space_initial.SpaceFunction,
+                 description="f0(x, v) from a function, cell-averaged (space runs)",
+                 examples=[{"function": _space_gaussian}])
+
+
+@hookimpl
+def granframe_register_reconstructions(registry):
+    registry.add("upwind", reconstruction.Upwind, description="first order: the cell averages")
+    registry.add("muscl", reconstruction.MUSCL,
+                 description="second order, piecewise linear with a limited slope (TVD)",
+                 examples=[{}, {"limiter": "minmod"}])
+    registry.add("weno5", reconstruction.WENO5,
+                 description="fifth order WENO (Jiang-Shu) for smooth problems")
+
+
+@hookimpl
+def granframe_register_boundaries(registry):
+    registry.add("periodic", boundaries.Periodic)
+    registry.add("specular", boundaries.Specular, description="specular reflection v_1 -> -v_1")
+    registry.add("diffuse", boundaries.Diffuse,
+                 description="diffuse (Maxwell) wall: temperature, tangential velocity, "
+                             "accommodation",
+                 examples=[{}, {"temperature": 2.0, "velocity": 0.5, "accommodation": 0.7}])

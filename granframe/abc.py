@@ -568,3 +568,75 @@ class CollisionOperator(abc.ABC):
     @abc.abstractmethod
     def __call__(self, f):
         """Return Q_I(f, f) sampled on the grid, an array like ``f`` in ``backend.xp``."""
+
+
+# -- Space: reconstructions of cell averages and boundaries -----------------------------------
+
+
+class Reconstruction(abc.ABC):
+    r"""Face values of cell averages along axis 0, for the finite-volume transport in x.
+
+    Cell j holds the average f_j of f over [x_{j-1/2}, x_{j+1/2}]. A reconstruction gives
+    at each face x_{j-1/2} the value reconstructed from the cell on its left (f^-) and from
+    the cell on its right (f^+); the transport takes the upwind one,
+    F_{j-1/2} = c^+ f^-_{j-1/2} + c^- f^+_{j-1/2} with c the speed of each velocity node
+    (:mod:`granframe.space.transport`).
+    """
+
+    #: cells each side that the face values of the outermost faces read beyond the interior
+    ghost: ClassVar[int]
+    #: formal order of accuracy on smooth data
+    order: ClassVar[int]
+    #: largest Courant number max|c| dt/dx of one transport sub-step (three-stage SSP
+    #: Runge-Kutta) for which the scheme is stable (and TVD, for the limited ones)
+    cfl: ClassVar[float]
+
+    @abc.abstractmethod
+    def faces(self, f, xp):
+        """Face values of the cell averages ``f`` of shape (n + 2 ghost, ...).
+
+        Returns ``(minus, plus)``, each of shape (n + 1, ...): entry i is at the face
+        between cells ghost + i - 1 and ghost + i (the n interior cells are
+        ``f[ghost:ghost + n]``); ``minus`` reconstructed from the left cell, ``plus``
+        from the right one. Every operation is element-wise over the trailing axes
+        (the velocity nodes), in the array namespace ``xp``.
+        """
+
+
+class Boundary(abc.ABC):
+    r"""What happens at one end of the interval: a wall, or the link of a periodic interval.
+
+    An implementation sees its wall as the left one, at x = 0 with the domain at x > 0:
+    the core maps the right wall to it by the exact reflection v_1 -> -v_1 of the velocity
+    nodes (:func:`granframe.space.transport.reflect`), so that the velocities that leave
+    the wall into the domain are always those with v_1 > 0.
+    """
+
+    #: the two ends are one (a periodic interval): both must be periodic, and the core
+    #: fills the ghost cells from the other end; :meth:`ghosts` and :meth:`emit` are unused
+    periodic: ClassVar[bool] = False
+
+    def check(self, grid) -> None:
+        """Refuse a velocity grid the boundary does not fit (a wall velocity of the wrong
+        dimension), with a message naming the parameter."""
+
+    @abc.abstractmethod
+    def ghosts(self, inside, grid, xp):
+        """Ghost cells beyond the wall from the cells next to it.
+
+        ``inside``: the first g cells from the wall inwards, shape (g, *grid.shape).
+        Returns g ghost cells, ordered from the wall outwards, of the same shape. They
+        feed the reconstruction of the faces near the wall; the flux through the wall
+        itself is set by :meth:`emit`.
+        """
+
+    @abc.abstractmethod
+    def emit(self, incoming, grid, xp):
+        """The face values at the wall.
+
+        ``incoming``: f at the wall reconstructed from inside, shape (*grid.shape); the
+        values at v_1 < 0 (moving into the wall) are what arrives. Returns the values at
+        the wall for every node: those at v_1 > 0 are what the wall sends into the domain
+        (the others are not used). Zero net mass flux means
+        sum_{v_1 > 0} v_1 out = sum_{v_1 < 0} |v_1| incoming on the grid.
+        """

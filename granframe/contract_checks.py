@@ -23,6 +23,8 @@ CONTRACTS = {
     "time_integrators": contracts.TimeIntegrator,
     "initial_conditions": contracts.InitialCondition,
     "array_backends": contracts.ArrayBackend,
+    "reconstructions": contracts.Reconstruction,
+    "boundaries": contracts.Boundary,
 }
 
 #: Relative speeds a restitution law and a kernel's speed part are sampled at: zero,

@@ -60,3 +60,15 @@ def granframe_register_initial_conditions(registry):
 def granframe_register_array_backends(registry):
     """Add array backends; factories return
     :class:`granframe.abc.ArrayBackend` instances."""
+
+
+@hookspec
+def granframe_register_reconstructions(registry):
+    """Add reconstructions of cell averages for the transport in x; factories return
+    :class:`granframe.abc.Reconstruction` instances."""
+
+
+@hookspec
+def granframe_register_boundaries(registry):
+    """Add boundaries of the space interval (walls, periodic links); factories return
+    :class:`granframe.abc.Boundary` instances."""

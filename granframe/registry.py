@@ -42,6 +42,8 @@ FAMILIES = {
     "time_integrators": "granframe_register_time_integrators",
     "initial_conditions": "granframe_register_initial_conditions",
     "array_backends": "granframe_register_array_backends",
+    "reconstructions": "granframe_register_reconstructions",
+    "boundaries": "granframe_register_boundaries",
 }
 
 _NAME = re.compile(r"^[a-z][a-z0-9_]*$")

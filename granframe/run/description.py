@@ -284,6 +284,110 @@ def component_field(**kwargs):
                        validator=instance_of(Component, "a name or a table"), **kwargs)
 
 
+@attrs.frozen(kw_only=True)
+class Space:
+    r"""The space interval of d_t f + v_1 d_x f = Q(f, f)/eps (+ tau Delta_v f) (docs/space.md).
+
+    Parameters
+    ----------
+    cells : int
+        Finite-volume cells on [0, length]; at least the reconstruction's stencil,
+        2 ghost + 1 (3 for ``upwind``, 5 for ``muscl``, 7 for ``weno5``).
+    length : float
+        ell > 0.
+    block_cells : int or None
+        Cells per block (:class:`~granframe.space.transport.CellBlocks`); a divisor of
+        ``cells``, at least the reconstruction's ghost width. The store's f is chunked by
+        block. None: the largest such divisor up to 64 (one block if there is none).
+    reconstruction : Component
+        Registered reconstruction of the cell averages (``muscl``, ``weno5``, ``upwind``).
+    left, right : Component
+        Registered boundaries (``periodic``, ``specular``, ``diffuse`` with
+        ``temperature``, ``velocity``, ``accommodation``); periodic at both ends or at
+        neither.
+
+    collisions : bool
+        False: a collisionless gas (free-molecular flow, d_t f + v_1 d_x f = 0); the
+        kernel, the restitution law and the operator are then not built.
+
+    The Knudsen number eps is the description's ``knudsen``.
+    """
+
+    cells: int = attrs.field(converter=check.to_int, validator=check.integer(1))
+    length: float = attrs.field(default=1.0, converter=check.to_float,
+                                validator=check.real(0.0, math.inf, lower_open=True))
+    block_cells: int | None = attrs.field(default=None, converter=check.to_int)
+    reconstruction: Component = component_field(default=Component("muscl"))
+    left: Component = component_field(default=Component("periodic"))
+    right: Component = component_field(default=Component("periodic"))
+    collisions: bool = attrs.field(default=True, validator=check.boolean)
+
+    @block_cells.validator
+    def _check_block(self, attribute, value):
+        if value is not None and not (check.is_integer(value) and 1 <= value <= self.cells
+                                      and self.cells % value == 0):
+            check.reject("Space", "block_cells", value, f"must be a divisor of cells = "
+                         f"{self.cells} (or None)")
+
+    def build(self, field: str):
+        """The registered reconstruction (``reconstruction``) or boundary (``left``,
+        ``right``)."""
+        component = getattr(self, field)
+        family = "reconstructions" if field == "reconstruction" else "boundaries"
+        return default_registries().create(family, component.name, **component.params)
+
+    def blocks(self, ghost: int) -> int:
+        """The cells per block: ``block_cells``, or the largest divisor of ``cells`` from
+        ``ghost`` to 64 (all cells when there is none)."""
+        if self.block_cells is not None:
+            return self.block_cells
+        divisors = [b for b in range(max(ghost, 1), min(self.cells, 64) + 1)
+                    if self.cells % b == 0]
+        return divisors[-1] if divisors else self.cells
+
+    def check(self, grid, time_step, step_limit: bool) -> dict:
+        """Build and check the reconstruction and the boundaries against the cells, the
+        grid and the time step (the transport's CFL limit); returns them."""
+        owner = "RunDescription"
+        built = {field: self.build(field) for field in ("reconstruction", "left", "right")}
+        ghost = built["reconstruction"].ghost
+        if self.cells < 2 * ghost + 1:
+            check.reject(owner, "space.cells", self.cells,
+                         f"must be >= {2 * ghost + 1}, the stencil of the reconstruction "
+                         f"'{self.reconstruction.name}' (2 x {ghost} ghost cells + 1)")
+        block = self.blocks(ghost)
+        if block < ghost:
+            check.reject(owner, "space.block_cells", block,
+                         f"must be >= {ghost}, the ghost width of the reconstruction "
+                         f"'{self.reconstruction.name}' (a block fills its neighbour's ghosts)")
+        left, right = built["left"], built["right"]
+        if left.periodic != right.periodic:
+            check.reject(owner, "space.left" if not left.periodic else "space.right",
+                         (self.left if not left.periodic else self.right).name,
+                         "must be periodic too: an interval is periodic at both ends or at "
+                         "neither")
+        for side in ("left", "right"):
+            built[side].check(grid)
+        if step_limit and time_step is not None:
+            dx = self.length / self.cells
+            speed = grid.half_width - grid.spacing
+            limit = 2.0 * built["reconstruction"].cfl * dx / speed
+            if time_step > limit * (1 + 1e-12):
+                check.reject(owner, "time_step", time_step,
+                             f"must be <= {limit:.6g}, the transport's CFL limit: each half "
+                             f"step dt/2 moves the fastest node (max|v_1| = L - h = "
+                             f"{speed:.6g}) at most cfl = {built['reconstruction'].cfl:g} "
+                             f"cells of dx = {dx:.6g} ('{self.reconstruction.name}' with SSP "
+                             "RK3); lower time_step, or use fewer space.cells")
+        return built
+
+    def to_dict(self) -> dict:
+        return {"cells": self.cells, "length": self.length, "block_cells": self.block_cells,
+                **({} if self.collisions else {"collisions": False}),
+                **{field: getattr(self, field).to_dict(f"space.{field}")
+                   for field in ("reconstruction", "left", "right")}}
+
+
 #: The registry family (:mod:`granframe.registry`) of each component of a description.
 COMPONENT_FAMILIES = {"kernel": "collision_kernels", "restitution": "restitution_laws",
                       "initial": "initial_conditions", "operator": "collision_operators",
@@ -403,6 +507,9 @@ class RunDescription:
     output : Output
     health : Health
     title : str
+    space : Space or None
+        The interval in x of a space-inhomogeneous run (:class:`Space`); None (the
+        default) for a space-homogeneous one.
     """
 
     grid: VelocityGrid = attrs.field(converter=_table(VelocityGrid),
@@ -431,6 +538,9 @@ class RunDescription:
     health: Health = attrs.field(factory=Health, converter=_table(Health),
                                  validator=instance_of(Health, "a Health table"))
     title: str = attrs.field(default="", validator=instance_of(str, "a string"))
+    space: Space | None = attrs.field(default=None, converter=_table(Space),
+                                      validator=attrs.validators.optional(
+                                          instance_of(Space, "a Space table")))
     #: what validating built: the light components (:data:`LIGHT_COMPONENTS`), which
     #: :meth:`build` hands out instead of building them again, and the operator's options
     #: (:meth:`operator_options`)
@@ -452,7 +562,24 @@ class RunDescription:
                   if isinstance(value, dict) and "name" in value else value)
             for key, value in self.operator.params.items()}
         self._check_time_stepping(self._light["integrator"].adaptive)
+        if self.space is not None:
+            self._check_space()
         self.to_dict()  # everything can be written to TOML and a store
+
+    def _check_space(self):
+        owner = "RunDescription"
+        if self._light["integrator"].adaptive:
+            check.reject(owner, "integrator", self.integrator.name,
+                         "must be a fixed-step integrator in a space run (the transport's "
+                         "CFL limit sets the step)")
+        if self.rescaled:
+            check.reject(owner, "rescaled", True, "applies to space-homogeneous runs only "
+                         "(free cooling in self-similar variables has no x)")
+        if not self.space.collisions and self.heat_bath:
+            check.reject(owner, "heat_bath", self.heat_bath, "must be 0 in a collisionless "
+                         "run (space.collisions = false solves free transport only)")
+        self._light["space"] = self.space.check(self.grid, self.time_step,
+                                                self.health.step_limit)
 
     def _check_time_stepping(self, adaptive: bool):
         owner, name = "RunDescription", self.integrator.name
@@ -542,7 +669,8 @@ class RunDescription:
                 "conservative": self.conservative,
                 "grid": attrs.asdict(self.grid),
                 **{field: getattr(self, field).to_dict(field) for field in COMPONENT_FAMILIES},
-                "output": attrs.asdict(self.output), "health": self.health.to_dict()}
+                "output": attrs.asdict(self.output), "health": self.health.to_dict(),
+                **({} if self.space is None else {"space": self.space.to_dict()})}
         return json.loads(json.dumps(_plain("RunDescription", "description", data)))
 
     @classmethod

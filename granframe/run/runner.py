@@ -41,7 +41,7 @@ from granframe.memory import check_run_memory
 from granframe.stepping.stability import check_time_step
 from granframe.registry import default_registries
 from granframe.equations.rescaled import RescaledBoltzmann
-from granframe.run.storage import RECORD_ARRAYS, RECORDED_MOMENTS, RunStore, StoreExistsError
+from granframe.run.storage import RECORDED_MOMENTS, RunStore, StoreExistsError
 from granframe.validators import distinct, reject
 from granframe.velocity.estimators import resolution_report
 from granframe.run.monitors import AccuracyMonitors
@@ -223,20 +223,21 @@ class RunResult:
 
 
 class _Records:
-    """Moment records waiting for the next commit."""
+    """Records waiting for the next commit: the step, its time and size, and ``names``
+    of each step's record (by default the moments of :data:`RECORDED_MOMENTS`)."""
 
-    def __init__(self):
+    def __init__(self, names=RECORDED_MOMENTS):
+        self.names = tuple(names)
         self.columns = self._empty()
 
-    @staticmethod
-    def _empty():
-        return {name: [] for name in RECORD_ARRAYS}
+    def _empty(self):
+        return {name: [] for name in ("step_time", "step", "dt") + self.names}
 
     def add(self, step: int, t: float, dt: float, record: dict) -> None:
         self.columns["step_time"].append(t)
         self.columns["step"].append(step)
         self.columns["dt"].append(dt)
-        for name in RECORDED_MOMENTS:
+        for name in self.names:
             self.columns[name].append(record[name])
 
     def take(self) -> dict:
@@ -492,15 +493,16 @@ class ProgressObserver(Observer):
 class StorageObserver(Observer):
     """At every output point: a commit of f with the pending moment records.
 
-    It also writes how a run ends otherwise: :meth:`fail` (a health check) and
-    :meth:`interrupt` (a Ctrl-C); :meth:`close` closes the store.
+    ``snapshot(f)`` is the state f as the NumPy array the store holds. It also writes
+    how a run ends otherwise: :meth:`fail` (a health check) and :meth:`interrupt` (a
+    Ctrl-C); :meth:`close` closes the store.
     """
 
-    def __init__(self, store: RunStore, records: "_Records", backend):
-        self.store, self.records, self.backend = store, records, backend
+    def __init__(self, store: RunStore, records: "_Records", snapshot):
+        self.store, self.records, self.snapshot = store, records, snapshot
 
     def at_output(self, state, final):
-        self.store.commit([(state.t, self.backend.to_numpy(state.f))], self.records.take(),
+        self.store.commit([(state.t, self.snapshot(state.f))], self.records.take(),
                           state.progress("finished" if final else "running"))
 
     def fail(self, state: RunState, stop: Stopped):
@@ -529,8 +531,17 @@ class Simulation:
     """Everything a run needs, built once from a description.
 
     f0 is checked against the grid (:func:`check_fits`) and projected onto the
-    Nyquist-free modes the operators evolve (:meth:`VelocityGrid.project`).
+    Nyquist-free modes the operators evolve (:meth:`VelocityGrid.project`). A description
+    with a ``space`` section makes a
+    :class:`~granframe.space.simulation.SpaceSimulation`.
     """
+
+    def __new__(cls, description=None):
+        if cls is Simulation and getattr(description, "space", None) is not None:
+            from granframe.space.simulation import SpaceSimulation
+
+            cls = SpaceSimulation
+        return super().__new__(cls)
 
     def __init__(self, description: RunDescription):
         if not isinstance(description, RunDescription):
@@ -628,14 +639,8 @@ class Simulation:
         d = self.description
         stepper = Stepper(self.integrator, self.equation, self.output_points(), d.time_step,
                           d.tolerance, self.backend.xp, d.final_time)
-        records = _Records()
-        storage = StorageObserver(store, records, self.backend)
-        observers = [MomentsObserver(self.grid, self.backend.xp, records),
-                     HealthObserver(d.health), ProgressObserver(state, d.final_time, progress),
-                     ResolutionObserver(self.grid, self.backend.xp,
-                                        d.health.resolution_tolerance),
-                     AccuracyObserver(self._monitors(store), self.backend.xp),
-                     storage]
+        observers = self._observers(store, state, progress)
+        storage = observers[-1]
         try:
             try:
                 for reached in stepper.steps(state):
@@ -658,6 +663,32 @@ class Simulation:
                          dataset=_dataset(store) if out is None else None,
                          accuracy_warnings=tuple(
                              store.progress.get("accuracy", {}).get("warnings", ())))
+
+    def _observers(self, store, state, progress) -> list:
+        """What the run does besides stepping, in order; the :class:`StorageObserver` last."""
+        d, xp = self.description, self.backend.xp
+        records = self._new_records()
+        return [MomentsObserver(self.grid, xp, records),
+                HealthObserver(d.health), ProgressObserver(state, d.final_time, progress),
+                ResolutionObserver(self.grid, xp, d.health.resolution_tolerance),
+                AccuracyObserver(self._monitors(store), xp),
+                StorageObserver(store, records, self.backend.to_numpy)]
+
+    def _layout(self):
+        """What the store holds (:func:`~granframe.run.storage.homogeneous_layout`)."""
+        return None
+
+    def _state(self, f_host):
+        """The run's state from a stored snapshot (on the backend)."""
+        return self.backend.asarray(f_host)
+
+    def _record(self, f) -> dict:
+        """The record of the state f (its moments)."""
+        return moments(self.grid, f, self.backend.xp)
+
+    def _new_records(self) -> _Records:
+        """The records a commit writes besides the step (the moments)."""
+        return _Records()
 
     def _monitors(self, store) -> AccuracyMonitors:
         """The accuracy monitors of a run in ``store``, from its first record (t = 0) and,
@@ -700,7 +731,8 @@ class Simulation:
                 store = RunStore.create(
                     out, description, d.to_toml(), self.grid, self.provenance(),
                     overwrite=overwrite, protect=protect, projection=self.projection,
-                    rescaling=None if rescaling is None else rescaling.to_dict())
+                    rescaling=None if rescaling is None else rescaling.to_dict(),
+                    layout=self._layout())
             except StoreExistsError:
                 if not resume:
                     raise         # else: another writer made it meanwhile; continue it
@@ -711,7 +743,7 @@ class Simulation:
         if entry["status"] == "finished":
             return store, None
         f_host, t = store.last_snapshot()
-        return store, RunState(self.backend.asarray(f_host), t, int(entry["step"]),
+        return store, RunState(self._state(f_host), t, int(entry["step"]),
                                float(entry["mass0"]), entry.get("dt_next"),
                                entry.get("resumes", []) + [int(entry["step"])],
                                entry.get("rollbacks", []),
@@ -721,12 +753,12 @@ class Simulation:
         """Commit f0 and its moments to a new store and publish it; the state at t = 0."""
         d = self.description
         try:
-            f = self.backend.asarray(self.f0)
-            record = moments(self.grid, f, self.backend.xp)
+            f = self._state(self.f0)
+            record = self._record(f)
             # adaptive schemes without a first trial step start from 1% of the run
             state = RunState(f, 0.0, 0, record["mass"], d.time_step or d.final_time / 100,
                              [], [], 0.0, started)
-            first = _Records()
+            first = self._new_records()
             first.add(0, 0.0, 0.0, record)
             store.commit([(0.0, self.f0)], first.columns,
                          {"status": "running", "step": 0, "time": 0.0, "mass0": state.mass0,

@@ -74,6 +74,7 @@ import sys
 import uuid
 import warnings
 
+import attrs
 import numpy
 import zarr
 
@@ -279,7 +280,9 @@ def store_kind(path) -> str:
 def _foreign_entries(path: pathlib.Path, kind: str) -> list[str]:
     """Entries at the top of a granframe store that granframe did not write."""
     if kind == "run":
-        own = set(SNAPSHOT_ARRAYS) | set(RECORD_ARRAYS) | {"zarr.json"}
+        meta = (_root_attributes(path) or {}).get("granframe", {})
+        own = set(SNAPSHOT_ARRAYS) | set(meta.get("record_arrays", RECORD_ARRAYS)) | {"zarr.json"}
+        own |= set(meta.get("coordinate_arrays", ()))
         own |= {p.name for p in path.iterdir() if p.name[:1] == "v" and p.name[1:].isdigit()}
     else:
         own = {"zarr.json", "runs", "table"}
@@ -489,6 +492,77 @@ def _chunk_file(root: pathlib.Path, name: str, index) -> pathlib.Path:
     return root / name / "c" / pathlib.Path(*map(str, index))
 
 
+@attrs.frozen
+class RecordArray:
+    """An array recorded after every step: ``shape`` and ``dimensions`` after ``step_time``."""
+
+    name: str
+    shape: tuple = ()
+    dimensions: tuple = ()
+    dtype: str = "f8"
+    #: records per chunk along step_time
+    chunk: int = MOMENT_CHUNK
+
+
+@attrs.frozen
+class Layout:
+    """What a run store holds besides its metadata.
+
+    Parameters
+    ----------
+    coordinates : tuple
+        ``(name, values, dimensions)`` of each coordinate array (written once).
+    snapshot_shape, snapshot_chunks, snapshot_dimensions : tuple
+        Shape, chunk shape and dimension names of one snapshot of ``f`` (after ``time``;
+        one snapshot per chunk along ``time``).
+    records : tuple
+        The :class:`RecordArray` of each record, ``step_time``, ``step`` and ``dt`` first.
+    space : dict or None
+        A space-inhomogeneous run's cells and blocks (kept in the metadata).
+    """
+
+    coordinates: tuple
+    snapshot_shape: tuple
+    snapshot_chunks: tuple
+    snapshot_dimensions: tuple
+    records: tuple
+    space: dict | None = None
+
+    def create(self, group) -> None:
+        """Create the layout's (empty) arrays in ``group``, the coordinates filled."""
+        for name, values, dimensions in self.coordinates:
+            values = numpy.asarray(values)
+            _create(group, name, values.shape, values.shape, values.dtype.str[1:],
+                    list(dimensions))[:] = values
+        _create(group, "f", (0,) + tuple(self.snapshot_shape),
+                (1,) + tuple(self.snapshot_chunks), "f8",
+                ["time"] + list(self.snapshot_dimensions))
+        for name, dtype in (("time", "f8"), ("snapshot_step", "i8"), ("snapshot_dt_next", "f8")):
+            _create(group, name, (0,), (SNAPSHOT_CHUNK,), dtype, ["time"])
+        for spec in self.records:
+            _create(group, spec.name, (0,) + tuple(spec.shape),
+                    (spec.chunk,) + tuple(spec.shape),
+                    spec.dtype, ["step_time"] + list(spec.dimensions))
+
+
+#: the step, its time and its size: the first records of every layout
+STEP_RECORDS = (RecordArray("step_time"), RecordArray("step", dtype="i8"), RecordArray("dt"))
+
+
+def homogeneous_layout(grid) -> Layout:
+    """The layout of a space-homogeneous run on ``grid``: f (time, v1, ..., vd) and the
+    moments of :data:`RECORDED_MOMENTS` after every step."""
+    d = grid.dimension
+    axes = tuple(f"v{i + 1}" for i in range(d))
+    points = grid.points()
+    tensors = {"momentum": ((d,), ("axis",)), "heat_flux": ((d,), ("axis",)),
+               "pressure_tensor": ((d, d), ("axis", "axis2"))}
+    records = STEP_RECORDS + tuple(RecordArray(name, *tensors.get(name, ((), ())))
+                                   for name in RECORDED_MOMENTS)
+    return Layout(tuple((name, points, (name,)) for name in axes), grid.shape, grid.shape,
+                  axes, records)
+
+
 class RunStore:
     """A run's store, opened for writing (:meth:`create`, :meth:`resume`) or reading (:meth:`open`).
 
@@ -509,7 +583,8 @@ class RunStore:
     @classmethod
     def create(cls, path, description: dict, description_toml: str, grid, provenance: dict,
                overwrite: bool = False, rescaling: dict | None = None,
-               protect=(), projection: dict | None = None) -> "RunStore":
+               protect=(), projection: dict | None = None,
+               layout: "Layout | None" = None) -> "RunStore":
         """A new store for ``description``, staged beside ``path``; see :meth:`publish`.
 
         ``path`` None: a store in memory, which nothing else can see (no lock, nothing
@@ -519,7 +594,10 @@ class RunStore:
         paths that must not be inside it). ``rescaling`` (rescaled runs) is the map to
         physical variables, :meth:`granframe.equations.rescaled.Rescaling.to_dict`, and
         ``projection`` the moments of f0 before and after its Nyquist projection
-        (:func:`granframe.model.initial.check_projection`), both kept in the metadata. The first :meth:`commit` and :meth:`publish` put it in place.
+        (:func:`granframe.model.initial.check_projection`), both kept in the metadata.
+        ``layout`` is what the store holds (:class:`Layout`); by default a
+        space-homogeneous run's (:func:`homogeneous_layout`). The first :meth:`commit` and
+        :meth:`publish` put it in place.
         """
         memory = path is None
         path = None if memory else pathlib.Path(path)
@@ -537,25 +615,14 @@ class RunStore:
                 token = uuid.uuid4().hex[:12]
                 staging = _sibling(path, _STAGING, token)
                 group = zarr.create_group(str(staging), zarr_format=3)
-            d = grid.dimension
-            axes = [f"v{i + 1}" for i in range(d)]
-            points = grid.points()
-            for name in axes:
-                _create(group, name, points.shape, points.shape, "f8", [name])[:] = points
-            _create(group, "f", (0,) + grid.shape, (1,) + grid.shape, "f8", ["time"] + axes)
-            for name, dtype in (("time", "f8"), ("snapshot_step", "i8"),
-                                ("snapshot_dt_next", "f8")):
-                _create(group, name, (0,), (SNAPSHOT_CHUNK,), dtype, ["time"])
-            for name, dtype in (("step_time", "f8"), ("step", "i8"), ("dt", "f8")) + tuple(
-                    (m, "f8") for m in SCALAR_MOMENTS):
-                _create(group, name, (0,), (MOMENT_CHUNK,), dtype, ["step_time"])
-            for name in ("momentum", "heat_flux"):
-                _create(group, name, (0, d), (MOMENT_CHUNK, d), "f8", ["step_time", "axis"])
-            _create(group, "pressure_tensor", (0, d, d), (MOMENT_CHUNK, d, d), "f8",
-                    ["step_time", "axis", "axis2"])
+            layout = homogeneous_layout(grid) if layout is None else layout
+            layout.create(group)
             meta = {
                 "schema": SCHEMA, "version": __version__, "description": description,
-                "record_arrays": list(RECORD_ARRAYS),
+                "record_arrays": [spec.name for spec in layout.records],
+                **({} if layout.space is None else {
+                    "coordinate_arrays": [name for name, _, _ in layout.coordinates],
+                    "space": layout.space}),
                 "description_toml": description_toml, "provenance": provenance,
                 "created": _now(),
                 "progress": {"snapshots": 0, "records": 0, "status": "created"},
@@ -704,6 +771,17 @@ class RunStore:
         return tuple(self.metadata.get("record_arrays", FIRST_RECORD_ARRAYS))
 
     @property
+    def coordinate_arrays(self) -> tuple:
+        """The coordinate arrays of this store: those its metadata names (a space run's
+        ``v1`` ... ``vd`` and ``x``), else ``v1`` ... ``vd``."""
+        names = self.metadata.get("coordinate_arrays")
+        if names is not None:
+            return tuple(names)
+        d = len(self.group["f"].shape) - 1 if "f" in self._names() else \
+            int(self.metadata["description"]["grid"]["dimension"])
+        return tuple(f"v{i + 1}" for i in range(d))
+
+    @property
     def location(self):
         """Where zarr finds the store: its path, or the in-memory zarr store."""
         return self.group.store if self.path is None else self.path
@@ -723,7 +801,7 @@ class RunStore:
         """Committed entries of an array along its first axis."""
         if name in SNAPSHOT_ARRAYS:
             return self.snapshot_count
-        if name in RECORD_ARRAYS:
+        if name in self.record_arrays:
             return int(self.progress["records"])
         return self.group[name].shape[0]
 
@@ -732,9 +810,7 @@ class RunStore:
 
     def _absent_arrays(self) -> list[dict]:
         """Arrays of the layout that are not in the store at all."""
-        d = len(self.group["f"].shape) - 1 if "f" in self._names() else \
-            int(self.metadata["description"]["grid"]["dimension"])
-        expected = set(SNAPSHOT_ARRAYS + self.record_arrays) | {f"v{i + 1}" for i in range(d)}
+        expected = set(SNAPSHOT_ARRAYS + self.record_arrays + self.coordinate_arrays)
         return [{"array": name, "chunk": [], "first": 0, "kind": "missing array",
                  "detail": ""} for name in sorted(expected - set(self._names()))]
 
@@ -766,11 +842,11 @@ class RunStore:
     def _continue_from_intact(self, rollback: bool) -> None:
         """Check what a resumed run reads; roll back to the last intact commit if asked."""
         k = self.snapshot_count
-        small = [n for n in self._names() if n != "f" and not n.startswith("v")]
+        small = [n for n in self._names() if n != "f" and n not in self.coordinate_arrays]
         problems = self.verify(small)
         bad_snapshot = min((p["first"] for p in problems if p["array"] in SNAPSHOT_ARRAYS),
                            default=k)
-        bad_record = min((p["first"] for p in problems if p["array"] in RECORD_ARRAYS),
+        bad_record = min((p["first"] for p in problems if p["array"] in self.record_arrays),
                          default=math.inf)
         intact = None
         for j in range(min(k, bad_snapshot) - 1, -1, -1):

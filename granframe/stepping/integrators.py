@@ -16,6 +16,7 @@ from fractions import Fraction
 from typing import ClassVar
 
 import attrs
+import numpy
 from granframe.abc import AdaptiveIntegrator, Equation, Part, TimeIntegrator
 
 
@@ -188,6 +189,11 @@ class DormandPrince54(AdaptiveIntegrator):
         self._last = self._candidate
 
 
+def _is_zero(value) -> bool:
+    """``value`` is the number 0 (a relaxation rate given per distribution is an array)."""
+    return numpy.ndim(value) == 0 and value == 0.0
+
+
 class PenalisedIMEX(TimeIntegrator):
     r"""Implicit-explicit Runge-Kutta with the BGK penalisation of Filbet & Jin (2010).
 
@@ -239,10 +245,10 @@ class PenalisedIMEX(TimeIntegrator):
                 for w, k in ((a_e[i][j], k_e[j]), (a_i[i][j], k_i[j])):
                     if w != 0.0 and k is not None:
                         g = g + (dt * w) * k
-            rate, target = equation.relaxation(g)
+            rate, target = equation.relaxation(g)   # a number, or one per distribution
             diagonal = a_i[i][i] * dt * rate
-            stage = g if diagonal == 0.0 else (g + diagonal * target) * (1.0 / (1.0 + diagonal))
-            k_i.append(rate * (target - stage) if rate else None)
+            stage = g if _is_zero(diagonal) else (g + diagonal * target) * (1.0 / (1.0 + diagonal))
+            k_i.append(None if _is_zero(rate) else rate * (target - stage))
             if needed[i]:
                 k = equation.nonlinear(t + c[i] * dt, stage)
                 k_e.append(k - k_i[i] if k_i[i] is not None else k)

@@ -42,7 +42,12 @@ class HeatBath:
         self._factors = {}
 
     def _apply(self, f, multiplier):
-        """IDFT(multiplier DFT(f)) with ``multiplier`` including the 1/N^d of the inverse."""
+        """IDFT(multiplier DFT(f)) with ``multiplier`` including the 1/N^d of the inverse;
+        f of the grid's shape, or a batch (..., *grid.shape) (the cells of a space run)."""
+        if f.shape != self.grid.shape:
+            axes = tuple(range(-self.grid.dimension, 0))
+            spectrum = self.backend.rfftn(f, axes=axes) * (multiplier / self._inverse_count)
+            return self.backend.irfftn(spectrum, self.grid.shape, axes=axes)
         fft = self._fft
         fft.real[...] = f
         spectrum = fft.forward()

@@ -1,0 +1,1 @@
+"""Space-inhomogeneous granular gases in one space dimension (docs/space.md)."""

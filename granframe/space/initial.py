@@ -1,0 +1,227 @@
+r"""Initial data f0(x, v) of space-inhomogeneous runs, as cell averages.
+
+Each condition gives, for the cell edges x_0 < ... < x_n of [0, ell], the average of f0
+over every cell at every velocity node (:meth:`SpaceCondition.sample_cells`):
+
+- :class:`RiemannProblem`: Maxwellians of (rho, u, T) left and right of x = a ell, each
+  cell the exact mixture by the share of it on each side;
+- :class:`SinusoidalMode`: a uniform Maxwellian with rho, u_1 or T times
+  1 + A sin(2 pi k x / ell), averaged by Gauss-Legendre quadrature (6 points per cell:
+  exact to degree 11, so the initial averages do not limit any reconstruction's order);
+- :class:`SpaceFunction`: any f0(x, v_1, ..., v_d) given as a ``module:function``, the
+  same quadrature.
+
+Any space-homogeneous initial condition (``maxwellian``, ``bkw``, ...) is uniform in x.
+As :class:`~granframe.abc.InitialCondition` each gives ``sample(grid)``, the average of f0
+over the interval (the distribution of the whole gas).
+"""
+
+from __future__ import annotations
+
+import math
+
+import attrs
+import numpy
+
+from granframe import abc as contracts
+from granframe import validators as check
+from granframe.model.initial import resolve_callable
+
+#: Gauss-Legendre points per cell of the averages
+CELL_POINTS = 6
+
+
+def _maxwellian(grid, density, velocity, temperature):
+    return grid.maxwellian(density, velocity, temperature)
+
+
+def _velocity(value, owner, name):
+    """A velocity given as u_1 (a number) or all d components, as a tuple."""
+    if check.is_real(value):
+        return (float(value),)
+    if isinstance(value, (list, tuple)) and 1 <= len(value) <= 3 and all(
+            check.is_real(v) and math.isfinite(v) for v in value):
+        return tuple(float(v) for v in value)
+    check.reject(owner, name, value, "must be u_1 (a number) or the d components of u")
+
+
+def _full(velocity, grid, owner, name):
+    d = grid.dimension
+    if len(velocity) not in (1, d):
+        check.reject(owner, name, list(velocity), f"must be u_1 or {d} components on a {d}D grid")
+    return tuple(velocity) + (0.0,) * (d - len(velocity))
+
+
+def _state(value, owner, name):
+    """A hydrodynamic state {density, velocity, temperature} with rho, T > 0."""
+    if not isinstance(value, dict):
+        check.reject(owner, name, value, "must be a table {density, velocity, temperature}",
+                     error=TypeError)
+    unknown = set(value) - {"density", "velocity", "temperature"}
+    if unknown:
+        check.reject(owner, f"{name}.{sorted(unknown)[0]}", value[sorted(unknown)[0]],
+                     "is not a state variable (density, velocity, temperature)")
+    state = {"density": value.get("density", 1.0), "velocity": value.get("velocity", 0.0),
+             "temperature": value.get("temperature", 1.0)}
+    for key in ("density", "temperature"):
+        if not (check.is_real(state[key]) and 0.0 < float(state[key]) < math.inf):
+            check.reject(owner, f"{name}.{key}", state[key], "must be a finite number > 0")
+        state[key] = float(state[key])
+    state["velocity"] = list(_velocity(state["velocity"], owner, f"{name}.velocity"))
+    return state
+
+
+class SpaceCondition(contracts.InitialCondition):
+    """Initial data that depends on x: :meth:`sample_cells` gives the cell averages."""
+
+    def sample_cells(self, grid, edges):
+        """(f0 cell averages (cells, *grid.shape), the intended mass of each cell or None)."""
+        raise NotImplementedError
+
+    def sample(self, grid):
+        """The average of f0 over the interval (the mean of 64 equal cells)."""
+        f, _ = self.sample_cells(grid, numpy.linspace(0.0, 1.0, 65))
+        return f.mean(axis=0)
+
+    @property
+    def intended_mass(self):
+        return None
+
+
+def _gauss(edges):
+    """Gauss-Legendre points (cells, CELL_POINTS) of each cell and the weights (sum 1)."""
+    nodes, weights = numpy.polynomial.legendre.leggauss(CELL_POINTS)
+    left, right = numpy.asarray(edges[:-1]), numpy.asarray(edges[1:])
+    x = 0.5 * (left + right)[:, None] + 0.5 * (right - left)[:, None] * nodes[None, :]
+    return x, 0.5 * weights
+
+
+@attrs.frozen
+class RiemannProblem(SpaceCondition):
+    """Maxwellians of the states ``left`` and ``right`` on each side of x = interface ell.
+
+    Parameters
+    ----------
+    left, right : dict
+        ``{density, velocity, temperature}``; velocity u_1 (a number) or all d components.
+        The elastic Sod tube: left (1, 0, 1), right (0.125, 0, 0.8) (p = rho T = 0.1).
+    interface : float
+        Position of the discontinuity as a fraction of the length, in (0, 1).
+    """
+
+    left: dict = attrs.field(converter=lambda v: _state(v, "RiemannProblem", "left"))
+    right: dict = attrs.field(converter=lambda v: _state(v, "RiemannProblem", "right"))
+    interface: float = attrs.field(default=0.5, converter=check.to_float,
+                                   validator=check.real(0.0, 1.0, lower_open=True,
+                                                        upper_open=True))
+
+    def sample_cells(self, grid, edges):
+        edges = numpy.asarray(edges, dtype=float)
+        owner = "RiemannProblem"
+        states = [_maxwellian(grid, s["density"], _full(s["velocity"], grid, owner, side),
+                              s["temperature"])
+                  for side, s in (("left.velocity", self.left), ("right.velocity", self.right))]
+        x0 = self.interface * edges[-1]
+        share = numpy.clip((x0 - edges[:-1]) / numpy.diff(edges), 0.0, 1.0)   # left of x0
+        shape = (-1,) + (1,) * grid.dimension
+        f = share.reshape(shape) * states[0] + (1.0 - share).reshape(shape) * states[1]
+        mass = share * self.left["density"] + (1.0 - share) * self.right["density"]
+        return f, mass
+
+
+_FIELDS = ("density", "velocity", "temperature")
+
+
+@attrs.frozen
+class SinusoidalMode(SpaceCondition):
+    """A uniform Maxwellian (rho, u_1, T) with one of them times 1 + A sin(2 pi k x / ell)
+    (the velocity: u_1 + A sin(...)).
+
+    Parameters
+    ----------
+    density, velocity, temperature : float
+        The uniform state (velocity: u_1, along x).
+    field : str
+        The perturbed field: 'density', 'velocity' or 'temperature'.
+    amplitude : float
+        A; |A| < 1 for the density and the temperature (positive fields).
+    mode : int
+        k >= 1, the number of periods on the interval.
+    """
+
+    density: float = attrs.field(default=1.0, converter=check.to_float,
+                                 validator=check.real(0.0, math.inf, lower_open=True))
+    velocity: float = attrs.field(default=0.0, converter=check.to_float,
+                                  validator=check.real(-math.inf, math.inf))
+    temperature: float = attrs.field(default=1.0, converter=check.to_float,
+                                     validator=check.real(0.0, math.inf, lower_open=True))
+    field: str = attrs.field(default="density")
+    amplitude: float = attrs.field(default=0.1, converter=check.to_float,
+                                   validator=check.real(-math.inf, math.inf))
+    mode: int = attrs.field(default=1, converter=check.to_int, validator=check.integer(1))
+
+    @field.validator
+    def _check_field(self, attribute, value):
+        if value not in _FIELDS:
+            check.reject("SinusoidalMode", "field", value, f"must be one of {list(_FIELDS)}")
+
+    @amplitude.validator
+    def _check_amplitude(self, attribute, value):
+        if self.field in ("density", "temperature") and not abs(value) < 1.0:
+            check.reject("SinusoidalMode", "amplitude", value,
+                         f"must be in (-1, 1) for the {self.field}, which must stay positive")
+
+    def profile(self, x, length: float = 1.0) -> dict:
+        """rho, u_1, T at the points x of an interval of length ``length``."""
+        wave = self.amplitude * numpy.sin(2.0 * math.pi * self.mode * numpy.asarray(x) / length)
+        base = {"density": self.density, "velocity": self.velocity,
+                "temperature": self.temperature}
+        values = {k: numpy.full(numpy.shape(x), v) for k, v in base.items()}
+        values[self.field] = (base[self.field] + wave if self.field == "velocity"
+                              else base[self.field] * (1.0 + wave))
+        return values
+
+    def sample_cells(self, grid, edges):
+        edges = numpy.asarray(edges, dtype=float)
+        x, weights = _gauss(edges)
+        fields = self.profile(x, edges[-1] - edges[0])
+        d = grid.dimension
+        f = numpy.zeros((len(edges) - 1,) + tuple(grid.shape))
+        for q, w in enumerate(weights):
+            for cell in range(f.shape[0]):
+                u = (fields["velocity"][cell, q],) + (0.0,) * (d - 1)
+                f[cell] += w * grid.maxwellian(fields["density"][cell, q], u,
+                                               fields["temperature"][cell, q])
+        return f, (fields["density"] * weights).sum(axis=1)
+
+
+@attrs.frozen
+class SpaceFunction(SpaceCondition):
+    """f0(x, v_1, ..., v_d) from a function, averaged over each cell by Gauss-Legendre
+    quadrature; ``function`` a callable or a ``module:function`` string, vectorised over
+    arrays of x and v broadcast against each other."""
+
+    function: object = attrs.field()
+
+    @function.validator
+    def _check_function(self, attribute, value):
+        if isinstance(value, str):
+            resolve_callable("SpaceFunction", "function", value)
+        elif not callable(value):
+            check.reject("SpaceFunction", "function", value, "must be a callable or a "
+                         "'module:function' string", error=TypeError)
+
+    def sample_cells(self, grid, edges):
+        function = (resolve_callable("SpaceFunction", "function", self.function)
+                    if isinstance(self.function, str) else self.function)
+        edges = numpy.asarray(edges, dtype=float)
+        x, weights = _gauss(edges)
+        mesh = grid.mesh()
+        d = grid.dimension
+        f = numpy.zeros((len(edges) - 1,) + tuple(grid.shape))
+        for q, w in enumerate(weights):
+            xq = x[:, q].reshape((-1,) + (1,) * d)
+            f += w * numpy.broadcast_to(numpy.asarray(function(xq, *mesh), dtype=float),
+                                        f.shape)
+        return f, None
+
