@@ -300,3 +300,155 @@ def parse_config(text: str):
     if len(values) == 2:
         values += [32, 16] if values[0] == 2 else [30, 32]
     return check_config(tuple(values))
+
+
+#: The space configurations of ``--space``: (dimension, N, cells, N_rho, M).
+DEFAULT_SPACE_CONFIGS = ((3, 32, 64, 30, 32), (2, 64, 256, 32, 16))
+
+
+def measure_space(dimension: int, n_modes: int, cells: int, radial_points: int,
+                  sphere_points: int, backend: str, threads: int, repeats: int,
+                  reconstruction: str = "muscl") -> dict:
+    """Time one full step of a space run and its parts, in this process.
+
+    The run: hard spheres, e = 0.8, RK4 collisions (4 operator calls per step) with the
+    review's rules (N_rho, M), ``cells`` cells between two diffuse walls, a density wave,
+    dt at the transport's CFL limit. Reported (medians of ``repeats``, in alternating
+    rounds): the step; its parts -- collisions (the integrator's step on all cells),
+    transport (two half steps, walls included), of which the walls (ghost exchange and
+    wall fluxes, the 6 stages' worth), and the moments (the fields of every cell); the
+    batched operator time per distribution (one call on all cells / cells); the target
+    1.15 x cells x that x 4; and the peak resident memory.
+    """
+    from granframe.run.description import RunDescription
+    from granframe.run.runner import Simulation
+
+    baseline = peak_rss_kib()
+    grid = {"dimension": dimension, "n_modes": n_modes, "support_radius": 4.0}
+    if dimension == 2:
+        sphere = {"name": "circle_trapezoid", "n_points": sphere_points}
+    else:
+        sphere = {"name": "sphere_product", "n_polar": int(round((sphere_points / 2) ** 0.5))}
+    description = RunDescription.from_dict({
+        "final_time": 1.0, "time_step": 1e-6, "grid": grid, "kernel": "hard_spheres",
+        "restitution": {"name": "constant", "value": 0.8},
+        "initial": {"name": "sinusoidal_mode", "field": "density", "amplitude": 0.2},
+        "operator": {"name": "fast_spectral", "radial_points": radial_points, "sphere": sphere},
+        "backend": {"name": backend, **({"threads": threads} if backend != "numpy" else {})},
+        "space": {"cells": cells, "reconstruction": reconstruction, "left": "diffuse",
+                  "right": "diffuse"},
+        "health": {"step_limit": False}})
+    start = time.perf_counter()
+    simulation = Simulation(description)
+    precompute = time.perf_counter() - start
+    xp_backend = simulation.backend
+    transport, blocks = simulation.transport, simulation.blocks
+    dt = 2.0 * transport.time_step_limit()
+    array = simulation._state(simulation.f0)
+    cells_f = xp_backend.asarray(simulation.f0)
+    collide = simulation.integrator.integrator
+    equation = simulation.equation
+
+    def step():
+        simulation.integrator.step(equation, 0.0, array, dt)
+
+    def collisions():
+        inner = blocks.interior(array)
+        inner[...] = collide.step(equation, 0.0, inner, dt)
+
+    def transport_both():
+        transport.advance(array, 0.5 * dt)
+        transport.advance(array, 0.5 * dt)
+
+    def walls():
+        for _ in range(6):
+            blocks.exchange(array, transport.left, transport.right)
+            transport.left.emit(array[0, blocks.ghost], grid_object, xp_backend.xp)
+            transport.right.emit(array[-1, -blocks.ghost - 1], grid_object, xp_backend.xp)
+
+    def moments():
+        simulation._record(array)
+
+    def operator():
+        simulation.operator(cells_f)
+
+    grid_object = simulation.grid
+    parts = {"step": step, "collisions": collisions, "transport": transport_both,
+             "walls": walls, "moments": moments, "operator": operator}
+    for function in parts.values():       # warm-up
+        function()
+    times = {name: [] for name in parts}
+    for _ in range(repeats):
+        for name, function in parts.items():
+            times[name].append(xp_backend.elapsed(function))
+    medians = {name: float(numpy.median(values)) for name, values in times.items()}
+    per_distribution = medians["operator"] / cells
+    target = 1.15 * cells * per_distribution * 4
+    return {"dimension": dimension, "n_modes": n_modes, "cells": cells,
+            "radial_points": radial_points, "sphere_points": sphere_points,
+            "reconstruction": reconstruction, "backend": backend, "threads": threads,
+            "repeats": repeats, "precompute_s": precompute, "time_step": dt,
+            "step_s": medians["step"], "collisions_s": medians["collisions"],
+            "transport_s": medians["transport"], "walls_s": medians["walls"],
+            "moments_s": medians["moments"], "operator_per_distribution_s": per_distribution,
+            "operator_calls_per_step": 4, "target_s": target,
+            "step_over_target": medians["step"] / target * 1.15,
+            "others_share": (medians["transport"] + medians["moments"])
+            / (medians["step"] + medians["moments"]),
+            "peak_rss_gib": peak_rss_kib() / 2 ** 20, "baseline_rss_gib": baseline / 2 ** 20}
+
+
+def run_space(configs, backend: str, threads: int, repeats: int,
+              reconstruction: str = "muscl") -> list[dict]:
+    """:func:`measure_space` for each (d, N, cells, N_rho, M) in its own subprocess."""
+    check_options(backend, threads, repeats)
+    records = []
+    for dimension, n_modes, cells, radial, sphere in configs:
+        check_config((dimension, n_modes, radial, sphere))
+        if not check.is_integer(cells) or cells < 7:
+            check.reject("bench", "cells", cells, "must be an integer >= 7")
+        command = [sys.executable, "-c",
+                   "import json; from granframe.tools.bench import measure_space; "
+                   f"print(json.dumps(measure_space({dimension}, {n_modes}, {cells}, {radial}, "
+                   f"{sphere}, {backend!r}, {threads}, {repeats}, {reconstruction!r})))"]
+        done = subprocess.run(command, capture_output=True, text=True)
+        if done.returncode != 0:
+            lines = done.stderr.strip().splitlines() or [f"exit status {done.returncode}"]
+            raise ValueError(f"bench: space configuration d={dimension} N={n_modes} "
+                             f"cells={cells} failed: {lines[-1]}")
+        records.append(json.loads(done.stdout.strip().splitlines()[-1]))
+    return records
+
+
+def space_table(records) -> str:
+    """Markdown table of :func:`measure_space` records."""
+    lines = ["| 1D x | cells | N_rho | M | step | collisions | transport (walls) | moments "
+             "| operator / distribution | target 1.15 x cells x op x 4 | step / (target/1.15) "
+             "| transport + moments share | peak RSS |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in records:
+        lines.append(
+            f"| {r['dimension']}D N = {r['n_modes']} | {r['cells']} | {r['radial_points']} "
+            f"| {r['sphere_points']} | {_ms(r['step_s'])} | {_ms(r['collisions_s'])} "
+            f"| {_ms(r['transport_s'])} ({_ms(r['walls_s'])}) | {_ms(r['moments_s'])} "
+            f"| {_ms(r['operator_per_distribution_s'])} | {_ms(r['target_s'])} "
+            f"| {r['step_over_target']:.3f} | {100 * r['others_share']:.1f} % "
+            f"| {r['peak_rss_gib']:.2f} GiB |")
+    return "\n".join(lines)
+
+
+def parse_space_config(text: str):
+    """'D:N:CELLS' or 'D:N:CELLS:NRHO:M' -> (d, N, cells, N_rho, M), the review's rules by
+    default."""
+    parts = text.split(":")
+    try:
+        values = [int(p) for p in parts]
+    except ValueError:
+        values = []
+    if len(values) not in (3, 5) or values[0] not in (2, 3):
+        raise ValueError(f"bench: parameter 'space' = {text!r} is invalid; use D:N:CELLS or "
+                         "D:N:CELLS:N_RHO:M with D in {2, 3}, e.g. 3:32:64 or 2:64:256:32:16")
+    if len(values) == 3:
+        values += [32, 16] if values[0] == 2 else [30, 32]
+    check_config((values[0], values[1], values[3], values[4]))
+    return tuple(values)

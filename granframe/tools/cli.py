@@ -147,6 +147,20 @@ def _bench(args) -> int:
     from granframe.backends import AUTO, resolve_backend
 
     backend = resolve_backend(AUTO if args.backend is None else args.backend)
+    if args.space is not None:
+        configs = ([bench.parse_space_config(c) for c in args.space] if args.space
+                   else list(bench.DEFAULT_SPACE_CONFIGS))
+        records = bench.run_space(configs, backend, args.threads, args.repeats)
+        if args.json:
+            json.dump({"schema": "granframe.tools.bench/1", "granframe_version": __version__,
+                       "records": records}, sys.stdout, indent=2)
+            sys.stdout.write("\n")
+        else:
+            print(f"space step (Strang: transport, RK4 collisions on all cells, transport), "
+                  f"backend {backend}, {args.threads} threads, median of {args.repeats} "
+                  "rounds after warm-up")
+            print(bench.space_table(records))
+        return 0
     configs = ([bench.parse_config(c) for c in args.config] if args.config
                else list(bench.DEFAULT_CONFIGS))
     records = bench.run(configs, backend, args.threads, args.repeats, args.precision,
@@ -676,7 +690,8 @@ time and floor per distribution.""",
               """\
   granframe bench --config 2:64 --config 3:32 --repeats 5
   granframe bench --config 3:32 --quadrature auto review
-  granframe bench --json --backend numpy --batch 1 8 64"""),
+  granframe bench --json --backend numpy --batch 1 8 64
+  granframe bench --space 3:32:64 2:64:256"""),
     "run": ("""\
 Run a description (a .toml file, or a study module defining description(quick) or
 runs(quick)) into a zarr store. A study with several runs writes STORE/<name>.zarr for each,
@@ -773,6 +788,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="time each configuration D:N with the rules of these presets of "
                             "fast_spectral's quadrature option (e.g. --quadrature auto "
                             "review) instead of its N_RHO and M")
+    bench.add_argument("--space", nargs="*", metavar="D:N:CELLS[:N_RHO:M]", default=None,
+                       help="time one step of a space run and its parts instead (default "
+                            "configurations: 3:32:64 and 2:64:256, the review's rules)")
     bench.set_defaults(handler=_bench)
     run = commands.add_parser("run", help="run a description (TOML or study module) into a store")
     run.add_argument("source", metavar="STUDY_OR_TOML",
