@@ -64,14 +64,21 @@ def integrator_copies(integrator) -> int:
 RUN_COPIES = 2 + 3 + 1 + 3
 
 
+#: Copies of the cells' f the transport of a space run holds besides them: the block array
+#: with its ghosts, the start of the sub-step and its three stage rates, the face values
+#: and fluxes (three), and the reconstruction's temporaries (WENO5: up to ten).
+TRANSPORT_COPIES = 1 + 4 + 3 + 10
+
+
 def run_memory(description, backend=None) -> dict:
     """Estimated bytes of a run of ``description``, found without allocating anything large.
 
     ``backend`` is the run's array backend when it is built already (else the estimate
     builds the description's, for the operator's estimate only).
 
-    Returns ``f`` (bytes of one float64 copy of f), ``copies`` (:func:`integrator_copies`
-    + :data:`RUN_COPIES`), ``operator`` (the operator's
+    Returns ``f`` (bytes of one float64 copy of f; of every cell's f in a space run),
+    ``copies`` (:func:`integrator_copies` + :data:`RUN_COPIES`, + :data:`TRANSPORT_COPIES`
+    in a space run), ``operator`` (the operator's
     :meth:`~granframe.CollisionOperator.estimate_memory`, 0 when it gives none) and
     ``total``. The operator's estimate raises the operator's own errors, among them a
     ``memory_budget`` too small for it.
@@ -79,8 +86,10 @@ def run_memory(description, backend=None) -> dict:
     from granframe.registry import default_registries
 
     d = description
-    need = {"f": 8 * d.grid.n_modes ** d.grid.dimension,
-            "copies": integrator_copies(d.build("integrator")) + RUN_COPIES, "operator": 0}
+    space = getattr(d, "space", None)
+    need = {"f": 8 * d.grid.n_modes ** d.grid.dimension * (1 if space is None else space.cells),
+            "copies": integrator_copies(d.build("integrator")) + RUN_COPIES
+            + (0 if space is None else TRANSPORT_COPIES), "operator": 0}
     need["total"] = need["f"] * need["copies"]
     if need["total"] <= budget():   # else too much already, whatever the operator needs
         factory = default_registries().get("collision_operators", d.operator.name).factory
@@ -100,6 +109,15 @@ def check_run_memory(description, backend=None) -> None:
     if need["total"] > limit:
         grid = description.grid
         operator = (f"operator {gib(need['operator'])} GiB + " if need["operator"] else "")
+        space = getattr(description, "space", None)
+        if space is not None:
+            check.reject("Simulation", "space.cells", space.cells,
+                         f"with grid.n_modes = {grid.n_modes} (d = {grid.dimension}) needs "
+                         f"about {gib(need['total'])} GiB for this run ({operator}"
+                         f"{need['copies']} copies of every cell's f at {gib(need['f'])} GiB), "
+                         f"more than the memory budget of {gib(limit)} GiB; use fewer cells "
+                         f"or a smaller n_modes, or set {ENVIRONMENT_VARIABLE} (bytes) to "
+                         "allow more")
         check.reject("Simulation", "grid.n_modes", grid.n_modes,
                      f"needs about {gib(need['total'])} GiB for this run ({operator}"
                      f"{need['copies']} copies of f at {gib(need['f'])} GiB, "

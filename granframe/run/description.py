@@ -369,17 +369,24 @@ class Space:
         for side in ("left", "right"):
             built[side].check(grid)
         if step_limit and time_step is not None:
-            dx = self.length / self.cells
-            speed = grid.half_width - grid.spacing
-            limit = 2.0 * built["reconstruction"].cfl * dx / speed
+            limit = self.transport_limit(grid, built["reconstruction"])
             if time_step > limit * (1 + 1e-12):
                 check.reject(owner, "time_step", time_step,
                              f"must be <= {limit:.6g}, the transport's CFL limit: each half "
                              f"step dt/2 moves the fastest node (max|v_1| = L - h = "
-                             f"{speed:.6g}) at most cfl = {built['reconstruction'].cfl:g} "
-                             f"cells of dx = {dx:.6g} ('{self.reconstruction.name}' with SSP "
-                             "RK3); lower time_step, or use fewer space.cells")
+                             f"{grid.half_width - grid.spacing:.6g}) at most cfl = "
+                             f"{built['reconstruction'].cfl:g} cells of dx = "
+                             f"{self.length / self.cells:.6g} ('{self.reconstruction.name}' "
+                             "with SSP RK3); lower time_step, or use fewer space.cells")
         return built
+
+    def transport_limit(self, grid, reconstruction=None) -> float:
+        """The largest time step of the transport: each half step dt/2 moves the fastest
+        node (max|v_1| = L - h) at most the reconstruction's ``cfl`` cells,
+        dt <= 2 cfl dx / (L - h)."""
+        reconstruction = reconstruction or self.build("reconstruction")
+        return (2.0 * reconstruction.cfl * (self.length / self.cells)
+                / (grid.half_width - grid.spacing))
 
     def to_dict(self) -> dict:
         return {"cells": self.cells, "length": self.length, "block_cells": self.block_cells,

@@ -25,7 +25,7 @@ import numpy
 
 from granframe import abc as contracts
 from granframe import validators as check
-from granframe.model.initial import resolve_callable
+from granframe.model.initial import IMAGINARY_TOLERANCE, resolve_callable
 
 #: Gauss-Legendre points per cell of the averages
 CELL_POINTS = 6
@@ -183,6 +183,11 @@ class SinusoidalMode(SpaceCondition):
 
     def sample_cells(self, grid, edges):
         edges = numpy.asarray(edges, dtype=float)
+        cells = len(edges) - 1
+        if 2 * self.mode > cells:
+            check.reject("SinusoidalMode", "mode", self.mode,
+                         f"must be <= cells / 2 = {cells / 2:g}: {cells} cells resolve at most "
+                         f"{cells // 2} periods (2 cells a period); use more space.cells")
         x, weights = _gauss(edges)
         fields = self.profile(x, edges[-1] - edges[0])
         d = grid.dimension
@@ -221,7 +226,48 @@ class SpaceFunction(SpaceCondition):
         f = numpy.zeros((len(edges) - 1,) + tuple(grid.shape))
         for q, w in enumerate(weights):
             xq = x[:, q].reshape((-1,) + (1,) * d)
-            f += w * numpy.broadcast_to(numpy.asarray(function(xq, *mesh), dtype=float),
-                                        f.shape)
+            f += w * self._values(function, xq, mesh, f.shape)
         return f, None
 
+    def _values(self, function, x, mesh, shape):
+        """function(x, *mesh) as a real array of ``shape``; refused when the call fails, the
+        result does not broadcast to ``shape``, or it is complex beyond round-off
+        (:data:`~granframe.model.initial.IMAGINARY_TOLERANCE`), as for ``callable``."""
+        try:
+            raw = numpy.asarray(function(x, *mesh))
+            values = numpy.asarray(raw.real if raw.dtype.kind == "c" else raw, dtype=float)
+            values = numpy.broadcast_to(values, shape)
+        except Exception as exc:  # the user's function: report it with what it was given
+            check.reject("SpaceFunction", "function", self.function,
+                         f"must map x and the {len(mesh)} velocity components (broadcastable "
+                         f"arrays, x of shape {x.shape}) to f0 of shape {shape}; calling it "
+                         f"raised {type(exc).__name__}: {exc}")
+        if raw.dtype.kind == "c":
+            imaginary = float(numpy.abs(raw.imag).max(initial=0.0))
+            scale = float(numpy.abs(values).max(initial=0.0))
+            if not imaginary <= IMAGINARY_TOLERANCE * scale:
+                check.reject("SpaceFunction", "function", self.function,
+                             f"must return real values; it returned complex values with "
+                             f"max |imaginary part| = {imaginary:.3g} against max |real part| "
+                             f"= {scale:.3g} (more than round-off: f0 is a real density)")
+        return values
+
+
+def cell_edges(space):
+    """The cell edges 0 = x_0 < ... < x_n = ell of a :class:`~granframe.run.description.Space`."""
+    return numpy.linspace(0.0, space.length, space.cells + 1)
+
+
+def initial_cells(description):
+    """f0 of a space run as cell averages (cells, *grid.shape), and the intended mass of each
+    cell (None where unknown): a :class:`SpaceCondition`'s :meth:`~SpaceCondition.sample_cells`,
+    or a space-homogeneous condition repeated in every cell."""
+    grid, space = description.grid, description.space
+    initial = description.build("initial")
+    if isinstance(initial, SpaceCondition):
+        f, masses = initial.sample_cells(grid, cell_edges(space))
+    else:
+        cell = initial.sample(grid)
+        f = numpy.broadcast_to(cell, (space.cells,) + cell.shape)
+        masses = [initial.intended_mass] * space.cells
+    return f, [None] * len(f) if masses is None else list(masses)

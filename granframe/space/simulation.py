@@ -26,6 +26,7 @@ from granframe.run.runner import (HealthObserver, Observer, ProgressObserver, Si
 from granframe.run.storage import STEP_RECORDS, Layout, RecordArray
 from granframe.space.collisions import CellCollisions, SplitStep
 from granframe.space.fields import FIELDS, FieldMoments
+from granframe.space.initial import cell_edges, initial_cells
 from granframe.space.transport import CellBlocks, Transport
 from granframe.stepping.stability import check_time_step
 from granframe.validators import reject
@@ -91,8 +92,8 @@ class SpaceSimulation(Simulation):
         self.backend = d.build("backend")
         xp = self.backend.xp
         collide = space.collisions
+        check_run_memory(d, self.backend)
         if collide:
-            check_run_memory(d, self.backend)
             self.operator = d.build("operator", grid=grid, kernel=d.build("kernel"),
                                     restitution=d.build("restitution"), backend=self.backend)
             if d.conservative is not None:
@@ -104,7 +105,7 @@ class SpaceSimulation(Simulation):
         self.blocks = CellBlocks(space.cells, block, self.reconstruction.ghost, grid, xp)
         self.transport = Transport(self.blocks, self.reconstruction, self.left, self.right,
                                    space.length)
-        self.edges = numpy.linspace(0.0, space.length, space.cells + 1)
+        self.edges = cell_edges(space)
         self.f0 = self._initial()
         self.projection = None
         self.equation = (CellCollisions(self.operator, d.heat_bath, d.knudsen) if collide
@@ -122,13 +123,7 @@ class SpaceSimulation(Simulation):
         """f0 as cell averages (cells, *grid.shape), checked and projected cell by cell."""
         d, grid = self.description, self.grid
         initial = d.build("initial")
-        if hasattr(initial, "sample_cells"):
-            sampled, masses = initial.sample_cells(grid, self.edges)
-        else:
-            cell = initial.sample(grid)
-            sampled = numpy.broadcast_to(cell, (d.space.cells,) + cell.shape)
-            masses = [initial.intended_mass] * d.space.cells
-        masses = [None] * len(sampled) if masses is None else masses
+        sampled, masses = initial_cells(d)
         for index, (f, mass) in enumerate(zip(sampled, masses)):
             try:
                 check_fits(grid, f, _cell(initial, mass), d.health.edge_tolerance,

@@ -154,7 +154,9 @@ def time_step_limit(description) -> StepLimit | None:
     direct method by 7e-8 for Maxwell molecules (T0 = 1) and 5e-6 for hard spheres (two
     Gaussians of T = 0.6 at u = (+-1, 0)), at 2D N = 32 with fast_spectral on 16 x 8
     points by 1e-5 (Maxwell, T0 = 8, S = 10). None when the equation has no part the scheme
-    treats explicitly. At 3D N = 32 it takes a few tenths of a second, where building the run's
+    treats explicitly. A space run's limit is that of the collisions in its stiffest cell
+    (:class:`~granframe.space.collisions.CellCollisions`); the transport's CFL limit is
+    :meth:`~granframe.run.description.Space.transport_limit`. At 3D N = 32 it takes a few tenths of a second, where building the run's
     operator takes seconds (tests/test_frictions.py).
 
     Examples
@@ -178,6 +180,17 @@ def time_step_limit(description) -> StepLimit | None:
     grid = d.grid
     outline = OperatorOutline(grid, d.build("kernel"), d.build("restitution"),
                               NumpyBackend(threads=1))
+    if d.space is not None:         # the collisions of every cell (docs/space.md)
+        import numpy
+
+        from granframe.space.collisions import CellCollisions
+        from granframe.space.initial import initial_cells
+
+        if not d.space.collisions:
+            return None
+        f0 = numpy.stack([grid.project(f) for f in initial_cells(d)[0]])
+        return step_limit(d.build("integrator"), CellCollisions(outline, d.heat_bath,
+                                                                d.knudsen), f0)
     f0 = grid.project(d.build("initial").sample(grid))
     if d.rescaled:
         dissipation = float(ConservativeCorrection(outline).dissipation(f0))

@@ -482,11 +482,14 @@ def _info_document(path) -> dict:
                                  "first_time": float(times[0]), "last_time": float(times[-1])}
     if progress.get("records"):
         n = int(progress["records"])
+        # a space run records totals over the interval (no kurtosis; T is per cell)
+        names = (("mass", "kinetic_energy", "min_f") if "space" in store.metadata
+                 else ("mass", "temperature", "kurtosis", "min_f"))
         document["moments"] = {
             "records": n, "first_time": float(group["step_time"][0]),
             "last_time": float(group["step_time"][n - 1]), "steps": int(group["step"][n - 1]),
             **{name: {"first": float(group[name][0]), "last": float(group[name][n - 1])}
-               for name in ("mass", "temperature", "kurtosis", "min_f")}}
+               for name in names}}
     return document
 
 
@@ -539,17 +542,26 @@ def _limits(args) -> int:
         limit = time_step_limit(d)
         adaptive = d.build("integrator").adaptive
         above = limit is not None and not adaptive and d.time_step > limit.limit
-        status = 3 if above else status
+        transport = None if d.space is None else d.space.transport_limit(d.grid)
+        above_cfl = transport is not None and d.time_step > transport * (1 + 1e-12)
+        status = 3 if above or above_cfl else status
         document[name] = {
             "integrator": d.integrator.name, "time_step": d.time_step, "adaptive": adaptive,
             "limit": None if limit is None or adaptive else limit.limit,
             "interval": None if limit is None or adaptive else limit.interval,
             "dominant": None if limit is None else str(limit.dominant),
             "rates": {} if limit is None else {str(k): v for k, v in limit.rates.items()},
-            "within": None if limit is None or adaptive else not above}
+            "within": None if limit is None or adaptive else not above,
+            **({} if transport is None else {"transport_limit": transport,
+                                             "within_transport_limit": not above_cfl})}
         if args.json:
             continue
         head = (f"[{name}] " if name else "") + f"'{d.integrator.name}': "
+        if transport is not None:
+            print((f"[{name}] " if name else "") + f"transport ('{d.space.reconstruction.name}',"
+                  f" SSP RK3 half steps): dt <= {transport:.4g}; time_step = "
+                  f"{d.time_step:g} is " + ("ABOVE it" if above_cfl else
+                                            f"within it ({d.time_step / transport:.3g} of it)"))
         if limit is None:
             print(head + "no explicit step limit (the scheme treats none of the equation's "
                   "stiff parts explicitly)")
