@@ -5,6 +5,9 @@ plugin is tested by being registered, with the parameter sets it declares
 (:meth:`granframe.registry.Entry.example_parameters`).
 """
 
+import pathlib
+import re
+
 import attrs
 import numpy
 import pytest
@@ -17,6 +20,9 @@ from granframe.errors import BackendUnavailableError, PluginError
 from granframe.model.kernels import VariableHardSpheres
 from granframe.model.restitution import RestitutionLaw
 from granframe.registry import Entry, Source, default_registries
+from granframe.space.boundaries import Diffuse, Specular
+from granframe.space.reconstruction import MUSCL, Upwind
+from granframe.space.transport import reflect, transport_speeds
 from granframe.stepping.integrators import ForwardEuler
 from granframe.testing import conformance as kit
 from granframe.velocity.quadratures import CircleTrapezoid
@@ -76,7 +82,9 @@ def test_registered_implementation_conforms(family, name, params):
      "collision_kernels": kit.check_collision_kernel,
      "quadratures": kit.check_quadrature,
      "time_integrators": kit.check_integrator_order,
-     "initial_conditions": kit.check_initial_condition}[family](product)
+     "initial_conditions": kit.check_initial_condition,
+     "reconstructions": kit.check_reconstruction,
+     "boundaries": kit.check_boundary}[family](product)
 
 
 def test_implementation_without_examples_fails_the_suite():
@@ -180,6 +188,111 @@ def test_kit_catches_an_overstated_order_and_degree():
         kit.check_integrator_order(SecondOrderEuler())
     with pytest.raises(AssertionError, match="declared degree 8, but the monomial"):
         kit.check_quadrature(Overpromising(8))
+
+
+class SecondOrderUpwind(Upwind):
+    """The first-order upwind reconstruction declaring order 2."""
+
+    order = 2
+
+
+@attrs.frozen
+class AbsoluteMUSCL(MUSCL):
+    """MUSCL whose slope is cut to 0 below an absolute threshold 1e-8 (not scale invariant)."""
+
+    def faces(self, f, xp):
+        minus, plus = super().faces(f, xp)
+        keep = xp.abs(f[2:-1] - f[1:-2]) > 1e-8
+        return xp.where(keep, minus, f[1:-2]), xp.where(keep, plus, f[2:-1])
+
+
+class BackwardSlope(Upwind):
+    """Piecewise linear with the backward slope f_j - f_{j-1}: second order, but it treats
+    the two directions differently."""
+
+    ghost = 2
+    order = 2
+
+    def faces(self, f, xp):
+        slope = 0.5 * (f[1:-1] - f[:-2])
+        return f[1:-2] + slope[:-1], f[2:-1] - slope[1:]
+
+
+def test_kit_catches_broken_reconstructions():
+    with pytest.raises(AssertionError, match=r"declared order 2, observed 1.01 on the face "
+                                             r"values of a sine"):
+        kit.check_reconstruction_order(SecondOrderUpwind())
+    with pytest.raises(AssertionError, match=r"minus values of 1e-12 f differ from 1e-12 times "
+                                             r"those of f by .* invariant under f -> lambda f"):
+        kit.check_reconstruction_symmetries(AbsoluteMUSCL())
+    kit.check_reconstruction_order(BackwardSlope())
+    with pytest.raises(AssertionError, match=r"on the reversed cells the minus values are not "
+                                             r"the plus values reversed"):
+        kit.check_reconstruction_symmetries(BackwardSlope())
+
+
+@attrs.frozen
+class LeakySpecular(Specular):
+    """Specular reflection of 99 % of what arrives."""
+
+    def emit(self, incoming, grid, xp):
+        return 0.99 * super().emit(incoming, grid, xp)
+
+
+@attrs.frozen
+class SquaringWall(Specular):
+    """Sends back f^2 / f-weighted mean: mass-conserving and positive, but not linear."""
+
+    def emit(self, incoming, grid, xp):
+        c = transport_speeds(grid, xp)
+        arriving = xp.maximum(-c, 0.0) * incoming
+        squared = reflect(arriving * incoming, grid.dimension, xp)
+        scale = arriving.sum() / (xp.maximum(c, 0.0) * squared).sum()
+        return xp.where(c > 0, scale * squared, incoming)
+
+
+@attrs.frozen
+class MuteRefusal(Specular):
+    """A wall whose check() raises a ValueError naming no parameter."""
+
+    def check(self, grid):
+        raise ValueError("no")
+
+
+def test_kit_catches_broken_walls():
+    with pytest.raises(AssertionError, match=r"LeakySpecular: net mass flux through the wall "
+                                             r".* 0.01 of the arriving flux \(2D\)"):
+        kit.check_wall_mass_flux(LeakySpecular())
+    kit.check_wall_mass_flux(SquaringWall())
+    kit.check_wall_positivity(SquaringWall())
+    with pytest.raises(AssertionError, match=r"SquaringWall: emit\(0.3 x \+ 2.5 y\) differs"):
+        kit.check_boundary(SquaringWall())
+    kit.check_boundary(SquaringWall(), linear=False)
+    with pytest.raises(AssertionError, match=r"MuteRefusal: check\(\) refused the 2D grid .* "
+                                             r"with a message naming no parameter: no"):
+        kit.check_boundary_basics(MuteRefusal())
+
+
+def test_specular_emission_is_an_exact_involution():
+    """R R = identity on the nodes: reflecting twice gives back the incoming values
+    bit for bit, and the wall's energy and tangential momentum fluxes vanish to
+    round-off (it conserves them, Diffuse with alpha = 1 does not)."""
+    wall = Specular()
+    for d, n in ((2, 16), (3, 8)):
+        grid = gf.VelocityGrid(d, n, 1.5)
+        incoming = numpy.random.default_rng(d).uniform(0.1, 1.0, grid.shape)
+        assert numpy.array_equal(wall.emit(wall.emit(incoming, grid, numpy), grid, numpy),
+                                 incoming)
+        c = transport_speeds(grid)
+        flux = (numpy.maximum(c, 0.0) * wall.emit(incoming, grid, numpy)
+                + numpy.minimum(c, 0.0) * incoming)
+        scale = numpy.sum(numpy.abs(c) * incoming * grid.speed_squared())
+        assert abs(numpy.sum(flux * grid.speed_squared())) <= 1e-14 * scale
+        v2 = grid.mesh()[1]
+        assert abs(numpy.sum(flux * v2)) <= 1e-14 * scale
+    diffuse = numpy.sum(kit._wall_flux(Diffuse(temperature=2.0), incoming, grid)[0]
+                        * grid.speed_squared())
+    assert abs(diffuse) > 1e-3 * scale
 
 
 class Leaky(CollisionOperator):
@@ -309,3 +422,46 @@ class TestNumpyBackendThroughTheKit(kit.ArrayBackendTests):
 
 class TestRK4ThroughTheKit(kit.TimeIntegratorTests):
     factory = default_registries().get("time_integrators", "rk4").factory
+
+
+class TestMUSCLThroughTheKit(kit.ReconstructionTests):
+    factory = MUSCL
+    examples = [{"limiter": "van_leer"}]
+
+
+class TestDiffuseThroughTheKit(kit.BoundaryTests):
+    factory = Diffuse
+    examples = [{"temperature": 1.5, "velocity": [0.3, -0.2], "accommodation": 0.5}]
+
+
+# -- the boundary plugin of docs/plugins.md -------------------------------------------------
+
+DOCS = pathlib.Path(__file__).parent.parent / "docs" / "plugins.md"
+
+
+def test_the_documented_boundary_registers_and_passes_the_kit(make_distribution,
+                                                              fresh_registries):
+    """The Python blocks of "A boundary, and a reconstruction": the wall and its hook as a
+    plugin module found by its entry point and built by name, and the kit's class on it;
+    the bounce-back share keeps the energy flux zero but not the tangential momentum's."""
+    text = DOCS.read_text()
+    start = text.index("## A boundary, and a reconstruction\n")
+    blocks = re.findall(r"```python\n(.*?)```", text[start:text.index("\n## ", start + 1)],
+                        re.S)
+    assert len(blocks) == 2
+    make_distribution("granframe-bounce", "granframe_bounce", blocks[0])
+    wall = fresh_registries().create("boundaries", "bounce_back", share=0.3)
+    assert type(wall).__module__ == "granframe_bounce"
+    namespace = {"__name__": "docs_plugins_boundary"}
+    for block in blocks:
+        exec(compile(block, str(DOCS), "exec"), namespace)
+    tests = namespace["TestBounceBack"]()
+    for name in ("test_basics", "test_mass_flux", "test_positivity", "test_linearity"):
+        getattr(tests, name)()
+    kit.check_boundary(wall)
+    grid = gf.VelocityGrid(3, 8, 1.5)
+    incoming = numpy.random.default_rng(0).uniform(0.1, 1.0, grid.shape)
+    flux = kit._wall_flux(wall, incoming, grid)[0]
+    scale = numpy.sum(numpy.abs(flux) * grid.speed_squared())
+    assert abs(numpy.sum(flux * grid.speed_squared())) <= 1e-14 * scale
+    assert abs(numpy.sum(flux * grid.mesh()[2])) > 1e-2 * numpy.sum(numpy.abs(flux))

@@ -487,6 +487,335 @@ def check_backend_parity(backend, factory, options=None) -> None:
                                      f"{error:.3g} of max |Q| ({d}D, {kernel})")
 
 
+# -- reconstructions -----------------------------------------------------------------------
+
+#: Cells of the order check: the L1 order is observed between these two resolutions.
+ORDER_CELLS = (40, 80)
+
+
+def _faces(reconstruction, f):
+    """(minus, plus) of ``f`` as NumPy arrays, of shape (len(f) - 2 ghost + 1, ...) each."""
+    name, g = type(reconstruction).__name__, reconstruction.ghost
+    minus, plus = (numpy.asarray(a) for a in reconstruction.faces(f, numpy))
+    expected = (f.shape[0] - 2 * g + 1,) + f.shape[1:]
+    _require(minus.shape == expected and plus.shape == expected,
+             f"{name}: faces() of an input of shape {f.shape} (ghost = {g}) returned shapes "
+             f"{minus.shape} and {plus.shape}, expected {expected} each")
+    return minus, plus
+
+
+def _sine_averages(cells: int, ghost: int):
+    """Averages of sin(2 pi x + 0.4) over the cells of width 1/cells of [0, 1] with ``ghost``
+    periodic ghost cells each side, and the exact values at the n + 1 faces."""
+    edges = numpy.arange(-ghost, cells + ghost + 1) / cells
+    phase = 2.0 * math.pi * edges + 0.4
+    averages = (numpy.cos(phase[:-1]) - numpy.cos(phase[1:])) * cells / (2.0 * math.pi)
+    return averages, numpy.sin(phase[ghost:cells + ghost + 1])
+
+
+def _rough_data(rng, cells: int):
+    """Positive data with a smooth part, a jump and an extremum, shape (cells, 3, 2)."""
+    x = (numpy.arange(cells) + 0.5) / cells
+    smooth = 1.0 + 0.5 * numpy.sin(2.0 * math.pi * x) + (x > 0.6)
+    return smooth[:, None, None] * rng.uniform(0.5, 1.5, (1, 3, 2))
+
+
+def check_reconstruction(reconstruction) -> None:
+    """The class constants, the faces' shapes, constants, broadcasting over the trailing
+    axes, the declared order, the symmetries and extreme data
+    (:func:`check_reconstruction_basics`, :func:`check_reconstruction_order`,
+    :func:`check_reconstruction_symmetries`, :func:`check_reconstruction_extremes`)."""
+    check_reconstruction_basics(reconstruction)
+    check_reconstruction_order(reconstruction)
+    check_reconstruction_symmetries(reconstruction)
+    check_reconstruction_extremes(reconstruction)
+
+
+def check_reconstruction_basics(reconstruction) -> None:
+    """``ghost`` an integer >= 0, ``order`` an integer >= 1, ``cfl`` in (0, 1], all class
+    attributes; faces() of an input (n + 2 ghost, ...) of shape (n + 1, ...) each, for no,
+    one and two trailing axes; constants 0, 0.7 and 3 reproduced to 4 ulp; a stack of
+    columns (trailing axes, a non-contiguous view as the transport passes) reconstructed as
+    each column alone, to 1e-14; the input left unchanged."""
+    from granframe.abc import Reconstruction
+
+    _require(isinstance(reconstruction, Reconstruction),
+             f"{reconstruction!r} is not a granframe.abc.Reconstruction")
+    _contract("reconstructions", reconstruction)
+    kind, name = type(reconstruction), type(reconstruction).__name__
+    for attribute in ("ghost", "order", "cfl"):
+        _require(attribute in dir(kind) and not isinstance(getattr(kind, attribute), property),
+                 f"{name}: '{attribute}' must be a class attribute (the core reads it before "
+                 "building the cells)")
+    g, order, cfl = kind.ghost, kind.order, kind.cfl
+    _require(isinstance(g, int) and not isinstance(g, bool) and g >= 0,
+             f"{name}: ghost must be an integer >= 0, got {g!r}")
+    _require(isinstance(order, int) and not isinstance(order, bool) and order >= 1,
+             f"{name}: order must be an integer >= 1, got {order!r}")
+    _require(isinstance(cfl, (int, float)) and 0.0 < cfl <= 1.0,
+             f"{name}: cfl must lie in (0, 1], got {cfl!r}")
+    rng = numpy.random.default_rng(2)
+    n = 12
+    for value in (0.0, 0.7, 3.0):
+        for trailing in ((), (3,), (3, 2)):
+            f = numpy.full((n + 2 * g,) + trailing, value)
+            for side, faces in zip(("minus", "plus"), _faces(reconstruction, f)):
+                error = float(numpy.max(numpy.abs(faces - value)))
+                _require(error <= 4 * numpy.finfo(float).eps * value,
+                         f"{name}: the constant {value} is reconstructed as {side} values "
+                         f"off by up to {error:.3g}")
+    f = numpy.ascontiguousarray(numpy.swapaxes(_rough_data(rng, n + 2 * g), 0, 1))
+    copy = f.copy()
+    stacked = _faces(reconstruction, numpy.swapaxes(f, 0, 1))   # a view, as the transport's
+    _require(numpy.array_equal(f, copy), f"{name}: faces() modified its input")
+    scale = numpy.max(numpy.abs(f))
+    for i, k in itertools.product(range(3), range(2)):
+        column = _faces(reconstruction, numpy.ascontiguousarray(f[i, :, k]))
+        for side, whole, alone in zip(("minus", "plus"), stacked, column):
+            error = float(numpy.max(numpy.abs(whole[:, i, k] - alone))) / scale
+            _require(error <= 1e-14,
+                     f"{name}: the {side} values of column ({i}, {k}) of a stack of shape "
+                     f"{f.shape[1:2] + f.shape[:1] + f.shape[2:]} differ from those of the "
+                     f"column alone by {error:.3g} of max |f|: faces() must act element-wise "
+                     "over the trailing axes")
+
+
+def check_reconstruction_order(reconstruction) -> None:
+    """Consistency at the declared ``order`` p: on the cell averages of sin(2 pi x + 0.4),
+    periodic, with n = 40 and 80 cells, the L1 error of the face values (both sides) against
+    the point values at the faces falls by at least 2^(p - 0.3) (L1, so that limited schemes,
+    which clip at extrema, are measured at their order)."""
+    name, g, order = type(reconstruction).__name__, reconstruction.ghost, reconstruction.order
+    errors = []
+    for cells in ORDER_CELLS:
+        averages, exact = _sine_averages(cells, g)
+        minus, plus = _faces(reconstruction, averages)
+        errors.append(float(numpy.sum(numpy.abs(minus - exact) + numpy.abs(plus - exact)))
+                      / (2 * (cells + 1)))
+    observed = math.log2(errors[0] / errors[1]) if errors[1] > 0 else math.inf
+    _require(observed >= order - 0.3,
+             f"{name}: declared order {order}, observed {observed:.2f} on the face values of "
+             f"a sine (L1 errors {errors[0]:.3g} with {ORDER_CELLS[0]} cells, {errors[1]:.3g} "
+             f"with {ORDER_CELLS[1]})")
+
+
+def check_reconstruction_symmetries(reconstruction) -> None:
+    """On positive data with a jump and an extremum: scale invariance (faces of lambda f
+    are lambda times those of f, to 1e-13 of lambda max|f|, for lambda = 1e-12 and 1e6:
+    distribution values span many decades), translation (the data shifted by one cell
+    give the faces shifted by one, to 1e-14 of max|f|) and the mirror symmetry (reversing
+    the cells gives the plus values reversed as minus values and the other way round, to
+    1e-13 of max|f|)."""
+    name, g = type(reconstruction).__name__, reconstruction.ghost
+    data = _rough_data(numpy.random.default_rng(3), 16 + 2 * g + 1)
+    f = data[:-1]
+    scale = float(numpy.max(numpy.abs(data)))
+    minus, plus = _faces(reconstruction, f)
+    for factor in (1e-12, 1e6):
+        for side, scaled, faces in zip(("minus", "plus"), _faces(reconstruction, factor * f),
+                                       (minus, plus)):
+            error = float(numpy.max(numpy.abs(scaled - factor * faces))) / (factor * scale)
+            _require(error <= 1e-13,
+                     f"{name}: the {side} values of {factor:g} f differ from {factor:g} times "
+                     f"those of f by {error:.3g} of max|{factor:g} f|: a reconstruction must "
+                     "be invariant under f -> lambda f (no absolute thresholds)")
+    for side, shifted, faces in zip(("minus", "plus"), _faces(reconstruction, data[1:]),
+                                    (minus, plus)):
+        error = float(numpy.max(numpy.abs(shifted[:-1] - faces[1:]))) / scale
+        _require(error <= 1e-14,
+                 f"{name}: the data shifted by one cell give {side} values that differ from "
+                 f"the shifted ones by {error:.3g} of max |f|")
+    mirrored = _faces(reconstruction, f[::-1])
+    for side, other, faces, original in (("minus", "plus", mirrored[0], plus),
+                                         ("plus", "minus", mirrored[1], minus)):
+        error = float(numpy.max(numpy.abs(faces - original[::-1]))) / scale
+        _require(error <= 1e-13,
+                 f"{name}: on the reversed cells the {side} values are not the {other} values "
+                 f"reversed (off by {error:.3g} of max |f|): the scheme must treat both "
+                 "directions alike")
+
+
+def check_reconstruction_extremes(reconstruction) -> None:
+    """Finite face values for data spanning 1e-300 .. 1 (a Gaussian tail, a jump from 1 to
+    1e-300, zeros, the smallest subnormal)."""
+    name, g = type(reconstruction).__name__, reconstruction.ghost
+    cells = 40 + 2 * g
+    tail = 10.0 ** -numpy.linspace(0.0, 300.0, cells)
+    jump = numpy.where(numpy.arange(cells) < cells // 2, 1.0, 1e-300)
+    sparse = tail * (numpy.arange(cells) % 3 == 0)
+    sparse[1] = 5e-324
+    f = numpy.stack([tail, tail[::-1], jump, sparse], axis=1)
+    for side, faces in zip(("minus", "plus"), _faces(reconstruction, f)):
+        bad = ~numpy.isfinite(faces)
+        _require(not numpy.any(bad),
+                 f"{name}: {side} values are not finite on data spanning 1e-300 .. 1 (columns "
+                 f"{sorted(set(numpy.nonzero(bad)[1].tolist()))} of: a decaying tail, a "
+                 "growing one, a jump from 1 to 1e-300, a sparse tail with zeros)")
+
+
+# -- boundaries ----------------------------------------------------------------------------
+
+#: Velocity grids of the boundary checks, (dimension, N, support radius): narrow and wide
+#: boxes (a wall may refuse a box that its wall Maxwellian does not fit).
+WALL_GRIDS = ((2, 16, 1.5), (2, 32, 5.0), (3, 8, 1.5), (3, 16, 5.0))
+
+
+def _wall_grids(boundary):
+    """The grids of :data:`WALL_GRIDS` that ``boundary.check`` accepts; a refusal must be a
+    ValueError naming a parameter, and at least one grid must be accepted."""
+    from granframe.velocity.grid import VelocityGrid
+
+    name, accepted = type(boundary).__name__, []
+    for d, n, support in WALL_GRIDS:
+        grid = VelocityGrid(d, n, support)
+        try:
+            boundary.check(grid)
+        except ValueError as exc:
+            _require("parameter '" in str(exc),
+                     f"{name}: check() refused the {d}D grid (N = {n}, L = "
+                     f"{grid.half_width:g}) with a message naming no parameter: {exc}")
+            continue
+        except Exception as exc:   # any other error of check() is the finding
+            raise AssertionError(f"{name}: check() on the {d}D grid (N = {n}, L = "
+                                 f"{grid.half_width:g}) raised {exc!r}, not a ValueError "
+                                 "naming a parameter") from exc
+        accepted.append(grid)
+    _require(accepted, f"{name}: check() refused every grid of the kit {WALL_GRIDS}")
+    return accepted
+
+
+def _incoming(grid, seed: int):
+    """Random positive face values at the wall, shape grid.shape."""
+    return numpy.random.default_rng(seed).uniform(0.1, 1.0, grid.shape)
+
+
+def _emit(boundary, incoming, grid):
+    name = type(boundary).__name__
+    out = numpy.asarray(boundary.emit(incoming, grid, numpy))
+    _require(out.shape == grid.shape,
+             f"{name}: emit() returned shape {out.shape}, the grid's is {grid.shape}")
+    _require(numpy.all(numpy.isfinite(out)), f"{name}: emit() returned non-finite values")
+    return out
+
+
+def check_boundary(boundary, linear: bool = True) -> None:
+    """:func:`check_boundary_basics`, then for a wall :func:`check_wall_mass_flux`,
+    :func:`check_wall_positivity` and, if ``linear``, :func:`check_wall_linearity`."""
+    check_boundary_basics(boundary)
+    if type(boundary).periodic:
+        return
+    check_wall_mass_flux(boundary)
+    check_wall_positivity(boundary)
+    if linear:
+        check_wall_linearity(boundary)
+
+
+def check_boundary_basics(boundary) -> None:
+    """``periodic`` a bool class attribute; ``check(grid)`` passes or raises a ValueError
+    naming a parameter on 2D and 3D grids (:data:`WALL_GRIDS`), and accepts one; for a
+    wall on each accepted grid: ``ghosts`` of g = 1, 2, 3 cells of shape (g, *grid.shape),
+    finite; ``emit`` of the grid's shape, finite, leaving its input unchanged, its values
+    at c > 0 (what the wall sends) read only the arriving values (c < 0): changing the
+    incoming values at c >= 0 leaves them unchanged to 1e-14."""
+    from granframe.abc import Boundary
+    from granframe.space.transport import transport_speeds
+
+    _require(isinstance(boundary, Boundary), f"{boundary!r} is not a granframe.abc.Boundary")
+    _contract("boundaries", boundary)
+    kind, name = type(boundary), type(boundary).__name__
+    flag = getattr(kind, "periodic", None)
+    _require(isinstance(flag, bool) and boundary.periodic is flag,
+             f"{name}: 'periodic' must be a bool class attribute, got {flag!r}")
+    grids = _wall_grids(boundary)
+    if flag:
+        return
+    for grid in grids:
+        for g in (1, 2, 3):
+            inside = numpy.random.default_rng(g).uniform(0.1, 1.0, (g,) + grid.shape)
+            ghosts = numpy.asarray(boundary.ghosts(inside, grid, numpy))
+            _require(ghosts.shape == inside.shape and numpy.all(numpy.isfinite(ghosts)),
+                     f"{name}: ghosts() of {g} cells must be finite of shape {inside.shape}, "
+                     f"got shape {ghosts.shape} ({grid.dimension}D)")
+        incoming = _incoming(grid, 4)
+        copy = incoming.copy()
+        out = _emit(boundary, incoming, grid)
+        _require(numpy.array_equal(incoming, copy), f"{name}: emit() modified its input")
+        c = numpy.broadcast_to(transport_speeds(grid), grid.shape)
+        changed = numpy.where(c >= 0, _incoming(grid, 5), incoming)
+        error = float(numpy.max(numpy.abs(_emit(boundary, changed, grid) - out)[c > 0]))
+        _require(error <= 1e-14 * numpy.max(numpy.abs(out)),
+                 f"{name}: the emission (c > 0) changed by {error:.3g} when only the incoming "
+                 f"values at c >= 0 changed ({grid.dimension}D): a wall sends back what "
+                 "arrives (c < 0)")
+
+
+def _wall_flux(boundary, incoming, grid):
+    """F = c^+ out + c^- in at the wall, and c."""
+    from granframe.space.transport import transport_speeds
+
+    c = transport_speeds(grid)
+    out = _emit(boundary, incoming, grid)
+    return numpy.maximum(c, 0.0) * out + numpy.minimum(c, 0.0) * incoming, c
+
+
+def check_wall_mass_flux(boundary) -> None:
+    """Zero net mass flux through the wall: sum_v F dv, F = c^+ out + c^- in with c the
+    transport speeds (:func:`granframe.space.transport.transport_speeds`), is below 1e-13
+    of the arriving flux sum_v |c^-| in dv, for three random positive ``in`` and a
+    Maxwellian drifting into the wall, on every grid the wall accepts."""
+    name = type(boundary).__name__
+    for grid in _wall_grids(boundary):
+        drifting = grid.maxwellian(1.0, [-0.5] + [0.2] * (grid.dimension - 1), 0.3)
+        for incoming in (_incoming(grid, 6), _incoming(grid, 7), _incoming(grid, 8), drifting):
+            flux, c = _wall_flux(boundary, incoming, grid)
+            arriving = float(numpy.sum(numpy.maximum(-c, 0.0) * incoming))
+            net = float(numpy.sum(flux))
+            _require(abs(net) <= 1e-13 * arriving,
+                     f"{name}: net mass flux through the wall {net * grid.cell_volume:.3g}, "
+                     f"{abs(net) / arriving:.3g} of the arriving flux ({grid.dimension}D): the "
+                     "wall must send back what arrives")
+
+
+def check_wall_positivity(boundary) -> None:
+    """Non-negative incoming values (random, with zeros, and values down to 1e-300) give a
+    non-negative emission (c > 0) and non-negative ghost cells."""
+    from granframe.space.transport import transport_speeds
+
+    name = type(boundary).__name__
+    for grid in _wall_grids(boundary):
+        rng = numpy.random.default_rng(9)
+        c = numpy.broadcast_to(transport_speeds(grid), grid.shape)
+        for incoming in (rng.uniform(0.0, 1.0, grid.shape) * (rng.uniform(size=grid.shape) > 0.5),
+                         10.0 ** -rng.uniform(0.0, 300.0, grid.shape)):
+            out = _emit(boundary, incoming, grid)
+            _require(out[c > 0].min() >= 0.0,
+                     f"{name}: emission {out[c > 0].min():.3g} < 0 from non-negative incoming "
+                     f"values ({grid.dimension}D)")
+            ghosts = numpy.asarray(boundary.ghosts(incoming[None], grid, numpy))
+            _require(ghosts.min() >= 0.0,
+                     f"{name}: ghost value {ghosts.min():.3g} < 0 from non-negative cells "
+                     f"({grid.dimension}D)")
+
+
+def check_wall_linearity(boundary) -> None:
+    """The emission (c > 0) is linear in the incoming values: emit(a x + b y) = a emit(x)
+    + b emit(y) to 1e-13 of the largest emission, a = 0.3, b = 2.5 (every wall whose
+    accommodation does not depend on what arrives)."""
+    from granframe.space.transport import transport_speeds
+
+    name = type(boundary).__name__
+    for grid in _wall_grids(boundary):
+        c = numpy.broadcast_to(transport_speeds(grid), grid.shape)
+        x, y = _incoming(grid, 10), _incoming(grid, 11)
+        combined = _emit(boundary, 0.3 * x + 2.5 * y, grid)
+        expected = 0.3 * _emit(boundary, x, grid) + 2.5 * _emit(boundary, y, grid)
+        error = float(numpy.max(numpy.abs(combined - expected)[c > 0]))
+        _require(error <= 1e-13 * numpy.max(numpy.abs(expected[c > 0])),
+                 f"{name}: emit(0.3 x + 2.5 y) differs from 0.3 emit(x) + 2.5 emit(y) by "
+                 f"{error:.3g} ({grid.dimension}D); a wall that is not linear sets "
+                 "'linear = False' in its BoundaryTests")
+
+
 # -- test classes to subclass --------------------------------------------------------------
 
 class _FamilyTests:
@@ -600,3 +929,49 @@ class ArrayBackendTests(_FamilyTests):
         for backend in self.implementations():
             for factory in self._operators():
                 check_backend_parity(backend, factory)
+
+
+class ReconstructionTests(_FamilyTests):
+    """Conformance tests of a reconstruction (:func:`check_reconstruction` in parts)."""
+
+    def test_basics(self):
+        for reconstruction in self.implementations():
+            check_reconstruction_basics(reconstruction)
+
+    def test_order(self):
+        for reconstruction in self.implementations():
+            check_reconstruction_order(reconstruction)
+
+    def test_symmetries(self):
+        for reconstruction in self.implementations():
+            check_reconstruction_symmetries(reconstruction)
+
+    def test_extremes(self):
+        for reconstruction in self.implementations():
+            check_reconstruction_extremes(reconstruction)
+
+
+class BoundaryTests(_FamilyTests):
+    """Conformance tests of a boundary (:func:`check_boundary` in parts); a wall whose
+    emission is not linear in what arrives sets ``linear = False``."""
+
+    linear = True
+
+    def test_basics(self):
+        for boundary in self.implementations():
+            check_boundary_basics(boundary)
+
+    def test_mass_flux(self):
+        for boundary in self.implementations():
+            if not type(boundary).periodic:
+                check_wall_mass_flux(boundary)
+
+    def test_positivity(self):
+        for boundary in self.implementations():
+            if not type(boundary).periodic:
+                check_wall_positivity(boundary)
+
+    def test_linearity(self):
+        for boundary in self.implementations():
+            if self.linear and not type(boundary).periodic:
+                check_wall_linearity(boundary)
