@@ -14,8 +14,12 @@ import os
 import xarray
 
 from granframe import validators as check
-from granframe.run.storage import (RunStore, StoreDamagedError, array_attributes,
-                                   flat_attributes, root_attributes, summarise)
+from granframe.run.storage import (SNAPSHOT_ARRAYS, RunStore, StoreDamagedError,
+                                   array_attributes, flat_attributes, root_attributes,
+                                   summarise)
+
+#: the coordinate of a space run's wall records: the wall at x = 0, then at x = ell
+WALLS = ("left", "right")
 
 
 def open_run(path) -> xarray.Dataset:
@@ -62,6 +66,21 @@ def open_run(path) -> xarray.Dataset:
           of :mod:`granframe.run.monitors`: ``progress_accuracy_values_temperature``,
           ``progress_accuracy_flagged_step``, ``progress_accuracy_warnings``, ...).
 
+        A space run's store (its metadata has a ``space`` entry) has, besides:
+
+        - dimensions ``x`` (the cells) and ``wall`` (2), with coordinates ``x`` (the cell
+          centres (j + 1/2) ell / cells, long name "cell centre") and ``wall``
+          (``"left"``, ``"right"``: the walls at x = 0 and x = ell); ``f`` is
+          (``time``, ``x``, ``v1`` ... ``vd``), the cell averages;
+        - the fields of every cell along (``step_time``, ``x``, ...): ``density``,
+          ``velocity``, ``temperature``, ``pressure_tensor`` and ``heat_flux``;
+        - the totals over the interval: ``mass`` int int f dv dx, ``kinetic_energy``,
+          ``min_f`` and ``negative_mass_fraction``;
+        - ``wall_mass`` and ``wall_energy`` (``step_time``, ``wall``): the mass and the
+          energy that entered the interval through each wall over the step (a
+          time-integrated flux, positive inwards; 0 at t = 0), so that
+          m(t) - m(0) = the sum of ``wall_mass`` up to t.
+
     Raises
     ------
     TypeError
@@ -101,20 +120,47 @@ def run_dataset(store: RunStore) -> xarray.Dataset:
     """The committed contents of an open :class:`RunStore` (on disk or in memory), labelled
     as :func:`open_run` describes; ``f`` is read lazily from the store."""
     meta = store.metadata
-    snapshots, records = store.snapshot_count, int(store.progress["records"])
-    dataset = xarray.open_zarr(store.location, consolidated=False, chunks=None)
-    dataset = dataset.isel(time=slice(0, snapshots), step_time=slice(0, records))
-    dataset = dataset.drop_encoding()       # the zarr codecs and chunks: no netCDF encoding
+    dataset = committed(store).drop_encoding()   # the zarr codecs and chunks: no netCDF encoding
     names = [f"v{i + 1}" for i in range(dataset.sizes["axis"])]
     dataset = dataset.assign_coords(axis=names)
     if "axis2" in dataset.dims:
         dataset = dataset.assign_coords(axis2=names)
+    space = "space" in meta
+    if "wall" in dataset.dims:
+        dataset = dataset.assign_coords(wall=list(WALLS))
     for name, variable in dataset.variables.items():
-        variable.attrs = array_attributes(name)
-    dataset["axis"].attrs = {"long_name": "velocity component of momentum, heat flux and "
+        variable.attrs = array_attributes(name, space)
+    vector = "the bulk velocity" if space else "momentum"
+    dataset["axis"].attrs = {"long_name": f"velocity component of {vector}, heat flux and "
                                           "the first index of the pressure tensor"}
+    if "wall" in dataset.dims:
+        dataset["wall"].attrs = {"long_name": "wall of the interval [0, ell]: left at x = 0, "
+                                              "right at x = ell"}
     if "axis2" in dataset.dims:
         dataset["axis2"].attrs = {"long_name": "velocity component of the second index of "
                                                "the pressure tensor"}
     dataset.attrs = {**root_attributes(meta), **flat_attributes("progress", meta["progress"])}
     return dataset
+
+
+def committed(store: RunStore) -> xarray.Dataset:
+    """The arrays of ``store`` as ``xarray.open_zarr`` shows them (its own attributes),
+    cut to the snapshots and records of the last commit; ``f`` is read lazily.
+
+    A commit cut short (a kill) may leave the arrays along ``time`` or ``step_time``
+    resized to different lengths, which one ``open_zarr`` of the whole store refuses;
+    each array is then opened alone, cut, and the cut arrays merged.
+    """
+    cut = {"time": slice(0, store.snapshot_count),
+           "step_time": slice(0, int(store.progress["records"]))}
+    location, group = store.location, store.group
+    lengths = [{group[name].shape[0] for name in names}
+               for names in (SNAPSHOT_ARRAYS, store.record_arrays)]
+    if all(len(found) == 1 for found in lengths):
+        dataset = xarray.open_zarr(location, consolidated=False, chunks=None)
+        return dataset.isel(cut)
+    names = sorted(group.array_keys())
+    parts = [xarray.open_zarr(location, consolidated=False, chunks=None,
+                              drop_variables=[other for other in names if other != name])
+             .isel(cut, missing_dims="ignore") for name in names]
+    return xarray.merge(parts, combine_attrs="override")

@@ -109,6 +109,28 @@ _LONG_NAMES = {
     "pressure_tensor": "pressure tensor int (v-u)_i (v-u)_j f dv",
     "heat_flux": "heat flux int (v-u)_i |v-u|^2 f dv / 2",
 }
+#: the long names of a space run's arrays where they differ from :data:`_LONG_NAMES`: the
+#: fields are per cell (rho, u, T, P, q of the cell average of f), the totals are
+#: integrals over x as well, and the wall records what entered [0, ell] through each
+#: wall over one step (time-integrated fluxes, positive inwards)
+_SPACE_LONG_NAMES = {
+    "f": "distribution function f(t, x, v), cell averages",
+    "x": "cell centre",
+    "mass": "total mass int int f dv dx",
+    "kinetic_energy": "total kinetic energy int int |v|^2/2 f dv dx",
+    "min_f": "minimum of f over the cells and the grid",
+    "negative_mass_fraction": "int int max(-f, 0) dv dx / int int |f| dv dx",
+    "density": "density rho = int f dv of each cell",
+    "velocity": "bulk velocity u = int v f dv / rho of each cell",
+    "temperature": "temperature int |v-u|^2 f dv / (d rho) of each cell",
+    "pressure_tensor": "pressure tensor int (v-u)_i (v-u)_j f dv of each cell",
+    "heat_flux": "heat flux int (v-u)_i |v-u|^2 f dv / 2 of each cell",
+    "wall_mass": "mass that entered the interval through the wall over the step (the "
+                 "time integral of the upwind wall flux int v_1 f dv, positive inwards)",
+    "wall_energy": "energy that entered the interval through the wall over the step (the "
+                   "time integral of the upwind wall flux int v_1 |v|^2/2 f dv, positive "
+                   "inwards)",
+}
 #: CF version whose attribute names the stores and :func:`granframe.open_run` use
 CONVENTIONS = "CF-1.10"
 #: what every quantity is measured in; all are dimensionless (CF's units "1")
@@ -188,9 +210,14 @@ def _now() -> str:
     return datetime.datetime.now(datetime.timezone.utc).isoformat()
 
 
-def array_attributes(name: str) -> dict:
-    """The CF attributes of the array ``name`` of a run store: ``long_name`` and ``units``."""
-    long_name = _LONG_NAMES.get(name, f"velocity component {name}")
+def array_attributes(name: str, space: bool = False) -> dict:
+    """The CF attributes of the array ``name`` of a run store: ``long_name`` and ``units``.
+
+    ``space``: the store of a space run (its metadata has a ``space`` entry), whose
+    fields are per cell and whose totals are integrals over x too.
+    """
+    names = {**_LONG_NAMES, **_SPACE_LONG_NAMES} if space else _LONG_NAMES
+    long_name = names.get(name, f"velocity component {name}")
     return {"long_name": long_name, "units": "1"}
 
 
@@ -530,19 +557,20 @@ class Layout:
 
     def create(self, group) -> None:
         """Create the layout's (empty) arrays in ``group``, the coordinates filled."""
+        space = self.space is not None
         for name, values, dimensions in self.coordinates:
             values = numpy.asarray(values)
             _create(group, name, values.shape, values.shape, values.dtype.str[1:],
-                    list(dimensions))[:] = values
+                    list(dimensions), space)[:] = values
         _create(group, "f", (0,) + tuple(self.snapshot_shape),
                 (1,) + tuple(self.snapshot_chunks), "f8",
-                ["time"] + list(self.snapshot_dimensions))
+                ["time"] + list(self.snapshot_dimensions), space)
         for name, dtype in (("time", "f8"), ("snapshot_step", "i8"), ("snapshot_dt_next", "f8")):
-            _create(group, name, (0,), (SNAPSHOT_CHUNK,), dtype, ["time"])
+            _create(group, name, (0,), (SNAPSHOT_CHUNK,), dtype, ["time"], space)
         for spec in self.records:
             _create(group, spec.name, (0,) + tuple(spec.shape),
                     (spec.chunk,) + tuple(spec.shape),
-                    spec.dtype, ["step_time"] + list(spec.dimensions))
+                    spec.dtype, ["step_time"] + list(spec.dimensions), space)
 
 
 #: the step, its time and its size: the first records of every layout
@@ -954,10 +982,10 @@ def _check_creatable(path: pathlib.Path, overwrite: bool, protect) -> None:
     check_replaceable(path, protect)
 
 
-def _create(group, name, shape, chunks, dtype, dimension_names):
+def _create(group, name, shape, chunks, dtype, dimension_names, space=False):
     return group.create_array(name, shape=shape, chunks=chunks, dtype=dtype,
                               fill_value=fill_value(dtype), dimension_names=dimension_names,
-                              attributes=array_attributes(name), **codecs())
+                              attributes=array_attributes(name, space), **codecs())
 
 
 def _problem(name, array, index, kind, detail="") -> dict:
@@ -979,6 +1007,11 @@ def _differences(a, b, prefix=""):
             yield from _differences(a.get(key), b.get(key), f"{prefix}{key}.")
     elif a != b:
         yield prefix.rstrip(".") or "(root)"
+
+
+def _cells(index: int, block: int) -> str:
+    """The cells of block ``index`` of a space run's f (chunked by block), in words."""
+    return f", block {index}: cells {index * block}..{(index + 1) * block - 1}"
 
 
 def check(path) -> tuple[bool, list[str]]:
@@ -1021,14 +1054,57 @@ def check(path) -> tuple[bool, list[str]]:
     lines = [f"{path}: status {progress.get('status')}, {store.snapshot_count} snapshots, "
              f"{progress.get('records')} records; {chunks} committed chunks read, "
              f"{len(problems)} problems"]
+    block = (store.metadata.get("space") or {}).get("block_cells")
     lines += [f"  {p['kind']}: {p['array']}" + (
-        f"/c/{'/'.join(map(str, p['chunk']))} (from entry {p['first']})" if p["chunk"] else "")
+        f"/c/{'/'.join(map(str, p['chunk']))} (from entry {p['first']}"
+        + (_cells(p["chunk"][1], block) if block and p["array"] == "f" else "") + ")"
+        if p["chunk"] else "")
         + (f": {p['detail']}" if p["detail"] else "") for p in problems]
     partial = sorted(str(p.relative_to(path)) for p in path.rglob("*.partial"))
     if partial:
         lines.append(f"  {len(partial)} file(s) of a write cut short (removed on --resume): "
                      + ", ".join(partial[:3]))
     return not problems, lines
+
+
+def _named(component: dict) -> str:
+    """A reconstruction or boundary of a description's ``space`` section as
+    ``name(key=value, ...)``."""
+    params = ", ".join(f"{key}={value}" for key, value in component.items() if key != "name")
+    return component["name"] + (f"({params})" if params else "")
+
+
+def _describe_space(meta: dict, group, n: int) -> list[str]:
+    """The lines of :func:`describe` for the first ``n`` records of a space run's store:
+    the interval, its blocks and walls; the range over the cells of T(x) and rho(x) at the
+    first and the last record; the totals; what entered through each wall, and the
+    balance m(t) - m(0) - (mass entered) of the records."""
+    space, section = meta["space"], meta["description"]["space"]
+    cells, length, block = space["cells"], space["length"], space["block_cells"]
+    lines = [f"space       {cells} cells on [0, {length:g}] (dx = {length / cells:.6g}), "
+             f"{cells // block} blocks of {block} cells, reconstruction "
+             f"{_named(section.get('reconstruction', {'name': 'muscl'}))}, walls: left "
+             f"{_named(section.get('left', {'name': 'periodic'}))}, right "
+             f"{_named(section.get('right', {'name': 'periodic'}))}"]
+    for name, label in (("temperature", "T(x)"), ("density", "rho(x)")):
+        first, last = group[name][0], group[name][n - 1]
+        lines.append(f"  {label:<12s}in [{numpy.nanmin(first):.6g}, {numpy.nanmax(first):.6g}] "
+                     f"-> [{numpy.nanmin(last):.6g}, {numpy.nanmax(last):.6g}] (over the cells)")
+    entered = {name: group[name][:n].sum(axis=0) for name in ("wall_mass", "wall_energy")}
+    for name, wall, label in (("mass", "wall_mass", "mass"),
+                              ("kinetic_energy", "wall_energy", "energy")):
+        first, last = group[name][[0, n - 1]]
+        inflow = entered[wall].sum()
+        lines.append(f"  {label:<12s}{first:.10g} -> {last:.10g} (drift "
+                     f"{last / first - 1:+.2e}; entered through the walls {inflow:+.3e}, "
+                     f"balance {last - first - inflow:+.2e})")
+    values = group["min_f"][[0, n - 1]]
+    lines.append(f"  {'min_f':<12s}{values[0]:.10g} -> {values[1]:.10g}")
+    for wall, what in (("wall_mass", "mass"), ("wall_energy", "energy")):
+        left, right = entered[wall]
+        lines.append(f"  {what} entered through the left wall {left:+.6e}, the right wall "
+                     f"{right:+.6e} (sums over the steps)")
+    return lines
 
 
 def describe(path) -> str:
@@ -1053,9 +1129,12 @@ def describe(path) -> str:
         lines.append(f"moments     {n} records (every step), t = "
                      f"{float(group['step_time'][0]):g} .. {float(group['step_time'][n - 1]):g}, "
                      f"{int(group['step'][n - 1])} steps")
-        for name in ("mass", "temperature", "kurtosis", "min_f"):
-            values = group[name][[0, n - 1]]
-            lines.append(f"  {name:<12s}{values[0]:.10g} -> {values[1]:.10g}")
+        if "space" in meta:
+            lines.extend(_describe_space(meta, group, n))
+        else:
+            for name in ("mass", "temperature", "kurtosis", "min_f"):
+                values = group[name][[0, n - 1]]
+                lines.append(f"  {name:<12s}{values[0]:.10g} -> {values[1]:.10g}")
     resolution = progress.get("resolution")
     if resolution:
         lines.append(f"resolution  at t = {progress['time']:g} (the last commit): spectral tail "

@@ -19,7 +19,7 @@ import numpy
 
 from granframe.equations.conservative import ConservativeCorrection
 from granframe.memory import check_run_memory
-from granframe.model.initial import check_fits
+from granframe.model.initial import check_fits, check_projection
 from granframe.registry import default_registries
 from granframe.run.runner import (HealthObserver, Observer, ProgressObserver, Simulation,
                                   StorageObserver, _Records)
@@ -107,7 +107,6 @@ class SpaceSimulation(Simulation):
                                    space.length)
         self.edges = cell_edges(space)
         self.f0 = self._initial()
-        self.projection = None
         self.equation = (CellCollisions(self.operator, d.heat_bath, d.knudsen) if collide
                          else None)
         if collide and d.health.step_limit:
@@ -120,19 +119,33 @@ class SpaceSimulation(Simulation):
         self.fields = FieldMoments(grid, space.length / space.cells, xp)
 
     def _initial(self):
-        """f0 as cell averages (cells, *grid.shape), checked and projected cell by cell."""
+        """f0 as cell averages (cells, *grid.shape), checked and projected cell by cell.
+
+        Sets :attr:`projection`, the moments before and after the Nyquist projection of
+        the cell they change most (:func:`~granframe.model.initial.check_projection`, which
+        refuses a cell the grid does not resolve).
+        """
         d, grid = self.description, self.grid
         initial = d.build("initial")
         sampled, masses = initial_cells(d)
+        projected, worst = [], -1.0
         for index, (f, mass) in enumerate(zip(sampled, masses)):
+            cell = _cell(initial, mass)
             try:
-                check_fits(grid, f, _cell(initial, mass), d.health.edge_tolerance,
+                check_fits(grid, f, cell, d.health.edge_tolerance,
                            d.health.initial_mass_tolerance)
+                projected.append(grid.project(f))
+                moments = check_projection(grid, f, projected[-1], cell,
+                                           d.health.projection_tolerance,
+                                           d.health.projection_kurtosis_tolerance)
             except ValueError as exc:
                 raise ValueError(f"{exc} (in cell {index} of {d.space.cells}, x = "
                                  f"{0.5 * (self.edges[index] + self.edges[index + 1]):.6g})"
                                  ) from None
-        return numpy.stack([grid.project(f) for f in sampled])
+            change = max(abs(m["after"] / m["before"] - 1.0) for m in moments.values())
+            if change > worst:
+                worst, self.projection = change, moments
+        return numpy.stack(projected)
 
     # -- what differs from a space-homogeneous run -----------------------------------------
     def _layout(self):

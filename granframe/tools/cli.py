@@ -386,7 +386,8 @@ def _run_one(description, out, args) -> int:
             return 0
     try:
         simulation = Simulation(description)
-        note = projection_note(simulation.projection)
+        # a space run keeps no projection record (None): nothing to note
+        note = projection_note(simulation.projection) if simulation.projection else None
         if note:
             print(f"granframe: {note}", file=sys.stderr)
         result = simulation.run(out, resume=args.resume, overwrite=args.overwrite,

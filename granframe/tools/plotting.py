@@ -21,6 +21,17 @@ the functions into five figures (:func:`figures`) and writes them as PNG, PDF or
   filled from f = 0 up, with f < 0 in grey;
 - ``moments``: mass drift, kurtosis against the Maxwellian value, and the negative share
   of f on a log axis against the positivity health limit.
+
+A space run (a description with a ``space`` section) has fields per cell instead, and
+three figures of its own:
+
+- ``maps``: x-t maps (:func:`field_map`) of the density rho, the bulk velocity u_1, the
+  temperature T, the pressure P_11 and the heat flux q_1, cell by cell and step by step;
+- ``profiles``: the same five fields against x (:func:`profiles`) at five of the
+  snapshot times, a marker at each cell centre;
+- ``totals``: the total mass and energy against t with what entered through the walls
+  (:func:`total_mass`, :func:`total_energy`) and the negative share of f
+  (:func:`positivity`).
 """
 
 from __future__ import annotations
@@ -38,6 +49,7 @@ from matplotlib.patches import Patch
 from granframe import validators as check
 from granframe.equations.rescaled import Rescaling
 from granframe.model.exact import heated_maxwell_law
+from granframe.run.dataset import committed
 from granframe.run.description import RunDescription
 from granframe.run.storage import RunStore, StoreDamagedError, summarise
 from granframe.tools.analysis import relative_entropy
@@ -62,7 +74,21 @@ _STYLE = {"axes.grid": True, "grid.alpha": 0.3, "font.size": 10, "axes.titlesize
 #: Figure name -> (rows, columns), size in inches.
 _LAYOUTS = {"temperature": ((1, 2), (11, 4.4)), "entropy": ((1, 1), (8, 5.2)),
             "slices": ((1, 2), (11, 4.4)), "contour": ((1, 2), (11, 5.8)),
-            "moments": ((1, 3), (14, 4.2))}
+            "moments": ((1, 3), (14, 4.2)), "maps": ((2, 3), (15, 8.6)),
+            "profiles": ((2, 3), (15, 8.2)), "totals": ((1, 3), (14, 4.2))}
+
+#: The fields of a space run that :func:`field_map` and :func:`profiles` draw: name ->
+#: (stored array, component index, symbol, words, signed).
+SPACE_FIELDS = {
+    "density": ("density", (), r"$\rho$", "density", False),
+    "velocity": ("velocity", (0,), r"$u_1$", "bulk velocity", True),
+    "temperature": ("temperature", (), "$T$", "temperature", False),
+    "pressure": ("pressure_tensor", (0, 0), r"$P_{11}$", "pressure", False),
+    "heat_flux": ("heat_flux", (0,), r"$q_1$", "heat flux", True),
+}
+
+#: The totals a space run records after every step (integrals over x and v).
+_SPACE_TOTALS = ("mass", "kinetic_energy", "min_f", "negative_mass_fraction")
 
 
 def _attribute(ds, name):
@@ -85,13 +111,14 @@ def _attribute(ds, name):
 
 
 def _open(path) -> xarray.Dataset:
-    """The Dataset of the store at ``path``, once every committed chunk passed its checksum."""
+    """The Dataset of the store at ``path``, cut to its last commit, once every committed
+    chunk passed its checksum."""
     store = RunStore.open(path, complete=False)
     problems = store.verify()
     if problems:
         raise StoreDamagedError(f"plot: store '{path}' is damaged: {summarise(problems)} "
                                 "(granframe check lists every problem)", problems)
-    return xarray.open_zarr(path, consolidated=False, chunks=None)
+    return committed(store)
 
 
 class _Run:
@@ -122,6 +149,8 @@ class _Run:
         self.description = RunDescription.from_toml(text)
         self.title = self.description.title or name or "untitled run"
         self.grid = self.description.grid
+        #: the description's space section; None for a space-homogeneous run
+        self.space = getattr(self.description, "space", None)
         self.status = progress.get("status")
         # the resolution warnings of the last commit: nested in the store's metadata, flat
         # (resolution_warnings) in granframe.open_run's attributes
@@ -135,7 +164,8 @@ class _Run:
                                   else list(accuracy or ()))
         self.step_time = self.ds["step_time"].values
         self.moments = {key: self.ds[key].values for key in
-                        ("mass", "temperature", "kurtosis", "min_f", "negative_mass_fraction")}
+                        (_SPACE_TOTALS if self.space is not None else
+                         ("mass", "temperature", "kurtosis", "min_f", "negative_mass_fraction"))}
         self.times = self.ds["time"].values
         self.axes = [self.ds[f"v{i + 1}"].values for i in range(self.grid.dimension)]
         self.rescaled = _attribute(data, "rescaling") is not None
@@ -204,6 +234,25 @@ class _Run:
         return sorted(set(numpy.linspace(0, self.count - 1, min(count, self.count))
                           .round().astype(int)))
 
+    def field(self, name):
+        """The field ``name`` of :data:`SPACE_FIELDS` of a space run, (step_time, x)."""
+        array, component = SPACE_FIELDS[name][:2]
+        values = self.ds[array].values
+        return values[(slice(None), slice(None)) + component]
+
+    def homogeneous(self, owner):
+        """Refuse a space run in the plotting function ``owner`` (drawn from f(v))."""
+        if self.space is not None:
+            check.reject(owner, "ds", self.title,
+                         "must be a space-homogeneous run; a space run is drawn by "
+                         "field_map, profiles, total_mass, total_energy and positivity")
+
+    def inhomogeneous(self, owner):
+        """Refuse a space-homogeneous run in the plotting function ``owner``."""
+        if self.space is None:
+            check.reject(owner, "ds", self.title,
+                         "must be a space run (a description with a space section)")
+
 
 def _component(component) -> str:
     """A component as ``name(key=value, ...)``, nested tables with a name the same way."""
@@ -231,7 +280,8 @@ def caption(ds) -> str:
     -------
     str
         Four lines: the run's title (and its status unless finished); the dimension, N,
-        dt and integrator, heat bath tau and Knudsen number; the operator; the
+        dt and integrator, heat bath tau and Knudsen number; the operator (then, for a
+        space run, its cells, reconstruction and walls); the
         restitution law e and the kernel exponent lambda, and that every quantity is
         dimensionless. Then one line per resolution warning of the last commit
         (:func:`granframe.velocity.estimators.resolution_report`) and one per accuracy
@@ -257,11 +307,21 @@ def caption(ds) -> str:
         f"L = {grid.half_width:.4g}; {dt}; heat bath τ = {d.heat_bath:g}, "
         f"Knudsen number ε = {d.knudsen:g}",
         f"operator {_component(d.operator)}",
+        *([_space_line(d.space)] if d.space is not None else []),
         f"restitution e: {_component(d.restitution)}; kernel {_component(d.kernel)}, "
         f"exponent λ = {exponent:g}" + (f", energy exponent γ = {energy:g}" if energy else "")
         + "; all quantities dimensionless"]
         + [f"UNDER-RESOLVED: {warning}" for warning in run.warnings]
         + [f"INACCURATE: {warning}" for warning in run.accuracy_warnings])
+
+
+def _space_line(space) -> str:
+    """The caption line of a space run: its interval, cells, reconstruction and walls."""
+    collisions = "" if space.collisions else "; collisionless (free transport)"
+    return (f"space: {space.cells} cells on [0, {space.length:g}] "
+            f"(dx = {space.length / space.cells:.4g}), reconstruction "
+            f"{_component(space.reconstruction)}, walls: left {_component(space.left)}, "
+            f"right {_component(space.right)}{collisions}")
 
 
 def _axes(ax, run):
@@ -296,6 +356,7 @@ def temperature(ds, ax=None):
     matplotlib.axes.Axes
     """
     run = _Run.of(ds)
+    run.homogeneous("temperature")
     ax = _axes(ax, run)
     t, T = run.step_time, run.moments["temperature"]
     exact = run.exact_temperature()
@@ -332,6 +393,7 @@ def temperature_error(ds, ax=None):
         When no exact law is known for the run.
     """
     run = _Run.of(ds)
+    run.homogeneous("temperature_error")
     exact = run.exact_temperature()
     if exact is None:
         check.reject("temperature_error", "ds", run.title,
@@ -389,6 +451,7 @@ def kurtosis(ds, ax=None):
     matplotlib.axes.Axes
     """
     run = _Run.of(ds)
+    run.homogeneous("kurtosis")
     ax = _axes(ax, run)
     d = run.grid.dimension
     ax.plot(run.step_time, run.moments["kurtosis"], color="C4", label="granframe")
@@ -453,6 +516,7 @@ def entropy(ds, ax=None):
     matplotlib.axes.Axes
     """
     run = _Run.of(ds)
+    run.homogeneous("entropy")
     if run.count < 2:
         check.reject("entropy", "ds", f"{run.count} snapshot",
                      "must hold at least two snapshots")
@@ -515,6 +579,7 @@ def slices(ds, ax=None, scale="linear"):
     if scale not in ("linear", "log"):
         check.reject("slices", "scale", scale, "must be 'linear' or 'log'")
     run = _Run.of(ds)
+    run.homogeneous("slices")
     ax = _axes(ax, run)
     v = run.axes[0]
     f, v1 = run.f_name, f"{run.v_name}1"
@@ -565,6 +630,7 @@ def contour(ds, ax=None, index=-1):
     matplotlib.axes.Axes
     """
     run = _Run.of(ds)
+    run.homogeneous("contour")
     if not check.is_integer(index) or not -run.count <= index < run.count:
         check.reject("contour", "index", index,
                      f"must be an integer from {-run.count} to {run.count - 1}")
@@ -597,8 +663,177 @@ def contour(ds, ax=None, index=-1):
     return ax
 
 
+def _space_field(run, owner, field):
+    """The entry of :data:`SPACE_FIELDS` named ``field`` of the space run ``run``."""
+    run.inhomogeneous(owner)
+    if field not in SPACE_FIELDS:
+        check.reject(owner, "field", field, f"must be one of {', '.join(SPACE_FIELDS)}")
+    return SPACE_FIELDS[field]
+
+
+def field_map(ds, field="density", ax=None):
+    """An x-t map of one field of a space run: its value in every cell after every step.
+
+    Drawn with ``pcolormesh``, one quad per cell and record (cell width dx, the record's
+    step around its time), with a colour bar; a signed field (u_1, q_1) on a diverging
+    scale centred at zero.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of a space run's store.
+    field : {"density", "velocity", "temperature", "pressure", "heat_flux"}
+        rho, u_1, T, P_11 or q_1 (:data:`SPACE_FIELDS`).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into (its figure gets the colour bar); a new captioned figure when
+        None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    run = _Run.of(ds)
+    _, _, symbol, words, signed = _space_field(run, "field_map", field)
+    ax = _axes(ax, run)
+    x, t = run.ds["x"].values, run.step_time
+    values = run.field(field)
+    style = {"cmap": "viridis"}
+    if signed:
+        reach = float(numpy.nanmax(numpy.abs(values))) or 1.0
+        style = {"cmap": "RdBu_r", "vmin": -reach, "vmax": reach}
+    mesh = ax.pcolormesh(x, t, values, shading="nearest", **style)
+    ax.figure.colorbar(mesh, ax=ax, label=f"{symbol} (dimensionless)")
+    ax.grid(False)
+    ax.set(xlabel="position x, cell centres (dimensionless)", ylabel=_TIME,
+           xlim=(0.0, run.space.length),
+           title=f"{words} {symbol}(t, x): range [{numpy.nanmin(values):.4g}, "
+                 f"{numpy.nanmax(values):.4g}]")
+    return ax
+
+
+def profiles(ds, field="density", ax=None):
+    """One field of a space run against x at five of its snapshot times.
+
+    The field of the record taken with each snapshot (its step), a marker at each cell
+    centre.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of a space run's store.
+    field : {"density", "velocity", "temperature", "pressure", "heat_flux"}
+        rho, u_1, T, P_11 or q_1 (:data:`SPACE_FIELDS`).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into; a new captioned figure when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    run = _Run.of(ds)
+    _, _, symbol, words, _ = _space_field(run, "profiles", field)
+    ax = _axes(ax, run)
+    x = run.ds["x"].values
+    values = run.field(field)
+    steps = run.ds["snapshot_step"].values
+    for colour, i in enumerate(run.snapshot_indices()):
+        ax.plot(x, values[int(steps[i])], color=f"C{colour}", marker="o", ms=2.5, lw=1,
+                label=f"t = {run.times[i]:g}")
+    ax.set(xlabel="position x, cell centres (dimensionless)",
+           ylabel=f"{symbol} (dimensionless)", xlim=(0.0, run.space.length),
+           title=f"{words} {symbol}(x) at the snapshots, a marker at each cell")
+    ax.legend()
+    return ax
+
+
+def _entered(run, name):
+    """What entered through both walls from t = 0 to each record (a running sum)."""
+    return numpy.cumsum(run.ds[name].values.sum(axis=1))
+
+
+def total_mass(ds, ax=None):
+    """The total mass m(t) = int int f dv dx of a space run, drift and balance, log axis.
+
+    Draws |m(t)/m(0) - 1| and the balance |m(t) - m(0) - M_in(t)| / m(0), where M_in(t)
+    is the mass that entered through the walls up to t (``wall_mass`` summed), against
+    the health check's limit; zeros are left out.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of a space run's store.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into; a new captioned figure when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    run = _Run.of(ds)
+    run.inhomogeneous("total_mass")
+    ax = _axes(ax, run)
+    mass = run.moments["mass"]
+    drift = numpy.abs(mass / mass[0] - 1)
+    balance = numpy.abs((mass - mass[0] - _entered(run, "wall_mass")) / mass[0])
+    ax.semilogy(run.step_time, _positive(drift), ".", ms=2, color="C2",
+                label=f"drift |m(t)/m(0) - 1|, max {drift.max():.1e}")
+    ax.semilogy(run.step_time, _positive(balance), "x", ms=3, color="C0",
+                label=f"balance with the walls, max {balance.max():.1e}")
+    ax.axhline(run.description.health.mass_tolerance, color="C3", ls="--", lw=1,
+               label="health limit (mass_tolerance)")
+    ax.set(xlabel=_TIME, ylabel=r"relative mass change (dimensionless)",
+           title=r"total mass $m = \int\int f\,dv\,dx$, m(0) = " + f"{mass[0]:.6g}"
+                 "\nand its balance with the walls (zeros left out)")
+    ax.legend()
+    return ax
+
+
+def total_energy(ds, ax=None):
+    """The total energy E(t) = int int |v|^2/2 f dv dx of a space run, with E(0) plus
+    the energy that entered through the walls up to t (``wall_energy`` summed).
+
+    The two agree where the transport and the collisions conserve energy (elastic
+    collisions); their gap is what the collision step changed.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of a space run's store.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into; a new captioned figure when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    run = _Run.of(ds)
+    run.inhomogeneous("total_energy")
+    ax = _axes(ax, run)
+    energy = run.moments["kinetic_energy"]
+    walls = energy[0] + _entered(run, "wall_energy")
+    ax.plot(run.step_time, energy, color="C1", label="E(t)")
+    ax.plot(run.step_time, walls, "--", color="C0",
+            label="E(0) + energy entered through the walls")
+    gap = float(numpy.abs(energy - walls).max())
+    ax.set(xlabel=_TIME, ylabel="total energy E (dimensionless)",
+           title=r"total energy $E = \int\int |v|^2/2\, f\,dv\,dx$" + "\nmax |E(t) - E(0) - "
+                 f"entered| = {gap:.2e} (the collision step's)")
+    ax.legend()
+    return ax
+
+
+def _space_panels(run) -> dict:
+    """The figures of a space run: name -> the functions drawing their panels."""
+    def drawn(function, field):
+        return lambda r, ax: function(r, field, ax)
+
+    return {"maps": tuple(drawn(field_map, name) for name in SPACE_FIELDS),
+            "profiles": tuple(drawn(profiles, name) for name in SPACE_FIELDS),
+            "totals": (total_mass, total_energy, positivity)}
+
+
 def figures(ds) -> dict:
-    """The five figures of a run, each captioned with its parameters.
+    """The figures of a run, each captioned with its parameters.
 
     Parameters
     ----------
@@ -609,23 +844,30 @@ def figures(ds) -> dict:
     -------
     dict of str to matplotlib.figure.Figure
         ``temperature``, ``slices``, ``contour``, ``moments`` and, with at least three
-        snapshots, ``entropy``. They are not attached to pyplot.
+        snapshots, ``entropy``; for a space run ``maps``, ``profiles`` and ``totals``.
+        They are not attached to pyplot.
     """
     run = _Run.of(ds)
-    error = temperature_error if run.exact_temperature() is not None else mass_drift
-    panels = {"temperature": (temperature, error),
-              "slices": (slices, lambda r, ax: slices(r, ax, scale="log")),
-              "contour": (lambda r, ax: contour(r, ax, index=0), contour),
-              "moments": (mass_drift, kurtosis, positivity)}
-    if run.count >= 3:
-        panels["entropy"] = (entropy,)
+    if run.space is not None:
+        panels = _space_panels(run)
+    else:
+        error = temperature_error if run.exact_temperature() is not None else mass_drift
+        panels = {"temperature": (temperature, error),
+                  "slices": (slices, lambda r, ax: slices(r, ax, scale="log")),
+                  "contour": (lambda r, ax: contour(r, ax, index=0), contour),
+                  "moments": (mass_drift, kurtosis, positivity)}
+        if run.count >= 3:
+            panels["entropy"] = (entropy,)
     text = caption(run)
     drawn = {}
     for name, draws in panels.items():
         layout, size = _LAYOUTS[name]
         fig = Figure(figsize=size, layout="constrained")
-        for ax, draw in zip(numpy.atleast_1d(fig.subplots(*layout)), draws):
+        axes = numpy.atleast_1d(fig.subplots(*layout)).ravel()
+        for ax, draw in zip(axes, draws):
             draw(run, ax)
+        for ax in axes[len(draws):]:
+            fig.delaxes(ax)
         fig.suptitle(text, fontsize=8, color="C3" if run.status not in (None, "finished")
                      or run.warnings or run.accuracy_warnings else "black")
         drawn[name] = fig
