@@ -284,6 +284,11 @@ def component_field(**kwargs):
                        validator=instance_of(Component, "a name or a table"), **kwargs)
 
 
+#: Most cells of a space run: 1e9 cells of the smallest grid (2D N = 4) already hold 128 GB
+#: per copy of f, so more is a mistake (and it keeps dx = length / cells a float).
+MAX_CELLS = 10 ** 9
+
+
 @attrs.frozen(kw_only=True)
 class Space:
     r"""The space interval of d_t f + v_1 d_x f = Q(f, f)/eps (+ tau Delta_v f) (docs/space.md).
@@ -292,7 +297,8 @@ class Space:
     ----------
     cells : int
         Finite-volume cells on [0, length]; at least the reconstruction's stencil,
-        2 ghost + 1 (3 for ``upwind``, 5 for ``muscl``, 7 for ``weno5``).
+        2 ghost + 1 (3 for ``upwind``, 5 for ``muscl``, 7 for ``weno5``), at most
+        :data:`MAX_CELLS`.
     length : float
         ell > 0.
     block_cells : int or None
@@ -313,7 +319,7 @@ class Space:
     The Knudsen number eps is the description's ``knudsen``.
     """
 
-    cells: int = attrs.field(converter=check.to_int, validator=check.integer(1))
+    cells: int = attrs.field(converter=check.to_int, validator=check.integer(1, MAX_CELLS))
     length: float = attrs.field(default=1.0, converter=check.to_float,
                                 validator=check.real(0.0, math.inf, lower_open=True))
     block_cells: int | None = attrs.field(default=None, converter=check.to_int)

@@ -35,14 +35,21 @@ def _maxwellian(grid, density, velocity, temperature):
     return grid.maxwellian(density, velocity, temperature)
 
 
+def _finite(value) -> bool:
+    """A finite real number (not bool), an integer beyond float range excluded."""
+    try:
+        return check.is_real(value) and math.isfinite(float(value))
+    except OverflowError:
+        return False
+
+
 def _velocity(value, owner, name):
     """A velocity given as u_1 (a number) or all d components, as a tuple."""
-    if check.is_real(value):
+    if _finite(value):
         return (float(value),)
-    if isinstance(value, (list, tuple)) and 1 <= len(value) <= 3 and all(
-            check.is_real(v) and math.isfinite(v) for v in value):
+    if isinstance(value, (list, tuple)) and 1 <= len(value) <= 3 and all(map(_finite, value)):
         return tuple(float(v) for v in value)
-    check.reject(owner, name, value, "must be u_1 (a number) or the d components of u")
+    check.reject(owner, name, value, "must be u_1 (a finite number) or the d components of u")
 
 
 def _full(velocity, grid, owner, name):
@@ -64,7 +71,7 @@ def _state(value, owner, name):
     state = {"density": value.get("density", 1.0), "velocity": value.get("velocity", 0.0),
              "temperature": value.get("temperature", 1.0)}
     for key in ("density", "temperature"):
-        if not (check.is_real(state[key]) and 0.0 < float(state[key]) < math.inf):
+        if not (_finite(state[key]) and float(state[key]) > 0.0):
             check.reject(owner, f"{name}.{key}", state[key], "must be a finite number > 0")
         state[key] = float(state[key])
     state["velocity"] = list(_velocity(state["velocity"], owner, f"{name}.velocity"))
