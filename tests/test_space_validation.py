@@ -236,12 +236,16 @@ def free_molecular(final_time=30.0, cells=10, reconstruction="upwind", samples=1
 
 
 def test_free_molecular_heat_transfer_reaches_the_grid_closed_form():
+    """To 1e-9 in f and 1e-7 in the fields: the node -L, which moves both ways, holds in a
+    run a profile linear in x between the two walls' emissions at |v_1| = L (relative
+    size exp(-L^2 / (2 T2)) = 3e-10 here), which the closed form replaces by its mean; q_1
+    weighs that node with L^3 / 2."""
     result = free_molecular()
     time, final = result["history"][-1]
     assert time == pytest.approx(30.0)
     for name, distance in final.items():
-        assert distance < 1e-12, (name, distance)
-    assert result["f"] < 1e-12
+        assert distance < 1e-7, (name, distance)
+    assert result["f"] < 1e-9
     assert result["history"][0][1]["q1"] > 0.5          # it started far from it
     # the grid state differs from the continuum one by the grid's quadrature error only
     steady, continuum = result["steady"], result["continuum"]

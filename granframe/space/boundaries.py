@@ -4,16 +4,17 @@ Every boundary sees its wall as the left one (x = 0, the domain at x > 0, veloci
 with v_1 > 0 leave the wall); :mod:`granframe.space.transport` maps the right wall onto it
 by the exact reflection of the nodes. The flux through the wall is
 F = c^+ out + c^- in with ``in`` the face value reconstructed from inside and ``out`` what
-:meth:`emit` returns, c the node speeds (:func:`~granframe.space.transport.transport_speeds`).
+:meth:`emit` returns, c^± the upwind speeds of the nodes
+(:func:`~granframe.space.transport.upwind_speeds`; the node -L moves both ways at L/2).
 
 A diffuse wall with accommodation alpha (Maxwell 1879) sends back
 
 .. math:: f_{out}(v) = (1 - \alpha) f_{in}(R v)
-          + \alpha \frac{\Phi}{\sum_{c > 0} c\, M_w \Delta v} M_w(v),\quad
-          \Phi = \sum_{c < 0} |c| f_{in}(v) \Delta v,\quad c > 0,
+          + \alpha \frac{\Phi}{\sum_v c^+ M_w \Delta v} M_w(v),\quad
+          \Phi = \sum_v |c^-| f_{in}(v) \Delta v,\quad c^+(v) > 0,
 
 with M_w(v) = exp(-|v - u_w|^2 / (2 T_w)) and u_w tangential (no v_1 component). Since R
-maps the nodes of c < 0 one to one onto those of c > 0 with c(Rv) = -c(v), the discrete
+maps the nodes of c^- < 0 one to one onto those of c^+ > 0 with c^+(Rv) = -c^-(v), the discrete
 mass flux sum_v c F Δv is zero to round-off: what arrives is sent back. Specular reflection
 is alpha = 0.
 """
@@ -28,7 +29,7 @@ import numpy
 
 from granframe import abc as contracts
 from granframe import validators as check
-from granframe.space.transport import reflect, transport_speeds
+from granframe.space.transport import reflect, upwind_speeds
 
 
 @attrs.frozen
@@ -143,7 +144,7 @@ class Diffuse(contracts.Boundary):
         return xp.asarray(numpy.exp(-exponent / (2.0 * self.temperature)))
 
     def _emission(self, grid, xp):
-        """M_w / sum_{c > 0} c M_w dv at the nodes of c > 0, 0 elsewhere; and |c^-| dv."""
+        """M_w / sum c^+ M_w dv at the nodes of c^+ > 0, 0 elsewhere; and |c^-| dv."""
         emission, arriving = _emission(self, grid)
         return xp.asarray(emission), xp.asarray(arriving)
 
@@ -157,17 +158,17 @@ class Diffuse(contracts.Boundary):
         emission, arriving = self._emission(grid, xp)
         axes = tuple(range(incoming.ndim - d, incoming.ndim))
         flux = (arriving * incoming).sum(axis=axes, keepdims=True)
-        c = transport_speeds(grid, xp)
+        positive, _ = upwind_speeds(grid, xp)
         out = self.accommodation * flux * emission
         if self.accommodation < 1.0:
             out = out + (1.0 - self.accommodation) * reflect(incoming, d, xp)
-        return xp.where(c > 0, out, incoming)
+        return xp.where(positive > 0, out, incoming)
 
 
 @functools.lru_cache(maxsize=16)
 def _emission(wall: Diffuse, grid):
     """:meth:`Diffuse._emission` as NumPy arrays, computed once per wall and grid."""
-    c = transport_speeds(grid, numpy)
-    m = wall.maxwellian(grid, numpy) * (c > 0)
-    m = m / float((c * m).sum() * grid.cell_volume)
-    return m, numpy.broadcast_to(numpy.maximum(-c, 0.0) * grid.cell_volume, grid.shape).copy()
+    positive, negative = upwind_speeds(grid, numpy)
+    m = wall.maxwellian(grid, numpy) * (positive > 0)
+    m = m / float((positive * m).sum() * grid.cell_volume)
+    return m, numpy.broadcast_to(-negative * grid.cell_volume, grid.shape).copy()

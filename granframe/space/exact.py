@@ -363,19 +363,24 @@ def free_molecular_walls(dimension: int, T1: float, T2: float, density: float) -
 def free_molecular_walls_grid(grid, T1: float, T2: float, density: float, rest=None) -> dict:
     r"""The free-molecular state of :func:`free_molecular_walls` on a velocity grid.
 
-    The discrete steady state of the transport with diffuse walls that emit, at the nodes
-    with v_1 > 0, a multiple of the grid-sampled Maxwellian M_{T_w}: f_j = n1 M_{T1}(v_j)
-    at the nodes with v_1 > 0 (j = N/2+1 .. N-1 along v_1), f_j = n2 M_{T2}(v_j) at those
-    with v_1 < 0 (j = 1 .. N/2-1); the two sets are mirror images. The nodes of speed 0
-    (j = 0, which the periodic grid shares between v_1 = -L and +L, and j = N/2, v_1 = 0)
-    carry no flux, are not reached by the walls and keep whatever they hold: ``rest``.
-    The discrete sums fix n1 and n2:
+    The discrete steady state of the transport with diffuse walls that emit a multiple of
+    the grid-sampled Maxwellian M_{T_w}: f_j = n1 M_{T1}(v_j) at the nodes with v_1 > 0
+    (j = N/2+1 .. N-1 along v_1), f_j = n2 M_{T2}(v_j) at those with v_1 < 0
+    (j = 1 .. N/2-1); the two sets are mirror images. The node j = 0, which the periodic
+    grid shares between v_1 = -L and +L, moves both ways at L/2
+    (:func:`granframe.space.transport.upwind_speeds`): each wall emits into it, and it
+    holds here the mean (n1 M_{T1} + n2 M_{T2})/2 of the two emissions. (In a run it holds
+    a profile between them, linear in x for the upwind reconstruction, whose mean over
+    the cells this is; both are of relative size exp(-L^2 / (2 max T_w)).) The nodes
+    v_1 = 0 (j = N/2) carry no flux, are not reached by the walls and keep whatever they
+    hold: ``rest``. The discrete sums fix n1 and n2:
 
-        n1 F(T1) = n2 F(T2),   F(T) = h^d sum_{v_1 > 0} v_1 M_T(v_j)        (zero mass flux),
-        n1 m(T1) + n2 m(T2) + m_rest = rho,   m(T) = h^d sum_{v_1 > 0} M_T(v_j)   (grid mass),
+        n1 F(T1) = n2 F(T2),   F(T) = h^d sum_v c^+ M_T(v_j)        (zero mass flux),
+        n1 m(T1) + n2 m(T2) + m_rest = rho,   m(T) = h^d sum_v M_T(v_j) over the nodes of
+        c^+ > 0 except j = 0, plus half of j = 0                      (grid mass),
 
-    with F and m summed over the transverse nodes too (the half-range sums over v_1 < 0
-    equal those over v_1 > 0 by the mirror symmetry).
+    with the sums over the transverse nodes too (the half-range sums over v_1 < 0 equal
+    those over v_1 > 0 by the mirror symmetry).
 
     With the default ``rest`` the node v_1 = 0 holds half of each half-range state, so each
     half-range sum is the trapezoidal rule on [0, L] in v_1, whose end v_1 = 0 is the kink
@@ -390,12 +395,12 @@ def free_molecular_walls_grid(grid, T1: float, T2: float, density: float, rest=N
     T1, T2, density : float
         Wall temperatures and the grid mass rho = h^d sum_j f_j of the state, > 0.
     rest : None or array_like
-        Values at the speed-0 nodes. ``None``: the average (n1 M_{T1} + n2 M_{T2})/2 of the
-        two half-range states at those nodes (n1, n2 then solve the 2 x 2 system with
+        Values at the nodes v_1 = 0. ``None``: the average (n1 M_{T1} + n2 M_{T2})/2 of the
+        two half-range states there (n1, n2 then solve the 2 x 2 system with
         m_rest = (n1 r(T1) + n2 r(T2))/2, r(T) the grid mass of M_T on them). An array of
-        the grid's shape: its values at j = 0 and j = N/2 along v_1 are kept (the initial
-        data of a run, which the discrete solver leaves there unchanged), so the result is
-        the state a run from that data converges to.
+        the grid's shape: its values at j = N/2 along v_1 are kept (the initial data of a
+        run, which the discrete solver leaves there unchanged), so the result is the state
+        a run from that data converges to.
 
     Returns
     -------
@@ -403,20 +408,24 @@ def free_molecular_walls_grid(grid, T1: float, T2: float, density: float, rest=N
         ``f`` (the grid's shape), ``n1``, ``n2``, and the grid moments of f
         (:meth:`VelocityGrid.moments`): ``rho``, ``u``, ``T``, ``P``, ``P11``, ``q``, ``q1``.
     """
+    from granframe.space.transport import upwind_speeds
+
     owner = "free_molecular_walls_grid"
     T1, T2, rho = _walls_arguments(owner, T1, T2, density)
     n = grid.n_modes
-    v1 = grid.mesh()[0]
-    index = numpy.arange(n).reshape(v1.shape)
-    positive = numpy.broadcast_to(index > n // 2, grid.shape)
-    negative = numpy.broadcast_to((index > 0) & (index < n // 2), grid.shape)
-    resting = ~(positive | negative)
+    index = numpy.broadcast_to(numpy.arange(n).reshape((-1,) + (1,) * (grid.dimension - 1)),
+                               grid.shape)
+    positive = index > n // 2
+    negative = (index > 0) & (index < n // 2)
+    shared = index == 0
+    resting = index == n // 2
     h = grid.cell_volume
+    c_plus, c_minus = (numpy.broadcast_to(c, grid.shape) for c in upwind_speeds(grid))
     m1, m2 = grid.maxwellian(1.0, None, T1), grid.maxwellian(1.0, None, T2)
-    flux1 = h * float(numpy.sum(numpy.where(positive, v1 * m1, 0.0)))
-    flux2 = h * float(numpy.sum(numpy.where(negative, -v1 * m2, 0.0)))
-    mass1 = h * float(numpy.sum(m1[positive]))
-    mass2 = h * float(numpy.sum(m2[negative]))
+    flux1 = h * float(numpy.sum(c_plus * m1))          # emitted by the left wall
+    flux2 = h * float(numpy.sum(-c_minus * m2))        # by the right one
+    mass1 = h * (float(numpy.sum(m1[positive])) + 0.5 * float(numpy.sum(m1[shared])))
+    mass2 = h * (float(numpy.sum(m2[negative])) + 0.5 * float(numpy.sum(m2[shared])))
     if rest is None:
         matrix = numpy.array([[flux1, -flux2],
                               [mass1 + 0.5 * h * float(numpy.sum(m1[resting])),
@@ -432,10 +441,11 @@ def free_molecular_walls_grid(grid, T1: float, T2: float, density: float, rest=N
         n1 = remaining * flux2 / (flux2 * mass1 + flux1 * mass2)
         n2 = n1 * flux1 / flux2
         if not n1 > 0.0:
-            check.reject(owner, "rest (grid mass at the speed-0 nodes)", rho - remaining,
+            check.reject(owner, "rest (grid mass at the nodes v_1 = 0)", rho - remaining,
                          f"must be below density = {rho:.6g}; the moving nodes would need "
                          "a negative mass")
     f = numpy.where(positive, n1 * m1, numpy.where(negative, n2 * m2, kept))
+    f = numpy.where(shared, 0.5 * (n1 * m1 + n2 * m2), f)
     moments = grid.moments(f)
     return {"f": f, "n1": float(n1), "n2": float(n2), "rho": moments["mass"],
             "u": moments["bulk_velocity"], "T": moments["temperature"],

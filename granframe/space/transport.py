@@ -17,13 +17,14 @@ the neighbouring block, at the ends from the other end (periodic) or by the
 itself (:meth:`~granframe.abc.Boundary.emit`).
 
 The velocity nodes. The grid is periodic on [-L, L): v_1 takes the values -L + i h,
-i = 0 .. N - 1. The node i = 0 stands for both -L and +L; its transport speed is 0, the
-mean of its two images, so that the set of speeds is symmetric: c_i = v_1 for i ≥ 1,
-max|c| = L - h. The reflection v_1 -> -v_1 is the permutation i -> (N - i) mod N of the
-nodes (:func:`reflect`); it fixes i = 0 and the nodes v_1 = 0 (i = N/2), reverses every
-other speed exactly (c(Rv) = -c(v) in floating point, since the nodes are symmetric about
-0), and so maps the velocities that enter the domain at a wall one to one onto those that
-leave it. Nodes of speed 0 carry no flux and are never transported.
+i = 0 .. N - 1. The node i = 0 stands for both -L and +L: half of what it holds moves
+each way, c^+ = L/2 and c^- = -L/2 (net speed 0), so that the speeds are symmetric:
+c^±_i = max/min(v_1, 0) for i ≥ 1, max(c^+) = L - h. The reflection v_1 -> -v_1 is the
+permutation i -> (N - i) mod N of the nodes (:func:`reflect`); it fixes i = 0 and the
+nodes v_1 = 0 (i = N/2), maps c^+ onto -c^- exactly (c(Rv) = -c(v) in floating point,
+since the nodes are symmetric about 0), and so maps the velocities that enter the domain
+at a wall one to one onto those that leave it; at i = 0 the half moving into the wall
+onto the half moving out. The nodes v_1 = 0 carry no flux and are never transported.
 """
 
 from __future__ import annotations
@@ -32,11 +33,22 @@ import numpy
 
 
 def transport_speeds(grid, xp=numpy):
-    """The transport speed of each v_1 node, shaped to broadcast over f (N, 1, ..., 1):
-    v_1, except 0 at the node -L (see the module notes)."""
-    speeds = numpy.array(grid.points(), dtype=float)
-    speeds[0] = 0.0
-    return xp.asarray(speeds.reshape((-1,) + (1,) * (grid.dimension - 1)))
+    """The net transport speed c = c^+ + c^- of each v_1 node (:func:`upwind_speeds`),
+    shaped to broadcast over f (N, 1, ..., 1): v_1, and 0 at the node -L."""
+    positive, negative = upwind_speeds(grid, xp)
+    return positive + negative
+
+
+def upwind_speeds(grid, xp=numpy):
+    """(c^+, c^-) of each v_1 node, shaped (N, 1, ..., 1): max(v_1, 0) and min(v_1, 0),
+    except at the node -L, which stands for both -L and +L: half of what it holds moves
+    each way, c^+ = L/2 and c^- = -L/2 (see the module notes)."""
+    points = numpy.array(grid.points(), dtype=float)
+    positive, negative = numpy.maximum(points, 0.0), numpy.minimum(points, 0.0)
+    positive[0] = negative[0] = 0.5 * grid.half_width
+    negative[0] = -negative[0]
+    shape = (-1,) + (1,) * (grid.dimension - 1)
+    return xp.asarray(positive.reshape(shape)), xp.asarray(negative.reshape(shape))
 
 
 def reflect(f, dimension: int, xp=numpy):
@@ -121,9 +133,7 @@ class Transport:
         self.dx = float(length) / blocks.cells
         grid, xp = blocks.grid, blocks.xp
         self.grid, self.xp = grid, xp
-        c = transport_speeds(grid, xp)
-        self.positive = xp.maximum(c, 0.0)
-        self.negative = xp.minimum(c, 0.0)
+        self.positive, self.negative = upwind_speeds(grid, xp)
         # moments of a face flux: mass and energy int F dv, int F |v|^2/2 dv
         self._weights = xp.asarray(numpy.stack([numpy.ones(grid.shape),
                                                 0.5 * grid.speed_squared()]) * grid.cell_volume)

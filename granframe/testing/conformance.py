@@ -715,10 +715,10 @@ def check_boundary_basics(boundary) -> None:
     naming a parameter on 2D and 3D grids (:data:`WALL_GRIDS`), and accepts one; for a
     wall on each accepted grid: ``ghosts`` of g = 1, 2, 3 cells of shape (g, *grid.shape),
     finite; ``emit`` of the grid's shape, finite, leaving its input unchanged, its values
-    at c > 0 (what the wall sends) read only the arriving values (c < 0): changing the
-    incoming values at c >= 0 leaves them unchanged to 1e-14."""
+    at c^+ > 0 (what the wall sends) read only the arriving values (c^- < 0): changing the
+    incoming values where c^- = 0 leaves them unchanged to 1e-14 (c^± the upwind speeds,
+    :func:`granframe.space.transport.upwind_speeds`; the node -L is both)."""
     from granframe.abc import Boundary
-    from granframe.space.transport import transport_speeds
 
     _require(isinstance(boundary, Boundary), f"{boundary!r} is not a granframe.abc.Boundary")
     _contract("boundaries", boundary)
@@ -740,35 +740,40 @@ def check_boundary_basics(boundary) -> None:
         copy = incoming.copy()
         out = _emit(boundary, incoming, grid)
         _require(numpy.array_equal(incoming, copy), f"{name}: emit() modified its input")
-        c = numpy.broadcast_to(transport_speeds(grid), grid.shape)
-        changed = numpy.where(c >= 0, _incoming(grid, 5), incoming)
-        error = float(numpy.max(numpy.abs(_emit(boundary, changed, grid) - out)[c > 0]))
+        positive, negative = _speeds(grid)
+        changed = numpy.where(negative == 0, _incoming(grid, 5), incoming)
+        error = float(numpy.max(numpy.abs(_emit(boundary, changed, grid) - out)[positive > 0]))
         _require(error <= 1e-14 * numpy.max(numpy.abs(out)),
-                 f"{name}: the emission (c > 0) changed by {error:.3g} when only the incoming "
-                 f"values at c >= 0 changed ({grid.dimension}D): a wall sends back what "
-                 "arrives (c < 0)")
+                 f"{name}: the emission (c^+ > 0) changed by {error:.3g} when only the "
+                 f"incoming values at c^- = 0 changed ({grid.dimension}D): a wall sends back "
+                 "what arrives (c^- < 0)")
+
+
+def _speeds(grid):
+    """The upwind speeds (c^+, c^-) broadcast to the grid's shape."""
+    from granframe.space.transport import upwind_speeds
+
+    return tuple(numpy.broadcast_to(c, grid.shape) for c in upwind_speeds(grid))
 
 
 def _wall_flux(boundary, incoming, grid):
-    """F = c^+ out + c^- in at the wall, and c."""
-    from granframe.space.transport import transport_speeds
-
-    c = transport_speeds(grid)
+    """F = c^+ out + c^- in at the wall, and c^-."""
+    positive, negative = _speeds(grid)
     out = _emit(boundary, incoming, grid)
-    return numpy.maximum(c, 0.0) * out + numpy.minimum(c, 0.0) * incoming, c
+    return positive * out + negative * incoming, negative
 
 
 def check_wall_mass_flux(boundary) -> None:
-    """Zero net mass flux through the wall: sum_v F dv, F = c^+ out + c^- in with c the
-    transport speeds (:func:`granframe.space.transport.transport_speeds`), is below 1e-13
+    """Zero net mass flux through the wall: sum_v F dv, F = c^+ out + c^- in with c^± the
+    upwind speeds (:func:`granframe.space.transport.upwind_speeds`), is below 1e-13
     of the arriving flux sum_v |c^-| in dv, for three random positive ``in`` and a
     Maxwellian drifting into the wall, on every grid the wall accepts."""
     name = type(boundary).__name__
     for grid in _wall_grids(boundary):
         drifting = grid.maxwellian(1.0, [-0.5] + [0.2] * (grid.dimension - 1), 0.3)
         for incoming in (_incoming(grid, 6), _incoming(grid, 7), _incoming(grid, 8), drifting):
-            flux, c = _wall_flux(boundary, incoming, grid)
-            arriving = float(numpy.sum(numpy.maximum(-c, 0.0) * incoming))
+            flux, negative = _wall_flux(boundary, incoming, grid)
+            arriving = float(numpy.sum(-negative * incoming))
             net = float(numpy.sum(flux))
             _require(abs(net) <= 1e-13 * arriving,
                      f"{name}: net mass flux through the wall {net * grid.cell_volume:.3g}, "
@@ -778,13 +783,11 @@ def check_wall_mass_flux(boundary) -> None:
 
 def check_wall_positivity(boundary) -> None:
     """Non-negative incoming values (random, with zeros, and values down to 1e-300) give a
-    non-negative emission (c > 0) and non-negative ghost cells."""
-    from granframe.space.transport import transport_speeds
-
+    non-negative emission (c^+ > 0) and non-negative ghost cells."""
     name = type(boundary).__name__
     for grid in _wall_grids(boundary):
         rng = numpy.random.default_rng(9)
-        c = numpy.broadcast_to(transport_speeds(grid), grid.shape)
+        c = _speeds(grid)[0]
         for incoming in (rng.uniform(0.0, 1.0, grid.shape) * (rng.uniform(size=grid.shape) > 0.5),
                          10.0 ** -rng.uniform(0.0, 300.0, grid.shape)):
             out = _emit(boundary, incoming, grid)
@@ -798,14 +801,12 @@ def check_wall_positivity(boundary) -> None:
 
 
 def check_wall_linearity(boundary) -> None:
-    """The emission (c > 0) is linear in the incoming values: emit(a x + b y) = a emit(x)
+    """The emission (c^+ > 0) is linear in the incoming values: emit(a x + b y) = a emit(x)
     + b emit(y) to 1e-13 of the largest emission, a = 0.3, b = 2.5 (every wall whose
     accommodation does not depend on what arrives)."""
-    from granframe.space.transport import transport_speeds
-
     name = type(boundary).__name__
     for grid in _wall_grids(boundary):
-        c = numpy.broadcast_to(transport_speeds(grid), grid.shape)
+        c = _speeds(grid)[0]
         x, y = _incoming(grid, 10), _incoming(grid, 11)
         combined = _emit(boundary, 0.3 * x + 2.5 * y, grid)
         expected = 0.3 * _emit(boundary, x, grid) + 2.5 * _emit(boundary, y, grid)
