@@ -91,6 +91,7 @@ def test_the_batched_heat_bath_equals_the_planned_one_cell_by_cell():
 def test_fields_of_every_cell_equal_the_grid_moments(dimension):
     grid = gf.VelocityGrid(dimension, 12 if dimension == 3 else 24, 3.0)
     f = _cells(grid, 4, seed=dimension)
+    f[:, 0] = 0.0        # the node -L, which the fields count as +-L (the next test)
     fields = FieldMoments(grid, dx=0.25)(f)
     for c in range(4):
         moments = grid.moments(f[c])
@@ -114,3 +115,21 @@ def test_maxwellians_of_fields_have_the_fields_as_moments():
     numpy.testing.assert_allclose(fields["density"], rho, rtol=1e-14)
     numpy.testing.assert_allclose(fields["velocity"], u, atol=1e-12)
     numpy.testing.assert_allclose(fields["temperature"], t, rtol=1e-10)
+
+
+@pytest.mark.parametrize("dimension", [2, 3])
+def test_the_fields_count_the_node_minus_L_as_its_two_halves(dimension):
+    """What the node v_1 = -L holds moves half each way: no momentum, no heat flux, P_11 =
+    L^2 times its mass; the other nodes as the grid moments count them."""
+    grid = gf.VelocityGrid(dimension, 8, 1.0)
+    f = numpy.zeros((2,) + grid.shape)
+    f[0][(0,) + (3,) * (dimension - 1)] = 1.0          # at v_1 = -L only
+    f[1] = _cells(grid, 1)[0]
+    f[1, 0] = 0.0
+    fields = FieldMoments(grid, dx=1.0)(f)
+    mass = grid.cell_volume
+    assert fields["density"][0] == pytest.approx(mass)
+    assert fields["velocity"][0][0] == 0.0 and fields["heat_flux"][0][0] == 0.0
+    assert fields["pressure_tensor"][0][0, 0] == pytest.approx(grid.half_width ** 2 * mass)
+    moments = grid.moments(f[1])
+    numpy.testing.assert_allclose(fields["heat_flux"][1], moments["heat_flux"], atol=1e-12)

@@ -257,8 +257,10 @@ def test_a_run_killed_at_any_write_opens_as_before_or_resumes_bitwise(store, tmp
     assert_same(contents(tmp_path / "count" / "s.zarr"), reference, "a run in a subprocess")
     published = max(int(line.split()[0]) for line in lines if line.split()[1] == "rename")
     rng = random.Random(19)
+    # the last few writes are left out: the total varies by a write or two between runs
+    # (a kill at write 824 of a counted 825 once found the run already ended)
     ks = sorted({published, published + 1, *rng.sample(range(2, published), 2),
-                 *rng.sample(range(published + 2, len(lines)), 4)})
+                 *rng.sample(range(published + 2, len(lines) - 8), 4)})
     outcomes = {"nothing": 0, "resumed": 0}
     for k in ks:
         workdir = tmp_path / f"k{k}"

@@ -124,7 +124,7 @@ class Diffuse(contracts.Boundary):
                          f"must be >= h^2 / 4 = {0.25 * grid.spacing ** 2:.4g} (a thermal speed "
                          f"sqrt(T_w) of at least half the node spacing h = {grid.spacing:.4g}): "
                          "a colder wall Maxwellian falls on the nodes next to its centre "
-                         "and its discrete wall flux sum_{c > 0} c M_w dv is off by 46 % or more; "
+                         "and its discrete wall flux sum c^+ M_w dv is off by 46 % or more; "
                          "refine the grid (n_modes) or warm the wall")
         if math.exp(-gap * gap / (2.0 * self.temperature)) > 1e-8:
             check.reject("Diffuse", "temperature", self.temperature,

@@ -9,7 +9,13 @@ by the cell volume of the velocity grid; from them, with rho u = J,
           + 2 \rho u_i |u|^2\bigr),
 
 the central moments of granframe's conventions (the homogeneous ones of
-:meth:`~granframe.velocity.grid.VelocityGrid.moments`, cell by cell).
+:meth:`~granframe.velocity.grid.VelocityGrid.moments`, cell by cell), with one difference:
+the node v_1 = -L, which the periodic grid shares between -L and +L and whose content the
+transport moves half each way (:func:`~granframe.space.transport.upwind_speeds`), counts
+as its two halves: v_1 = 0 in the odd powers of v_1 (momentum, P_1j for j != 1, q_i), and
+v_1^2 = L^2 in the even ones. The fields are then those of what the transport carries;
+as -L (the homogeneous convention) that node's content, which the collision operator's
+ringing puts there next to walls, would show as a bulk velocity and a heat flux.
 """
 
 from __future__ import annotations
@@ -37,9 +43,14 @@ class FieldMoments:
         d = grid.dimension
         self.grid, self.dx, self.xp, self.d = grid, float(dx), xp, d
         mesh = [m.reshape(-1) for m in numpy.meshgrid(*[grid.points()] * d, indexing="ij")]
-        self.pairs = [(i, j) for i in range(d) for j in range(i, d)]
         squared = sum(m * m for m in mesh)
-        columns = ([numpy.ones_like(mesh[0])] + mesh + [mesh[i] * mesh[j] for i, j in self.pairs]
+        odd = mesh[0].copy()
+        odd[mesh[0] == -grid.half_width] = 0.0        # the node -L: half at -L, half at +L
+        mesh = [odd] + mesh[1:]
+        self.pairs = [(i, j) for i in range(d) for j in range(i, d)]
+        columns = ([numpy.ones_like(odd)] + mesh
+                   + [squared - sum(m * m for m in mesh[1:]) if (i, j) == (0, 0)
+                      else mesh[i] * mesh[j] for i, j in self.pairs]
                    + [m * squared for m in mesh])
         self.basis = xp.asarray(numpy.stack(columns, axis=1) * grid.cell_volume)
 
