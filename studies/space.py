@@ -198,9 +198,9 @@ def heat_transfer(ds, window: float = 0.2) -> dict:
     (max - min)/|mean|; at the steady state of an elastic gas it is uniform in x and
     equals the heat rates of the walls, what the left wall puts in and the right one takes
     out per unit time (averaged over the last ``window`` of the steps). ``q1``: the recorded
-    heat-flux field, which counts the node j = 0 at v_1 = -L (weight L^3/2) although its
-    net transport speed is 0: next to diffuse walls that node holds up to 4e-4 of the mass
-    of a cell, what the collision operator's ringing puts there (docs/space.md).
+    heat-flux field, which counts the node j = 0 as its two halves at +-L, as the transport
+    moves it (:mod:`granframe.space.fields`); at the steady state (u = 0) it is the energy
+    flux.
     """
     flux = energy_flux(ds)
     q1 = ds.heat_flux.values[-1][:, 0]

@@ -20,6 +20,9 @@ REPORTS = {
                          "lambda1_S5"}, "T_final",
                         {"test3_haff.png", "test3_lambda.png", "test3_heated.png",
                          "test3_resolution.png"}),
+    "space.py": ({"sod_eps0.01", "sod_eps0.001", "sod_eps0.0001", "walls_heat",
+                  "walls_balance"}, "cells",
+                 {"space_sod_profiles.png", "space_walls_heat.png", "space_walls_balance.png"}),
 }
 
 
