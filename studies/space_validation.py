@@ -50,7 +50,7 @@ w(f"Velocity grid 2D N = 16, S = 2.8 (L = {g.half_width:.3f}, h = {g.spacing:.3f
   "0.3 sin(pi x) tanh v_1), exact `specular_images_cell_averages` (method of images). "
   "Error: sum |f - exact| dx dv / sum |exact| dx dv. dt = 0.8 x the CFL limit on 20 cells "
   "(2 cfl dx / max|c|), times 20/cells (upwind, MUSCL with the mc limiter: fixed Courant "
-  "number) or (20/cells)^{5/3} (WENO5, JS weights), the last step of each run ending at "
+  "number) or (20/cells)^{5/3} (WENO5, WENO-Z weights, the default), the last step of each run ending at "
   "t = 0.2.\n")
 for ends in ("periodic", "specular"):
     w(f"**{ends}**\n")

@@ -17,8 +17,6 @@ alone; an explicit integrator keeps its own limit O(eps).
 
 from __future__ import annotations
 
-import time
-
 import numpy
 
 from granframe.equations.homogeneous import HomogeneousBoltzmann
@@ -99,22 +97,14 @@ class SplitStep:
 
     def __init__(self, integrator, transport, blocks):
         self.integrator, self.transport, self.blocks = integrator, transport, blocks
-        #: wall seconds spent in each part over the run (collisions, transport)
-        self.seconds = {"collisions": 0.0, "transport": 0.0}
 
     def step(self, equation, t, array, dt):
         half = 0.5 * dt
-        started = time.perf_counter()
         self.transport.advance(array, half)
-        middle = time.perf_counter()
         if self.integrator is not None:      # None: a collisionless gas
             inner = self.blocks.interior(array)
             inner[...] = self.integrator.step(equation, t, inner, dt)
-        collided = time.perf_counter()
         self.transport.advance(array, half)
-        ended = time.perf_counter()
-        self.seconds["transport"] += (middle - started) + (ended - collided)
-        self.seconds["collisions"] += collided - middle
         return array
 
 
