@@ -133,3 +133,36 @@ def test_the_fields_count_the_node_minus_L_as_its_two_halves(dimension):
     assert fields["pressure_tensor"][0][0, 0] == pytest.approx(grid.half_width ** 2 * mass)
     moments = grid.moments(f[1])
     numpy.testing.assert_allclose(fields["heat_flux"][1], moments["heat_flux"], atol=1e-12)
+
+
+def _sod(support_radius, stop=False):
+    from granframe.run.description import RunDescription
+
+    return RunDescription.from_dict({
+        "final_time": 0.06, "time_step": 0.003,
+        "grid": {"dimension": 2, "n_modes": 24, "support_radius": support_radius},
+        "kernel": "maxwell", "restitution": {"name": "constant", "value": 1.0},
+        "initial": {"name": "riemann", "left": {"density": 1.0, "temperature": 1.0},
+                    "right": {"density": 0.125, "temperature": 0.8}},
+        "operator": {"name": "fast_spectral", "quadrature": "review"},
+        "backend": {"name": "numpy"},
+        "space": {"cells": 40, "left": "specular", "right": "specular"},
+        "health": {"stop_on_accuracy": stop}})
+
+
+def test_the_edge_monitors_flag_the_worst_cell_of_a_narrow_box():
+    """The Sod tube heats the gas behind the shock to T = 1.12: on S = 3.2 the hottest cell
+    has 0.1 % of its energy beyond the edge radius (warned, naming grid.support_radius),
+    on S = 4 far less; with health.stop_on_accuracy the run stops."""
+    from granframe.run.runner import HealthError, Simulation
+
+    narrow = Simulation(_sod(3.2)).run(None, progress=False)
+    accuracy = narrow.dataset.attrs
+    assert accuracy["progress_accuracy_values_edge_energy"] > 1e-3
+    assert any("raise grid.support_radius (now S = 3.2)" in w
+               for w in narrow.accuracy_warnings)
+    wide = Simulation(_sod(4.0)).run(None, progress=False)
+    assert wide.dataset.attrs["progress_accuracy_values_edge_energy"] < 1e-5
+    assert not wide.accuracy_warnings
+    with pytest.raises(HealthError, match="edge radius .* raise grid.support_radius"):
+        Simulation(_sod(3.2, stop=True)).run(None, progress=False)

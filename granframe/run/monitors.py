@@ -307,3 +307,55 @@ def describe(entry: dict, time: float) -> list[str]:
                      f"at step {flagged['step']}, t = {flagged['time']:g}")
     lines.extend(f"  warning: {warning}" for warning in entry.get("warnings", ()))
     return lines
+
+
+class CellEdgeMonitors(AccuracyMonitors):
+    """The edge monitors of a space run: ``edge_mass`` and ``edge_energy`` of every cell
+    (:func:`edge_shares` about the cell's own bulk velocity), the largest over the cells.
+
+    The drifts and the temperature law of :class:`AccuracyMonitors` belong to a gas that
+    conserves its momentum or follows a law as a whole, which walls break; the spectral
+    tail is not taken per cell. ``state``: the ``accuracy`` entry of the last commit of a
+    resumed run.
+    """
+
+    def __init__(self, description, state: dict | None = None):
+        health = description.health
+        self.grid = description.grid
+        self.tolerance = health.accuracy_tolerance
+        self.resolution_tolerance = health.resolution_tolerance
+        self.stop = health.stop_on_accuracy
+        self.law = None
+        self.radius = edge_radius(self.grid)
+        self._remedy = {"grid.support_radius": f"raise grid.support_radius (now S = "
+                                               f"{self.grid.support_radius:g})"}
+        state = state or {}
+        self.values = {name: math.nan for name in MONITORS}
+        self.values.update(state.get("values", {}))
+        self.largest = dict(state.get("largest", {}))
+        self.flagged = state.get("flagged")
+        self._tail_warned = False
+
+    def shape(self, cells, velocities, xp=numpy) -> dict:
+        """The largest ``edge_mass`` and ``edge_energy`` over the cells of ``cells``
+        (cells, *grid.shape) about their bulk velocities (cells, d); none when r_e <= 0."""
+        if not self.radius > 0.0:
+            return {}
+        d = self.grid.dimension
+        mesh = self.grid.mesh(xp)
+        u = xp.asarray(numpy.asarray(velocities, dtype=float))
+        distance = sum((mesh[i][None] - u[:, i].reshape((-1,) + (1,) * d)) ** 2
+                       for i in range(d))
+        beyond = distance > self.radius ** 2
+        axes = tuple(range(1, d + 1))
+        weighted = cells * distance
+        mass, energy = _host(cells.sum(axis=axes)), _host(weighted.sum(axis=axes))
+        with numpy.errstate(divide="ignore", invalid="ignore"):
+            shares = (_host((cells * beyond).sum(axis=axes)) / mass,
+                      _host((weighted * beyond).sum(axis=axes)) / energy)
+        return {name: float(numpy.nanmax(share)) if numpy.isfinite(share).any() else math.nan
+                for name, share in zip(("edge_mass", "edge_energy"), shares)}
+
+
+def _host(a):
+    return a.get() if hasattr(a, "get") else numpy.asarray(a)

@@ -10,7 +10,9 @@ resume, lock and health checks, and replaces what is per distribution:
 - after every step the fields of every cell (:class:`~granframe.space.fields.FieldMoments`),
   the totals, and the mass and energy that entered through each wall over the step are
   recorded (:func:`space_layout`);
-- a snapshot is f(x, v) of every cell, chunked by block.
+- a snapshot is f(x, v) of every cell, chunked by block;
+- at each output point the accuracy monitors are the shares of mass and energy beyond the
+  edge radius in the worst cell (:class:`~granframe.run.monitors.CellEdgeMonitors`).
 """
 
 from __future__ import annotations
@@ -21,8 +23,9 @@ from granframe.equations.conservative import ConservativeCorrection
 from granframe.memory import check_run_memory
 from granframe.model.initial import check_fits, check_projection
 from granframe.registry import default_registries
+from granframe.run.monitors import CellEdgeMonitors
 from granframe.run.runner import (HealthObserver, Observer, ProgressObserver, Simulation,
-                                  StorageObserver, _Records)
+                                  StorageObserver, Stopped, _Records)
 from granframe.run.storage import STEP_RECORDS, Layout, RecordArray
 from granframe.space.collisions import CellCollisions, SplitStep
 from granframe.space.fields import FIELDS, FieldMoments
@@ -168,9 +171,10 @@ class SpaceSimulation(Simulation):
     def _observers(self, store, state, progress) -> list:
         d = self.description
         records = self._new_records()
+        monitors = CellEdgeMonitors(d, store.progress.get("accuracy"))
         return [_FieldsObserver(self), _WallObserver(self.transport), _AddRecord(records),
                 HealthObserver(d.health), _Progress(state, d.final_time, progress),
-                StorageObserver(store, records, self._snapshot)]
+                _EdgeObserver(self, monitors), StorageObserver(store, records, self._snapshot)]
 
 
 class _FieldsObserver(Observer):
@@ -181,6 +185,26 @@ class _FieldsObserver(Observer):
 
     def after_step(self, state):
         state.record = self.simulation._record(state.f)
+
+
+class _EdgeObserver(Observer):
+    """At every output point: the largest edge shares over the cells
+    (:class:`~granframe.run.monitors.CellEdgeMonitors`) into ``state.accuracy``, which the
+    next commit keeps; with ``health.stop_on_accuracy`` one above
+    ``health.accuracy_tolerance`` stops the run."""
+
+    def __init__(self, simulation, monitors):
+        self.simulation, self.monitors = simulation, monitors
+
+    def at_output(self, state, final):
+        simulation, monitors = self.simulation, self.monitors
+        cells = simulation.blocks.to_cells(state.f)
+        problem = monitors.update(monitors.shape(cells, state.record["velocity"],
+                                                 simulation.backend.xp), state.step, state.t)
+        state.accuracy = monitors.report()
+        if problem is not None:
+            raise Stopped(f"health check failed at step {state.step}, t = {state.t:.6g}: "
+                          f"{problem}")
 
 
 class _AddRecord(Observer):
