@@ -20,6 +20,11 @@ from granframe import validators as check
 from granframe.abc import ArrayBackend, RealFFT
 
 
+def to_host(a) -> numpy.ndarray:
+    """``a`` as a NumPy array: a device array (CuPy's, with ``get``) is copied to the host."""
+    return a.get() if hasattr(a, "get") else numpy.asarray(a)
+
+
 def available_cpus() -> int:
     """CPUs this process may run on."""
     try:

@@ -97,6 +97,16 @@ def integer(lower: int | None = None, upper: int | None = None, *,
     return validate
 
 
+def one_of(choices) -> Callable:
+    """attrs validator: one of the names ``choices``."""
+
+    def validate(instance, attribute: attrs.Attribute, value):
+        if not (isinstance(value, str) and value in choices):
+            reject(_owner(instance), attribute.name, value, f"must be one of {list(choices)}")
+
+    return validate
+
+
 def to_float(value):
     """attrs converter: real numbers become ``float``; anything else passes to the validator."""
     if not is_real(value):

@@ -71,3 +71,21 @@ def make_distribution(tmp_path, monkeypatch):
         return site
 
     return make
+
+
+def mutated(table: dict, changes) -> dict:
+    """``table`` (a description table, changed in place) with dotted keys set (None: removed);
+    a string where a table is needed becomes ``{name = ...}``."""
+    for key, value in changes:
+        *parents, last = key.split(".")
+        node = table
+        for part in parents:
+            child = node.get(part)
+            node[part] = child = child if isinstance(child, dict) else (
+                {"name": child} if isinstance(child, str) else {})
+            node = child
+        if value is None:
+            node.pop(last, None)
+        else:
+            node[last] = value
+    return table

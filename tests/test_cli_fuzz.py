@@ -16,6 +16,7 @@ import tomli_w
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
+from conftest import mutated
 from granframe.tools.cli import main
 from granframe.run.runner import Simulation
 from test_fault_injection import NEW, OLD
@@ -56,23 +57,6 @@ KEYS = {
     "title": ["t", "", "../x"],
     "unknown": [1],
 }
-
-
-def mutated(table: dict, changes) -> dict:
-    """The description table with dotted keys set (None: removed)."""
-    for key, value in changes:
-        *parents, last = key.split(".")
-        node = table
-        for part in parents:
-            child = node.get(part)
-            node[part] = child = child if isinstance(child, dict) else (
-                {"name": child} if isinstance(child, str) else {})
-            node = child
-        if value is None:
-            node.pop(last, None)
-        else:
-            node[last] = value
-    return table
 
 
 changes = st.lists(st.one_of(

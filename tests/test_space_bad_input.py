@@ -22,6 +22,7 @@ from granframe.run.runner import Simulation
 from granframe.space.boundaries import Diffuse
 from granframe.space.initial import RiemannProblem, SinusoidalMode, SpaceFunction
 from granframe.space.transport import upwind_speeds
+from conftest import mutated
 from granframe.tools.cli import main
 from test_validation_fuzz import values
 
@@ -43,19 +44,7 @@ BASE = {
 
 def table(*changes, base=BASE):
     """The base description with dotted keys set (None: removed)."""
-    data = copy.deepcopy(base)
-    for key, value in changes:
-        *parents, last = key.split(".")
-        node = data
-        for part in parents:
-            child = node.get(part)
-            node[part] = child = {"name": child} if isinstance(child, str) else child
-            node = child
-        if value is None:
-            node.pop(last, None)
-        else:
-            node[last] = value
-    return data
+    return mutated(copy.deepcopy(base), changes)
 
 
 def refused(tmp_path, changes, match, error=(ValueError, TypeError)):

@@ -346,6 +346,21 @@ def _function(instance, attribute, value):
     resolve_callable("FromCallable", attribute.name, value)
 
 
+def check_real(raw, values, owner: str, function) -> None:
+    """Refuse the result ``raw`` of a user's f0 ``function`` when it is complex with an
+    imaginary part above :data:`IMAGINARY_TOLERANCE` times max |``values``| (its real
+    part); a round-off imaginary part, e.g. from transforms, is real data."""
+    if raw.dtype.kind != "c":
+        return
+    imaginary = float(numpy.abs(raw.imag).max(initial=0.0))
+    scale = float(numpy.abs(values).max(initial=0.0))
+    if not imaginary <= IMAGINARY_TOLERANCE * scale:
+        check.reject(owner, "function", function,
+                     f"must return real values; it returned complex values with "
+                     f"max |imaginary part| = {imaginary:.3g} against max |real part| "
+                     f"= {scale:.3g} (more than round-off: f0 is a real density)")
+
+
 @attrs.frozen
 class FromCallable(InitialCondition):
     """f0(v) = function(v_1, ..., v_d), any Python function vectorised over the grid's mesh.
@@ -373,14 +388,7 @@ class FromCallable(InitialCondition):
             check.reject("FromCallable", "function", self.function,
                          f"must map the {grid.dimension} velocity components (broadcastable "
                          f"arrays) to f0; calling it raised {type(exc).__name__}: {exc}")
-        if raw.dtype.kind == "c":
-            imaginary = float(numpy.abs(raw.imag).max(initial=0.0))
-            scale = float(numpy.abs(values).max(initial=0.0))
-            if not imaginary <= IMAGINARY_TOLERANCE * scale:
-                check.reject("FromCallable", "function", self.function,
-                             f"must return real values; it returned complex values with "
-                             f"max |imaginary part| = {imaginary:.3g} against max |real part| "
-                             f"= {scale:.3g} (more than round-off: f0 is a real density)")
+        check_real(raw, values, "FromCallable", self.function)
         try:
             return numpy.broadcast_to(values, grid.shape).copy()
         except ValueError:

@@ -185,22 +185,28 @@ class AccuracyMonitors:
     """
 
     def __init__(self, description, operator, initial: dict, state: dict | None = None):
-        self.grid = description.grid
-        self.tolerance = description.health.accuracy_tolerance
-        self.resolution_tolerance = description.health.resolution_tolerance
-        self.stop = description.health.stop_on_accuracy
-        self.law = temperature_law(description)
-        self.radius = edge_radius(self.grid)
+        self._start(description, temperature_law(description), state)
         self.mass0 = float(initial["mass"])
         self.momentum0 = numpy.asarray(initial["momentum"], dtype=float)
         self.temperature0 = float(initial["temperature"])
         step = (f"lower time_step (now {description.time_step:g})"
                 if description.time_step is not None else "lower tolerance")
-        self._remedy = {
-            "quadrature": f"raise {quadrature_settings(operator)}; if it persists, {step}",
-            "grid.support_radius": f"raise grid.support_radius (now S = "
-                                   f"{self.grid.support_radius:g})",
-            "grid.n_modes": f"raise grid.n_modes (now N = {self.grid.n_modes})"}
+        self._remedy["quadrature"] = (f"raise {quadrature_settings(operator)}; if it "
+                                      f"persists, {step}")
+
+    def _start(self, description, law, state: dict | None) -> None:
+        """The settings of ``description``, the run's ``law``, and the values, largest
+        values and first flag of ``state`` (a resumed run's last commit)."""
+        health = description.health
+        self.grid = description.grid
+        self.tolerance = health.accuracy_tolerance
+        self.resolution_tolerance = health.resolution_tolerance
+        self.stop = health.stop_on_accuracy
+        self.law = law
+        self.radius = edge_radius(self.grid)
+        self._remedy = {"grid.support_radius": f"raise grid.support_radius (now S = "
+                                               f"{self.grid.support_radius:g})",
+                        "grid.n_modes": f"raise grid.n_modes (now N = {self.grid.n_modes})"}
         state = state or {}
         self.values = {name: math.nan for name in MONITORS}
         self.values.update(state.get("values", {}))
@@ -320,42 +326,15 @@ class CellEdgeMonitors(AccuracyMonitors):
     """
 
     def __init__(self, description, state: dict | None = None):
-        health = description.health
-        self.grid = description.grid
-        self.tolerance = health.accuracy_tolerance
-        self.resolution_tolerance = health.resolution_tolerance
-        self.stop = health.stop_on_accuracy
-        self.law = None
-        self.radius = edge_radius(self.grid)
-        self._remedy = {"grid.support_radius": f"raise grid.support_radius (now S = "
-                                               f"{self.grid.support_radius:g})"}
-        state = state or {}
-        self.values = {name: math.nan for name in MONITORS}
-        self.values.update(state.get("values", {}))
-        self.largest = dict(state.get("largest", {}))
-        self.flagged = state.get("flagged")
-        self._tail_warned = False
+        self._start(description, None, state)
 
     def shape(self, cells, velocities, xp=numpy) -> dict:
         """The largest ``edge_mass`` and ``edge_energy`` over the cells of ``cells``
-        (cells, *grid.shape) about their bulk velocities (cells, d); none when r_e <= 0."""
+        (cells, *grid.shape), each about its bulk velocity (``velocities``, (cells, d));
+        none when r_e <= 0. One :func:`edge_shares` per cell, at output points only."""
         if not self.radius > 0.0:
             return {}
-        d = self.grid.dimension
-        mesh = self.grid.mesh(xp)
-        u = xp.asarray(numpy.asarray(velocities, dtype=float))
-        distance = sum((mesh[i][None] - u[:, i].reshape((-1,) + (1,) * d)) ** 2
-                       for i in range(d))
-        beyond = distance > self.radius ** 2
-        axes = tuple(range(1, d + 1))
-        weighted = cells * distance
-        mass, energy = _host(cells.sum(axis=axes)), _host(weighted.sum(axis=axes))
-        with numpy.errstate(divide="ignore", invalid="ignore"):
-            shares = (_host((cells * beyond).sum(axis=axes)) / mass,
-                      _host((weighted * beyond).sum(axis=axes)) / energy)
-        return {name: float(numpy.nanmax(share)) if numpy.isfinite(share).any() else math.nan
-                for name, share in zip(("edge_mass", "edge_energy"), shares)}
-
-
-def _host(a):
-    return a.get() if hasattr(a, "get") else numpy.asarray(a)
+        shares = numpy.array([edge_shares(self.grid, cells[c], velocities[c], self.radius, xp)
+                              for c in range(len(cells))])
+        return {name: float(numpy.nanmax(column)) if numpy.isfinite(column).any() else math.nan
+                for name, column in zip(("edge_mass", "edge_energy"), shares.T)}

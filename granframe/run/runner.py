@@ -551,10 +551,7 @@ class Simulation:
         self.grid = d.grid
         self.backend = d.build("backend")
         check_run_memory(d, self.backend)   # before anything of the grid's size is allocated
-        self.operator = d.build("operator", grid=d.grid, kernel=d.build("kernel"),
-                                restitution=d.build("restitution"), backend=self.backend)
-        if d.conservative is not None:      # docs/conservative.md
-            self.operator = ConservativeCorrection(self.operator, d.conservative)
+        self.operator = self._build_operator()
         self.integrator = d.build("integrator")
         initial = d.build("initial")
         sampled = initial.sample(d.grid)
@@ -570,12 +567,29 @@ class Simulation:
                                               d.knudsen)
         else:
             self.equation = HomogeneousBoltzmann(self.operator, d.heat_bath, d.knudsen)
-        if d.health.step_limit and not self.integrator.adaptive:
-            registries = default_registries()
-            schemes = [(name, registries.get("time_integrators", name).factory)
-                       for name in registries.names("time_integrators")]
-            check_time_step(self.integrator, d.integrator.name, self.equation, self.f0,
-                            d.time_step, schemes)
+        self._check_step_limit(self.integrator, self.equation, self.f0)
+
+    def _build_operator(self):
+        """The description's collision operator on :attr:`backend`, with the conservative
+        correction when the description asks for it (docs/conservative.md)."""
+        d = self.description
+        operator = d.build("operator", grid=d.grid, kernel=d.build("kernel"),
+                           restitution=d.build("restitution"), backend=self.backend)
+        if d.conservative is not None:
+            operator = ConservativeCorrection(operator, d.conservative)
+        return operator
+
+    def _check_step_limit(self, integrator, equation, f0) -> None:
+        """Refuse a fixed time step above ``integrator``'s explicit stability limit for
+        ``equation`` at f0 (unless ``health.step_limit`` is false), naming the schemes
+        that would take it (:func:`~granframe.stepping.stability.check_time_step`)."""
+        d = self.description
+        if not d.health.step_limit or integrator.adaptive:
+            return
+        registries = default_registries()
+        schemes = [(name, registries.get("time_integrators", name).factory)
+                   for name in registries.names("time_integrators")]
+        check_time_step(integrator, d.integrator.name, equation, f0, d.time_step, schemes)
 
     def provenance(self) -> dict:
         """Versions and plugins behind this run (stored with it)."""

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import numpy
 
+from granframe.backends import to_host
 from granframe.equations.homogeneous import HomogeneousBoltzmann
 from granframe.space.fields import maxwellians
 
@@ -69,7 +70,7 @@ class CellCollisions(HomogeneousBoltzmann):
         grid, xp = self.operator.grid, self.operator.backend.xp
         d = grid.dimension
         flat, rho, momentum, temperature, energy = self._cells(f)
-        host = [_host(a) for a in (rho, temperature, energy)]
+        host = [to_host(a) for a in (rho, temperature, energy)]
         valid = numpy.isfinite(host[0]) & (host[0] > 0) & numpy.isfinite(host[1]) & (host[1] > 0)
         frequency = numpy.zeros_like(host[0])
         for cell in numpy.flatnonzero(valid):
@@ -106,8 +107,3 @@ class SplitStep:
             inner[...] = self.integrator.step(equation, t, inner, dt)
         self.transport.advance(array, half)
         return array
-
-
-def _host(a):
-    return a.get() if hasattr(a, "get") else numpy.asarray(a)
-

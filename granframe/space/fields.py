@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import numpy
 
+from granframe.backends import to_host
+
 #: the fields recorded for every cell after every step: name -> (components, dimensions)
 FIELDS = {"density": ((), ()), "velocity": (("d",), ("axis",)), "temperature": ((), ()),
           "pressure_tensor": (("d", "d"), ("axis", "axis2")), "heat_flux": (("d",), ("axis",))}
@@ -64,10 +66,10 @@ class FieldMoments:
         """
         xp, d = self.xp, self.d
         flat = f.reshape(f.shape[0], -1)
-        raw = _host(flat @ self.basis)
-        negative = float(_host(xp.maximum(-flat, 0.0).sum()))
-        absolute = float(_host(xp.abs(flat).sum()))
-        minimum = float(_host(flat.min()))
+        raw = to_host(flat @ self.basis)
+        negative = float(to_host(xp.maximum(-flat, 0.0).sum()))
+        absolute = float(to_host(xp.abs(flat).sum()))
+        minimum = float(to_host(flat.min()))
         rho = raw[:, 0]
         momentum = raw[:, 1:1 + d]
         second = numpy.zeros((len(rho), d, d))
@@ -106,7 +108,3 @@ def maxwellians(grid, density, velocity, temperature, xp=numpy):
         result = result * factor.reshape(shape)
     mass = result.reshape(cells, -1).sum(axis=1) * grid.cell_volume
     return result * (density / mass).reshape((cells,) + (1,) * d)
-
-
-def _host(a):
-    return a.get() if hasattr(a, "get") else numpy.asarray(a)

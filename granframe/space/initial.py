@@ -25,14 +25,10 @@ import numpy
 
 from granframe import abc as contracts
 from granframe import validators as check
-from granframe.model.initial import IMAGINARY_TOLERANCE, resolve_callable
+from granframe.model.initial import check_real, resolve_callable
 
 #: Gauss-Legendre points per cell of the averages
 CELL_POINTS = 6
-
-
-def _maxwellian(grid, density, velocity, temperature):
-    return grid.maxwellian(density, velocity, temperature)
 
 
 def _finite(value) -> bool:
@@ -125,7 +121,7 @@ class RiemannProblem(SpaceCondition):
     def sample_cells(self, grid, edges):
         edges = numpy.asarray(edges, dtype=float)
         owner = "RiemannProblem"
-        states = [_maxwellian(grid, s["density"], _full(s["velocity"], grid, owner, side),
+        states = [grid.maxwellian(s["density"], _full(s["velocity"], grid, owner, side),
                               s["temperature"])
                   for side, s in (("left.velocity", self.left), ("right.velocity", self.right))]
         x0 = self.interface * edges[-1]
@@ -162,15 +158,10 @@ class SinusoidalMode(SpaceCondition):
                                   validator=check.real(-math.inf, math.inf))
     temperature: float = attrs.field(default=1.0, converter=check.to_float,
                                      validator=check.real(0.0, math.inf, lower_open=True))
-    field: str = attrs.field(default="density")
+    field: str = attrs.field(default="density", validator=check.one_of(_FIELDS))
     amplitude: float = attrs.field(default=0.1, converter=check.to_float,
                                    validator=check.real(-math.inf, math.inf))
     mode: int = attrs.field(default=1, converter=check.to_int, validator=check.integer(1))
-
-    @field.validator
-    def _check_field(self, attribute, value):
-        if value not in _FIELDS:
-            check.reject("SinusoidalMode", "field", value, f"must be one of {list(_FIELDS)}")
 
     @amplitude.validator
     def _check_amplitude(self, attribute, value):
@@ -249,14 +240,7 @@ class SpaceFunction(SpaceCondition):
                          f"must map x and the {len(mesh)} velocity components (broadcastable "
                          f"arrays, x of shape {x.shape}) to f0 of shape {shape}; calling it "
                          f"raised {type(exc).__name__}: {exc}")
-        if raw.dtype.kind == "c":
-            imaginary = float(numpy.abs(raw.imag).max(initial=0.0))
-            scale = float(numpy.abs(values).max(initial=0.0))
-            if not imaginary <= IMAGINARY_TOLERANCE * scale:
-                check.reject("SpaceFunction", "function", self.function,
-                             f"must return real values; it returned complex values with "
-                             f"max |imaginary part| = {imaginary:.3g} against max |real part| "
-                             f"= {scale:.3g} (more than round-off: f0 is a real density)")
+        check_real(raw, values, "SpaceFunction", self.function)
         return values
 
 

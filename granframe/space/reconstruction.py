@@ -55,12 +55,6 @@ class Upwind(Reconstruction):
 _LIMITERS = ("minmod", "van_leer", "mc")
 
 
-def _limiter_name(instance, attribute, value):
-    if value not in _LIMITERS:
-        check.reject(type(instance).__name__, attribute.name, value,
-                     f"must be one of {', '.join(repr(n) for n in _LIMITERS)}")
-
-
 @attrs.frozen
 class MUSCL(Reconstruction):
     r"""Piecewise-linear reconstruction with a limited slope (MUSCL).
@@ -96,7 +90,7 @@ class MUSCL(Reconstruction):
         The slope limiter; "mc" by default.
     """
 
-    limiter: str = attrs.field(default="mc", validator=_limiter_name)
+    limiter: str = attrs.field(default="mc", validator=check.one_of(_LIMITERS))
 
     ghost = 2
     order = 2
@@ -127,12 +121,6 @@ class MUSCL(Reconstruction):
 
 
 _WEIGHTS = ("js", "z")
-
-
-def _weights_name(instance, attribute, value):
-    if value not in _WEIGHTS:
-        check.reject(type(instance).__name__, attribute.name, value,
-                     f"must be one of {', '.join(repr(n) for n in _WEIGHTS)}")
 
 
 @attrs.frozen
@@ -199,7 +187,7 @@ class WENO5(Reconstruction):
         or Jiang-Shu ("js").
     """
 
-    weights: str = attrs.field(default="z", validator=_weights_name)
+    weights: str = attrs.field(default="z", validator=check.one_of(_WEIGHTS))
 
     ghost = 3
     order = 5

@@ -19,10 +19,8 @@ from __future__ import annotations
 
 import numpy
 
-from granframe.equations.conservative import ConservativeCorrection
 from granframe.memory import check_run_memory
 from granframe.model.initial import check_fits, check_projection
-from granframe.registry import default_registries
 from granframe.run.monitors import CellEdgeMonitors
 from granframe.run.runner import (HealthObserver, Observer, ProgressObserver, Simulation,
                                   StorageObserver, Stopped, _Records)
@@ -31,7 +29,6 @@ from granframe.space.collisions import CellCollisions, SplitStep
 from granframe.space.fields import FIELDS, FieldMoments
 from granframe.space.initial import cell_edges, initial_cells
 from granframe.space.transport import CellBlocks, Transport
-from granframe.stepping.stability import check_time_step
 from granframe.validators import reject
 
 #: the totals recorded after every step (scalars over the whole interval)
@@ -96,13 +93,7 @@ class SpaceSimulation(Simulation):
         xp = self.backend.xp
         collide = space.collisions
         check_run_memory(d, self.backend)
-        if collide:
-            self.operator = d.build("operator", grid=grid, kernel=d.build("kernel"),
-                                    restitution=d.build("restitution"), backend=self.backend)
-            if d.conservative is not None:
-                self.operator = ConservativeCorrection(self.operator, d.conservative)
-        else:
-            self.operator = None
+        self.operator = self._build_operator() if collide else None
         collision_integrator = d.build("integrator") if collide else None
         block = space.blocks(self.reconstruction.ghost)
         self.blocks = CellBlocks(space.cells, block, self.reconstruction.ghost, grid, xp)
@@ -112,12 +103,8 @@ class SpaceSimulation(Simulation):
         self.f0 = self._initial()
         self.equation = (CellCollisions(self.operator, d.heat_bath, d.knudsen) if collide
                          else None)
-        if collide and d.health.step_limit:
-            registries = default_registries()
-            schemes = [(name, registries.get("time_integrators", name).factory)
-                       for name in registries.names("time_integrators")]
-            check_time_step(collision_integrator, d.integrator.name, self.equation,
-                            self.f0, d.time_step, schemes)
+        if collide:
+            self._check_step_limit(collision_integrator, self.equation, self.f0)
         self.integrator = SplitStep(collision_integrator, self.transport, self.blocks)
         self.fields = FieldMoments(grid, space.length / space.cells, xp)
 

@@ -31,6 +31,8 @@ from __future__ import annotations
 
 import numpy
 
+from granframe.backends import to_host
+
 
 def transport_speeds(grid, xp=numpy):
     """The net transport speed c = c^+ + c^- of each v_1 node (:func:`upwind_speeds`),
@@ -170,7 +172,7 @@ class Transport:
 
     def _moments(self, face):
         """(int F dv, int F |v|^2/2 dv) of a face flux, on the host."""
-        return _to_host((self._weights * face).reshape(2, -1).sum(axis=1))
+        return to_host((self._weights * face).reshape(2, -1).sum(axis=1))
 
     def advance(self, array, tau: float) -> None:
         """Transport the cells of ``array`` over a time tau, in place (SSPRK3)."""
@@ -190,8 +192,3 @@ class Transport:
         """The (wall, [mass, energy]) entered since the last call, and reset them."""
         totals, self.wall_totals = self.wall_totals, numpy.zeros((2, 2))
         return totals
-
-
-def _to_host(a):
-    """``a`` as a NumPy array (a CuPy array is copied to the host)."""
-    return a.get() if hasattr(a, "get") else numpy.asarray(a)

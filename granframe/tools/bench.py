@@ -286,20 +286,27 @@ def check_config(config) -> tuple:
     return config
 
 
+#: The review's quadrature (N_rho, M) per dimension: what a configuration without them takes.
+REVIEW_RULES = {2: [32, 16], 3: [30, 32]}
+
+
+def _integers(text: str, name: str, counts: tuple, usage: str) -> list:
+    """The integers of 'A:B:...' (``counts`` of them, the first the dimension 2 or 3), the
+    review's N_rho and M appended when they are left out; refused naming ``name``."""
+    try:
+        values = [int(p) for p in text.split(":")]
+    except ValueError:
+        values = []
+    if len(values) not in counts or values[0] not in (2, 3):
+        raise ValueError(f"bench: parameter '{name}' = {text!r} is invalid; use {usage}")
+    return values + (REVIEW_RULES[values[0]] if len(values) == counts[0] else [])
+
+
 def parse_config(text: str):
     """'D:N' or 'D:N:NRHO:M' -> (d, N, N_rho, M) with the review's quadrature by default,
     checked by :func:`check_config`."""
-    parts = text.split(":")
-    try:
-        values = [int(p) for p in parts]
-    except ValueError:
-        values = []
-    if len(values) not in (2, 4) or values[0] not in (2, 3):
-        raise ValueError(f"bench: parameter 'config' = {text!r} is invalid; use D:N or "
-                         "D:N:N_RHO:M with D in {2, 3}, e.g. 3:32 or 3:32:30:32")
-    if len(values) == 2:
-        values += [32, 16] if values[0] == 2 else [30, 32]
-    return check_config(tuple(values))
+    return check_config(tuple(_integers(text, "config", (2, 4), "D:N or D:N:N_RHO:M with D "
+                                        "in {2, 3}, e.g. 3:32 or 3:32:30:32")))
 
 
 #: The space configurations of ``--space``: (dimension, N, cells, N_rho, M).
@@ -440,15 +447,7 @@ def space_table(records) -> str:
 def parse_space_config(text: str):
     """'D:N:CELLS' or 'D:N:CELLS:NRHO:M' -> (d, N, cells, N_rho, M), the review's rules by
     default."""
-    parts = text.split(":")
-    try:
-        values = [int(p) for p in parts]
-    except ValueError:
-        values = []
-    if len(values) not in (3, 5) or values[0] not in (2, 3):
-        raise ValueError(f"bench: parameter 'space' = {text!r} is invalid; use D:N:CELLS or "
-                         "D:N:CELLS:N_RHO:M with D in {2, 3}, e.g. 3:32:64 or 2:64:256:32:16")
-    if len(values) == 3:
-        values += [32, 16] if values[0] == 2 else [30, 32]
+    values = _integers(text, "space", (3, 5), "D:N:CELLS or D:N:CELLS:N_RHO:M with D in "
+                       "{2, 3}, e.g. 3:32:64 or 2:64:256:32:16")
     check_config((values[0], values[1], values[3], values[4]))
     return tuple(values)

@@ -151,30 +151,27 @@ def _bench(args) -> int:
         configs = ([bench.parse_space_config(c) for c in args.space] if args.space
                    else list(bench.DEFAULT_SPACE_CONFIGS))
         records = bench.run_space(configs, backend, args.threads, args.repeats)
-        if args.json:
-            json.dump({"schema": "granframe.tools.bench/1", "granframe_version": __version__,
-                       "records": records}, sys.stdout, indent=2)
-            sys.stdout.write("\n")
-        else:
-            print(f"space step (Strang: transport, RK4 collisions on all cells, transport), "
-                  f"backend {backend}, {args.threads} threads, median of {args.repeats} "
-                  "rounds after warm-up")
-            print(bench.space_table(records))
-        return 0
-    configs = ([bench.parse_config(c) for c in args.config] if args.config
-               else list(bench.DEFAULT_CONFIGS))
-    records = bench.run(configs, backend, args.threads, args.repeats, args.precision,
-                        batches=args.batch or (1,), quadratures=args.quadrature or (None,))
+        heading = (f"space step (Strang: transport, RK4 collisions on all cells, transport), "
+                   f"backend {backend}, {args.threads} threads, median of {args.repeats} "
+                   "rounds after warm-up")
+        table = bench.space_table
+    else:
+        configs = ([bench.parse_config(c) for c in args.config] if args.config
+                   else list(bench.DEFAULT_CONFIGS))
+        records = bench.run(configs, backend, args.threads, args.repeats, args.precision,
+                            batches=args.batch or (1,), quadratures=args.quadrature or (None,))
+        heading = (f"fast_spectral, backend {backend}, {args.threads} threads, "
+                   f"{args.precision}, median of {args.repeats} evaluations after warm-up"
+                   + (", B distributions per evaluation (time and floor per distribution)"
+                      if args.batch else ""))
+        table = bench.table
     if args.json:
         json.dump({"schema": "granframe.tools.bench/1", "granframe_version": __version__,
                    "records": records}, sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
-        print(f"fast_spectral, backend {backend}, {args.threads} threads, {args.precision}, "
-              f"median of {args.repeats} evaluations after warm-up"
-              + (", B distributions per evaluation (time and floor per distribution)"
-                 if args.batch else ""))
-        print(bench.table(records))
+        print(heading)
+        print(table(records))
     return 0
 
 

@@ -22,6 +22,7 @@ import attrs
 import numpy
 
 from granframe import validators as check
+from granframe.backends import to_host
 from granframe.errors import AliasingWarning
 
 #: Factor c in the anti-aliasing bound L >= c S of the review, c = (3 + sqrt 2)/2.
@@ -337,8 +338,7 @@ class VelocityGrid:
         extremes = xp.stack([xp.min(f), xp.sum(xp.abs(f)), xp.sum(xp.maximum(-f, 0.0))])
         stacked = xp.concatenate([xp.reshape(raw, (-1,)),
                                   xp.asarray(extremes, dtype=raw.dtype)])
-        host = numpy.asarray(stacked.get() if hasattr(stacked, "get") else stacked,
-                             dtype=numpy.float64)
+        host = numpy.asarray(to_host(stacked), dtype=numpy.float64)
         scales = self.half_width ** numpy.arange(5.0)
         M = host[:5 ** d].reshape((5,) * d) * self.cell_volume
         for axis in range(d):
