@@ -32,7 +32,8 @@ _EXPORTS = {
     "open_sweep": "granframe.run.sweep",
     "ConservativeCorrection": "granframe.equations.conservative",
     "run_in_memory": "granframe.run.runner",
-    "time_step_limit": "granframe.stepping.stability",
+    "time_step_limit": "granframe.run.problems",
+    "Problem": "granframe.abc", "make_problem": "granframe.run.problems",
 }
 
 
@@ -103,5 +104,5 @@ __all__ = [
     "open_sweep",
     "ConservativeCorrection",
     "run_in_memory",
-    "time_step_limit",
+    "time_step_limit", "Problem", "make_problem",
 ]

@@ -138,3 +138,8 @@ def granframe_register_boundaries(registry):
                  description="diffuse (Maxwell) wall: temperature, tangential velocity, "
                              "accommodation",
                  examples=[{}, {"temperature": 2.0, "velocity": 0.5, "accommodation": 0.7}])
+    registry.add("vibrating", boundaries.Vibrating,
+                 description="diffuse wall vibrating along x, A omega cos(omega t), at a fixed "
+                             "place (small amplitude): temperature, amplitude, frequency",
+                 examples=[{"amplitude": 0.1, "frequency": 5.0},
+                           {"temperature": 0.2, "amplitude": 0.02, "frequency": 20.0}])

@@ -19,6 +19,7 @@ from typing import ClassVar
 import numpy
 
 from granframe import validators as check
+from granframe.rules import antipodal_pairs, circle_rule, gauss_legendre
 
 
 # -- The stiff parts of an equation ---------------------------------------------------------
@@ -277,8 +278,6 @@ class SurfaceQuadrature(Quadrature):
     @property
     def is_antipodal(self) -> bool:
         """True when -ghat is a node of equal weight for every node ghat."""
-        from granframe.velocity.quadratures import antipodal_pairs
-
         _, w_plus, w_minus = antipodal_pairs(*self._rule())
         return bool(numpy.allclose(w_plus, w_minus, rtol=1e-12, atol=0.0))
 
@@ -455,13 +454,11 @@ class CollisionKernel(abc.ABC):
         :class:`~granframe.velocity.quadratures.CircleTrapezoid`; spectral for smooth b); in
         3D 2 pi times the 200-point Gauss-Legendre rule in cos theta. |S^{d-1}| for b = 1.
         """
-        from granframe.velocity.quadratures import CircleTrapezoid, GaussLegendre
-
         if dimension == 2:
-            rule = CircleTrapezoid(2048)
-            t, w = rule.nodes()[:, 0], rule.weights()
+            nodes, w = circle_rule(2048)
+            t = nodes[:, 0]
         else:
-            nodes, w = GaussLegendre(200).rule(2.0)
+            nodes, w = gauss_legendre(200, 2.0)
             t, w = nodes - 1.0, 2 * math.pi * w
         values = self.angular_part(t) * (1.0 if weight is None else weight(t))
         return float(w @ values)
@@ -476,11 +473,27 @@ class CollisionKernel(abc.ABC):
         ``temperature``: g is Maxwellian at 2T, |g| has the density proportional to
         r^{d-1} exp(-r^2/(4T)). By default a 64-point Gauss-Legendre rule on
         [0, 18 sqrt(T)] (the density is below e^-80 beyond)."""
-        from granframe.velocity.quadratures import GaussLegendre
-
-        r, w = GaussLegendre(64).rule(18.0 * math.sqrt(temperature))
+        if not (temperature > 0.0 and math.isfinite(temperature)):
+            check.reject(type(self).__name__, "temperature", temperature,
+                         "must be positive and finite")
+        r, w = gauss_legendre(64, 18.0 * math.sqrt(temperature))
         density = w * r ** (dimension - 1) * numpy.exp(-r * r / (4.0 * temperature))
         return float(density @ self.speed_part(r) / density.sum())
+
+    def mean_speed_parts(self, dimension: int, temperature, xp=numpy):
+        r""":meth:`mean_speed_part` at every temperature of an array of ``xp`` (one per cell
+        of a space run), in ``xp``: no transfer to the host. By default the same 64-point
+        Gauss-Legendre rule on [0, 18 sqrt(T)], in the variable x = r / (18 sqrt T) whose
+        weights x^{d-1} exp(-81 x^2) do not depend on T."""
+        x, w = numpy.polynomial.legendre.leggauss(64)
+        x, w = 0.5 * (x + 1.0), 0.5 * w
+        density = w * x ** (dimension - 1) * numpy.exp(-81.0 * x * x)
+        speeds = 18.0 * xp.sqrt(temperature)[..., None] * xp.asarray(x)
+        return self.speed_part(speeds, xp) @ xp.asarray(density / density.sum())
+
+    def energy_factors(self, energy):
+        """phi(E) = E^gamma at every energy of an array (positive, checked by the caller)."""
+        return 1.0 if self.energy_exponent == 0.0 else energy ** self.energy_exponent
 
     def energy_factor(self, energy: float) -> float:
         """phi(E) = E^gamma for the kinetic energy E = int |v|^2/2 f dv."""
@@ -497,6 +510,20 @@ class CollisionKernel(abc.ABC):
                 * self.angular_part(cos_theta) * self.energy_factor(energy))
 
 
+# -- Velocity grids ------------------------------------------------------------------------
+
+class Grid(abc.ABC):
+    """A velocity grid, what every ``grid`` argument of these contracts is:
+    :class:`granframe.VelocityGrid` is the implementation.
+
+    It declares no members: those of :class:`~granframe.velocity.grid.VelocityGrid` are the
+    contract. It lets the core check a grid (:func:`check_arguments`) without importing the
+    velocity layer, which is built on the core.
+    """
+
+    __slots__ = ()
+
+
 # -- Collision operators -------------------------------------------------------------------
 
 def check_arguments(owner: str, grid, kernel, restitution, backend) -> None:
@@ -504,9 +531,7 @@ def check_arguments(owner: str, grid, kernel, restitution, backend) -> None:
     the parameter, before an operator uses them. A kernel is accepted by what it offers
     (the kernel against :class:`CollisionKernel`, the restitution law by
     :func:`check_restitution`)."""
-    from granframe.velocity.grid import VelocityGrid
-
-    if not isinstance(grid, VelocityGrid):
+    if not isinstance(grid, Grid):
         check.reject(owner, "grid", grid, "must be a granframe.VelocityGrid", error=TypeError)
     if not isinstance(kernel, CollisionKernel):
         check.reject(owner, "kernel", kernel, "must be a collision kernel (a "
@@ -610,33 +635,134 @@ class Boundary(abc.ABC):
     the core maps the right wall to it by the exact reflection v_1 -> -v_1 of the velocity
     nodes (:func:`granframe.space.transport.reflect`), so that the velocities that leave
     the wall into the domain are always those with v_1 > 0.
+
+    :meth:`ghosts` and :meth:`emit` are told the time ``t`` at which the wall acts (the
+    stage time of the transport) and ``side``, which wall it is in the lab frame: "left"
+    (x = 0) or "right" (x = ell). A wall that moves along x with lab velocity U has the
+    normal velocity +U in its own frame on the left and -U on the right (the reflection
+    reverses v_1). Both run inside a time step, on the device with a GPU backend: they
+    must not copy device arrays to the host (no ``float()`` of an array, no branching on
+    array values) and should keep their constant arrays per grid and array namespace
+    rather than copy them from the host on every call.
     """
 
     #: the two ends are one (a periodic interval): both must be periodic, and the core
     #: fills the ghost cells from the other end; :meth:`ghosts` and :meth:`emit` are unused
     periodic: ClassVar[bool] = False
 
+    #: the period in t of what the wall does (:meth:`ghosts`, :meth:`emit`), a finite
+    #: float > 0 for a wall that acts periodically in time (a property of its parameters,
+    #: or a class attribute); None for one that does not depend on t, or not periodically.
+    #: The conformance kit checks a wall at times spread over its period.
+    period: float | None = None
+
     def check(self, grid) -> None:
         """Refuse a velocity grid the boundary does not fit (a wall velocity of the wrong
         dimension), with a message naming the parameter."""
 
     @abc.abstractmethod
-    def ghosts(self, inside, grid, xp):
-        """Ghost cells beyond the wall from the cells next to it.
+    def ghosts(self, inside, grid, xp, *, t: float = 0.0, side: str = "left"):
+        """Ghost cells beyond the wall from the cells next to it, at time ``t``.
 
-        ``inside``: the first g cells from the wall inwards, shape (g, *grid.shape).
-        Returns g ghost cells, ordered from the wall outwards, of the same shape. They
-        feed the reconstruction of the faces near the wall; the flux through the wall
-        itself is set by :meth:`emit`.
+        ``inside``: the first g cells from the wall inwards, shape (g, *grid.shape), in
+        the wall's own frame (the right wall's reflected). Returns g ghost cells, ordered
+        from the wall outwards, of the same shape. They feed the reconstruction of the
+        faces near the wall; the flux through the wall itself is set by :meth:`emit`.
+        ``side``: "left" or "right", the wall in the lab frame.
         """
 
     @abc.abstractmethod
-    def emit(self, incoming, grid, xp):
-        """The face values at the wall.
+    def emit(self, incoming, grid, xp, *, t: float = 0.0, side: str = "left"):
+        """The face values at the wall at time ``t``.
 
-        ``incoming``: f at the wall reconstructed from inside, shape (*grid.shape); the
-        values at v_1 < 0 (moving into the wall) are what arrives. Returns the values at
-        the wall for every node: those at v_1 > 0 are what the wall sends into the domain
-        (the others are not used). Zero net mass flux means
-        sum_{v_1 > 0} v_1 out = sum_{v_1 < 0} |v_1| incoming on the grid.
+        ``incoming``: f at the wall reconstructed from inside, shape (*grid.shape), in the
+        wall's own frame (the right wall's reflected); the values at v_1 < 0 (moving into
+        the wall) are what arrives. Returns the values at the wall for every node: those
+        at v_1 > 0 are what the wall sends into the domain (the others are not used). Zero
+        net mass flux means sum_{v_1 > 0} v_1 out = sum_{v_1 < 0} |v_1| incoming on the
+        grid, at every t. ``side``: "left" or "right", the wall in the lab frame.
         """
+
+
+# -- Problems: what a run steps --------------------------------------------------------------
+
+class Problem(abc.ABC):
+    """What a run is made of: the one contract between a discretised equation and the runner.
+
+    The runner (:class:`granframe.run.runner.Simulation`), ``granframe limits``,
+    ``granframe bench`` and resume use a problem through these members only; the
+    space-homogeneous and the space problems implement it (:mod:`granframe.run.problems`).
+
+    A run goes: :attr:`f0` (checked and projected when the problem is built) becomes the
+    stepped state by :meth:`state`; each step is :meth:`step`; after it :meth:`record`
+    gives what the store keeps of that step (one host transfer at most); at each output
+    point :meth:`snapshot` gives f on the host, and :meth:`report` the indicators kept
+    with the commit. :meth:`layout` says what the store holds.
+    """
+
+    #: the run description the problem was built from
+    description: object
+    #: the array backend the state lives on
+    backend: "ArrayBackend"
+    #: f0 on the host, checked against the grid and projected onto the evolved modes
+    f0: numpy.ndarray
+    #: the moments of f0 before and after that projection (kept in the store's metadata)
+    projection: dict
+    #: the time integrator (its ``adaptive`` flag selects fixed or controlled steps) and the
+    #: equation it integrates; :meth:`step` is ``integrator.step(equation, t, state, dt)``
+    integrator: "TimeIntegrator"
+    equation: object
+
+    @abc.abstractmethod
+    def layout(self):
+        """The store layout (:class:`granframe.run.storage.Layout`): coordinates, the
+        snapshot array and its chunks, and the arrays recorded after every step."""
+
+    @property
+    @abc.abstractmethod
+    def record_names(self) -> tuple:
+        """The names of :meth:`record`'s entries that the store keeps after every step."""
+
+    @abc.abstractmethod
+    def state(self, f_host):
+        """The stepped state from f on the host (f0, or a stored snapshot when resuming)."""
+
+    @abc.abstractmethod
+    def snapshot(self, state) -> numpy.ndarray:
+        """f of ``state`` on the host, as the store's snapshot array holds it."""
+
+    def step(self, t: float, state, dt: float):
+        """One step of length ``dt`` from time ``t``; returns the new state."""
+        return self.integrator.step(self.equation, t, state, dt)
+
+    @abc.abstractmethod
+    def record(self, state) -> dict:
+        """What the store keeps of ``state`` after a step (:attr:`record_names`), on the
+        host, and ``mass``, ``kinetic_energy``, ``min_f``, ``negative_mass_fraction`` and
+        ``temperature`` for the health checks and the progress bar; one device->host
+        transfer at most."""
+
+    @abc.abstractmethod
+    def monitors(self, store):
+        """The accuracy monitors of a run in ``store`` (a new one, or one being resumed,
+        whose last commit holds their state) (:mod:`granframe.run.monitors`)."""
+
+    @abc.abstractmethod
+    def report(self, state, record: dict, monitors) -> tuple:
+        """At an output point: ``(resolution, problem)``, the resolution indicators kept
+        with the commit (or None), and the first accuracy monitor above its tolerance
+        (a message) or None; ``monitors`` are :meth:`monitors`' and take the report."""
+
+    @abc.abstractmethod
+    def progress_text(self, record: dict, mass0: float) -> str:
+        """What the progress bar shows after a step besides t and the step number."""
+
+    @abc.abstractmethod
+    def step_limit(self):
+        """The explicit step limit of the problem's integrator at f0
+        (:class:`granframe.stepping.stability.StepLimit`), or None when nothing is
+        explicit."""
+
+    def check_step(self) -> None:
+        """Refuse a fixed time step above :meth:`step_limit` (a message naming the step,
+        the limit and the schemes that would take it); by default nothing is checked."""

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy
 
 from granframe import abc as contracts
+from granframe.rules import sphere_area
 
 #: Family name -> the contract class its factories' products are instances of.
 CONTRACTS = {
@@ -88,8 +89,6 @@ def check_collision_kernel(kernel) -> None:
 def check_quadrature(rule) -> None:
     """Finite nodes and weights, ``n_points`` of them; surface rules: unit nodes and
     weights summing to |S^{d-1}|; radial rules: nodes in [0, R], weights summing to R."""
-    from granframe.velocity.quadratures import sphere_area
-
     if rule.kind not in ("radial", "circle", "sphere"):
         _fail(f"kind must be 'radial', 'circle' or 'sphere', got {rule.kind!r}")
     m = rule.n_points

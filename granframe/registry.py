@@ -1,9 +1,10 @@
 """Discovery and registries of implementations.
 
 :func:`get_plugin_manager` follows pluggy's host pattern: add the hook
-specifications, load third-party plugins from the entry-point group
-``granframe``, then register granframe's own built-in module, which goes
-through exactly the same hooks. :class:`Registries` calls every hook
+specifications, then load the plugins of the entry-point group ``granframe``.
+granframe's own built-in module is one of them (the entry point ``builtin`` of the
+``granframe`` distribution), so it takes exactly the road of a third party's plugin
+and no module of granframe imports it. :class:`Registries` calls every hook
 implementation once with a :class:`FamilyRegistry` bound to that plugin, so
 every registered name knows where it came from.
 
@@ -395,16 +396,22 @@ def disabled_plugins() -> set[str]:
 
 
 def get_plugin_manager() -> tuple[pluggy.PluginManager, dict[str, Source]]:
-    """Plugin manager with entry-point plugins and the built-ins, plus their sources."""
-    from granframe import _builtin
+    """Plugin manager with the entry-point plugins, the built-ins among them, plus their
+    sources.
 
+    The built-ins (entry point :data:`BUILTIN_PLUGIN`) are registered last, whatever the
+    order of discovery: pluggy calls the last registered first, so the built-ins register
+    their names first and a third party's clash is the one reported.
+    """
     pm = pluggy.PluginManager(hookspecs.PROJECT)
     pm.add_hookspecs(hookspecs)
     blocked = disabled_plugins()
     for name in blocked:
         pm.set_blocked(name)
     sources: dict[str, Source] = {}
-    for ep in importlib.metadata.entry_points(group=ENTRY_POINT_GROUP):
+    discovered = importlib.metadata.entry_points(group=ENTRY_POINT_GROUP)
+    # sorted is stable: the built-ins move to the end, the others keep their order
+    for ep in sorted(discovered, key=lambda ep: ep.name == BUILTIN_PLUGIN):
         if pm.is_blocked(ep.name):
             continue
         dist = ep.dist
@@ -422,9 +429,6 @@ def get_plugin_manager() -> tuple[pluggy.PluginManager, dict[str, Source]]:
         except pluggy.PluginValidationError as exc:
             raise PluginError(f"{source} does not match granframe's hooks: {exc}") from exc
         sources[ep.name] = source
-    if not pm.is_blocked(BUILTIN_PLUGIN):
-        pm.register(_builtin, name=BUILTIN_PLUGIN)
-        sources[BUILTIN_PLUGIN] = Source(BUILTIN_PLUGIN, "granframe", __version__)
     try:
         pm.check_pending()
     except pluggy.PluginValidationError as exc:

@@ -235,15 +235,15 @@ def test_kit_catches_broken_reconstructions():
 class LeakySpecular(Specular):
     """Specular reflection of 99 % of what arrives."""
 
-    def emit(self, incoming, grid, xp):
-        return 0.99 * super().emit(incoming, grid, xp)
+    def emit(self, incoming, grid, xp, **when):
+        return 0.99 * super().emit(incoming, grid, xp, **when)
 
 
 @attrs.frozen
 class SquaringWall(Specular):
     """Sends back f^2 / f-weighted mean: mass-conserving and positive, but not linear."""
 
-    def emit(self, incoming, grid, xp):
+    def emit(self, incoming, grid, xp, **when):
         positive, negative = upwind_speeds(grid, xp)
         squared = reflect(-negative * incoming * incoming, grid.dimension, xp)
         scale = (-negative * incoming).sum() / (positive * squared).sum()

@@ -109,7 +109,7 @@ def test_block_cells_below_the_ghost_width_are_refused(tmp_path):
     refused(tmp_path, [("space.block_cells", 2), ("space.reconstruction", "weno5")],
             r"^RunDescription: parameter 'space.block_cells' = 2 is invalid; must be >= 3, the "
             r"ghost width of the reconstruction 'weno5'")
-    assert accepted([("space.block_cells", 2)]).blocks.blocks == 20      # muscl: ghost 2
+    assert accepted([("space.block_cells", 2)]).domain.blocks == 20      # muscl: ghost 2
 
 
 def test_an_unknown_space_key_and_a_missing_cells_are_refused(tmp_path):

@@ -123,6 +123,10 @@ class VariableHardSpheres(CollisionKernel):
         return (4.0 * temperature) ** (lam / 2) * math.exp(
             math.lgamma((dimension + lam) / 2) - math.lgamma(dimension / 2))
 
+    def mean_speed_parts(self, dimension: int, temperature, xp=numpy):
+        """:meth:`mean_speed_part` at every temperature of an array (the same closed form)."""
+        return self.mean_speed_part(dimension, temperature)
+
 
 def maxwell_molecules(angular=None, energy_exponent=0.0, constant=None) -> VariableHardSpheres:
     """Maxwell pseudo-molecules, B = C b(cos theta) E^gamma (lambda = 0)."""

@@ -328,13 +328,17 @@ class CellEdgeMonitors(AccuracyMonitors):
     def __init__(self, description, state: dict | None = None):
         self._start(description, None, state)
 
-    def shape(self, cells, velocities, xp=numpy) -> dict:
-        """The largest ``edge_mass`` and ``edge_energy`` over the cells of ``cells``
-        (cells, *grid.shape), each about its bulk velocity (``velocities``, (cells, d));
-        none when r_e <= 0. One :func:`edge_shares` per cell, at output points only."""
-        if not self.radius > 0.0:
+    def drifts(self, record: dict, t: float) -> dict:
+        """None: walls exchange momentum and energy with the gas, so neither is a drift."""
+        return {}
+
+    def shape(self, shares) -> dict:
+        """The largest ``edge_mass`` and ``edge_energy`` over the cells from ``shares``
+        (cells, 2), each cell's about its own bulk velocity (computed for every cell at
+        once on the backend, :meth:`granframe.space.fields.FieldMoments.edge_shares`);
+        none when r_e <= 0 (``shares`` None)."""
+        if shares is None:
             return {}
-        shares = numpy.array([edge_shares(self.grid, cells[c], velocities[c], self.radius, xp)
-                              for c in range(len(cells))])
+        shares = numpy.asarray(shares, dtype=float)
         return {name: float(numpy.nanmax(column)) if numpy.isfinite(column).any() else math.nan
                 for name, column in zip(("edge_mass", "edge_energy"), shares.T)}

@@ -31,20 +31,13 @@ import zarr
 
 from granframe._version import __version__
 from granframe.backends import available_cpus
-from granframe.run.description import COMPONENT_FAMILIES, RunDescription, fixed_steps
-from granframe.equations.conservative import ConservativeCorrection
-from granframe.equations.homogeneous import HomogeneousBoltzmann
 from granframe.errors import NonFiniteError
-from granframe.model.initial import check_fits, check_projection
-from granframe.stepping.integrators import StepController, StepSizeError
-from granframe.memory import check_run_memory
-from granframe.stepping.stability import check_time_step
 from granframe.registry import default_registries
-from granframe.equations.rescaled import RescaledBoltzmann
+from granframe.run.description import COMPONENT_FAMILIES, RunDescription, fixed_steps
+from granframe.run.problems import make_problem, moments
 from granframe.run.storage import RECORDED_MOMENTS, RunStore, StoreExistsError
+from granframe.stepping.integrators import StepController, StepSizeError
 from granframe.validators import distinct, reject
-from granframe.velocity.estimators import resolution_report
-from granframe.run.monitors import AccuracyMonitors
 
 _RUN_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 
@@ -148,18 +141,18 @@ def run_in_memory(description: RunDescription, *, progress: bool | None = None):
     return Simulation(description).run_in_memory(progress=progress)
 
 
-def _dataset(store: RunStore):
-    """:func:`granframe.run.dataset.run_dataset` (xarray is imported on first use)."""
-    from granframe.run.dataset import run_dataset
-
-    return run_dataset(store)
-
-
 def check_run_modes(resume: bool, overwrite: bool) -> None:
     """Refuse ``resume`` together with ``overwrite``."""
     if resume and overwrite:
         raise ValueError("run: --resume and --overwrite exclude each other: --resume "
                          "continues the store, --overwrite replaces it")
+
+
+def _dataset(store: RunStore):
+    """:func:`granframe.run.dataset.run_dataset` (xarray is imported on first use)."""
+    from granframe.run.dataset import run_dataset
+
+    return run_dataset(store)
 
 
 class HealthError(RuntimeError):
@@ -170,17 +163,6 @@ class HealthError(RuntimeError):
     """
 
     dataset = None
-
-
-def moments(grid, f, xp) -> dict:
-    """Mass, momentum, temperature, energy, min f, negative-mass share, kurtosis, a2,
-    pressure tensor and heat flux of f.
-
-    One fused pass over f and one transfer to the host (:meth:`VelocityGrid.moments`);
-    NaN where a moment is undefined (a zero mass).
-    """
-    fused = grid.moments(f, xp)
-    return {name: fused[name] for name in RECORDED_MOMENTS}
 
 
 def health_problem(record: dict, mass0: float, health) -> str | None:
@@ -222,9 +204,10 @@ class RunResult:
     accuracy_warnings: tuple = ()
 
 
-class _Records:
+class Records:
     """Records waiting for the next commit: the step, its time and size, and ``names``
-    of each step's record (by default the moments of :data:`RECORDED_MOMENTS`)."""
+    of each step's record (by default the moments of :data:`RECORDED_MOMENTS`; a
+    problem's :attr:`~granframe.abc.Problem.record_names`)."""
 
     def __init__(self, names=RECORDED_MOMENTS):
         self.names = tuple(names)
@@ -308,8 +291,9 @@ class Stepper:
 
     Parameters
     ----------
-    integrator : TimeIntegrator
-    equation : Equation
+    problem : granframe.abc.Problem
+        Its :meth:`~granframe.abc.Problem.step` takes the fixed steps; an adaptive scheme
+        (its ``integrator.adaptive``) is driven on its ``integrator`` and ``equation``.
     targets : list
         The output points after t = 0 (:meth:`Simulation.output_points`): step indices for
         fixed steps, times for adaptive ones.
@@ -317,17 +301,14 @@ class Stepper:
         dt of a fixed-step scheme.
     tolerance : float or None
         Error tolerance of an adaptive scheme.
-    xp : module
-        The backend's array namespace.
     final_time : float or None
         Where a fixed-step run ends (its last step may be shorter than ``time_step``);
         None: at the last target, a whole number of steps.
     """
 
-    def __init__(self, integrator, equation, targets, time_step, tolerance, xp,
-                 final_time=None):
-        self.integrator, self.equation, self.xp = integrator, equation, xp
-        self.adaptive = integrator.adaptive
+    def __init__(self, problem, targets, time_step, tolerance, final_time=None):
+        self.problem = problem
+        self.adaptive = problem.integrator.adaptive
         self.targets, self.time_step = targets, time_step
         self.controller = StepController(tolerance) if self.adaptive else None
         self.full_steps, self.final_time = math.inf, final_time
@@ -362,12 +343,13 @@ class Stepper:
     def _advance(self, state: RunState, target) -> None:
         try:
             if self.adaptive:
+                problem = self.problem
                 state.f, state.t, state.dt, state.dt_next = self.controller.advance(
-                    self.integrator, self.equation, state.t, state.f, state.dt_next, target,
-                    self.xp)
+                    problem.integrator, problem.equation, state.t, state.f, state.dt_next,
+                    target, problem.backend.xp)
             else:
                 dt, t_end = self._fixed_step(state.step + 1)
-                state.f = self.integrator.step(self.equation, state.t, state.f, dt)
+                state.f = self.problem.step(state.t, state.f, dt)
         except (NonFiniteError, StepSizeError) as exc:   # a stage blew up, or dt fell to
             problem = (exc if isinstance(exc, StepSizeError)   # round-off
                        else "f is not finite (NaN or Inf) within the step")
@@ -396,15 +378,16 @@ class Observer:
         """Called once, when the run ends (finished, stopped or interrupted)."""
 
 
-class MomentsObserver(Observer):
-    """After every step: the moments of f (one fused pass, :func:`moments`) into
+class RecordObserver(Observer):
+    """After every step: the problem's record of the state
+    (:meth:`~granframe.abc.Problem.record`, one transfer to the host) into
     ``state.record`` and the records waiting for the next commit."""
 
-    def __init__(self, grid, xp, records: "_Records"):
-        self.grid, self.xp, self.records = grid, xp, records
+    def __init__(self, problem, records: "Records"):
+        self.problem, self.records = problem, records
 
     def after_step(self, state):
-        state.record = moments(self.grid, state.f, self.xp)
+        state.record = self.problem.record(state.f)
         self.records.add(state.step, state.t, state.dt, state.record)
 
 
@@ -421,30 +404,17 @@ class HealthObserver(Observer):
                           f"{problem}")
 
 
-class ResolutionObserver(Observer):
-    """At every output point: the resolution indicators of f
-    (:func:`~granframe.velocity.estimators.resolution_report`: an FFT of f, and one of |f|
-    padded to 2N per axis) into ``state.resolution``, which the next commit keeps."""
-
-    def __init__(self, grid, xp, tolerance: float):
-        self.grid, self.xp, self.tolerance = grid, xp, tolerance
-
-    def at_output(self, state, final):
-        state.resolution = resolution_report(self.grid, state.f,
-                                             state.record["negative_mass_fraction"],
-                                             self.tolerance, self.xp)
-
-
 class AccuracyObserver(Observer):
     """The accuracy monitors (:mod:`granframe.run.monitors`): after every step the drifts
-    of momentum and temperature (from the step's moments, no pass over f); at every output
-    point, after the :class:`ResolutionObserver`, the edge shares (one pass over f) and
-    the spectral tail (the resolution report's), and their report into ``state.accuracy``,
-    which the next commit keeps. With ``health.stop_on_accuracy`` a monitor above
-    ``health.accuracy_tolerance`` stops the run."""
+    of momentum and temperature (from the step's record, no pass over f); at every output
+    point the problem's :meth:`~granframe.abc.Problem.report`: the resolution indicators
+    (which the next commit keeps in ``state.resolution``) and the monitors of the shape of
+    f (edge shares, spectral tail), whose report goes into ``state.accuracy``. With
+    ``health.stop_on_accuracy`` a monitor above ``health.accuracy_tolerance`` stops the
+    run."""
 
-    def __init__(self, monitors: AccuracyMonitors, xp):
-        self.monitors, self.xp = monitors, xp
+    def __init__(self, problem, monitors):
+        self.problem, self.monitors = problem, monitors
 
     def _stop(self, state, problem):
         if problem is not None:
@@ -458,20 +428,20 @@ class AccuracyObserver(Observer):
                                           state.step, state.t))
 
     def at_output(self, state, final):
-        monitors = self.monitors
-        problem = monitors.update(monitors.shape(state.f, state.record, state.resolution,
-                                                 self.xp), state.step, state.t)
-        state.accuracy = monitors.report()
+        state.resolution, problem = self.problem.report(state, state.record, self.monitors)
+        state.accuracy = self.monitors.report()
         self._stop(state, problem)
 
 
 class ProgressObserver(Observer):
-    """After every step: the progress bar (t, step, T and the mass drift).
+    """After every step: the progress bar (t, step, and the problem's
+    :meth:`~granframe.abc.Problem.progress_text`: T and the mass drift).
 
     ``show`` None shows it on a terminal only.
     """
 
-    def __init__(self, state: RunState, final_time: float, show: bool | None):
+    def __init__(self, state: RunState, final_time: float, show: bool | None, text):
+        self.text = text
         self.bar = tqdm.tqdm(total=final_time, initial=state.t,
                              disable=None if show is None else not show, unit="t",
                              dynamic_ncols=True,
@@ -482,9 +452,8 @@ class ProgressObserver(Observer):
         # t = step * dt may pass final_time by round-off (3 * 0.1 > 0.3): the bar stops at
         # its total instead of warning that it clamps
         self.bar.update(min(state.t, self.bar.total) - self.bar.n)
-        self.bar.set_postfix_str(f"step {state.step}, T={state.record['temperature']:.6g}, "
-                                 f"mass drift {state.record['mass'] / state.mass0 - 1:+.1e}",
-                                 refresh=False)
+        self.bar.set_postfix_str(f"step {state.step}, "
+                                 f"{self.text(state.record, state.mass0)}", refresh=False)
 
     def close(self):
         self.bar.close()
@@ -498,7 +467,7 @@ class StorageObserver(Observer):
     Ctrl-C); :meth:`close` closes the store.
     """
 
-    def __init__(self, store: RunStore, records: "_Records", snapshot):
+    def __init__(self, store: RunStore, records: "Records", snapshot):
         self.store, self.records, self.snapshot = store, records, snapshot
 
     def at_output(self, state, final):
@@ -528,68 +497,28 @@ class StorageObserver(Observer):
 
 
 class Simulation:
-    """Everything a run needs, built once from a description.
+    """A run of the problem a description asks for, built once.
 
-    f0 is checked against the grid (:func:`check_fits`) and projected onto the
-    Nyquist-free modes the operators evolve (:meth:`VelocityGrid.project`). A description
-    with a ``space`` section makes a
-    :class:`~granframe.space.simulation.SpaceSimulation`.
+    The problem (:func:`~granframe.run.problems.make_problem`: space-homogeneous, or in
+    space for a description with a ``space`` section) holds everything the run steps; the
+    simulation drives it through the :class:`granframe.abc.Problem` contract only. Its
+    public members (``grid``, ``backend``, ``operator``, ``f0``, ``equation``,
+    ``integrator``, ``projection``, ...) are read through the simulation. A fixed time
+    step above the explicit stability limit at f0 is refused here.
     """
-
-    def __new__(cls, description=None):
-        if cls is Simulation and getattr(description, "space", None) is not None:
-            from granframe.space.simulation import SpaceSimulation
-
-            cls = SpaceSimulation
-        return super().__new__(cls)
 
     def __init__(self, description: RunDescription):
         if not isinstance(description, RunDescription):
             raise TypeError(f"Simulation: parameter 'description' = {description!r} is invalid; "
                             "must be a RunDescription")
-        self.description = d = description
-        self.grid = d.grid
-        self.backend = d.build("backend")
-        check_run_memory(d, self.backend)   # before anything of the grid's size is allocated
-        self.operator = self._build_operator()
-        self.integrator = d.build("integrator")
-        initial = d.build("initial")
-        sampled = initial.sample(d.grid)
-        check_fits(d.grid, sampled, initial, d.health.edge_tolerance,
-                   d.health.initial_mass_tolerance)
-        self.f0 = d.grid.project(sampled)
-        #: moments of f0 before and after the projection (stored with the run)
-        self.projection = check_projection(d.grid, sampled, self.f0, initial,
-                                           d.health.projection_tolerance,
-                                           d.health.projection_kurtosis_tolerance)
-        if d.rescaled:
-            self.equation = RescaledBoltzmann(self.operator, self.backend.asarray(self.f0),
-                                              d.knudsen)
-        else:
-            self.equation = HomogeneousBoltzmann(self.operator, d.heat_bath, d.knudsen)
-        self._check_step_limit(self.integrator, self.equation, self.f0)
+        self.description = description
+        self.problem = make_problem(description)
+        self.problem.check_step()
 
-    def _build_operator(self):
-        """The description's collision operator on :attr:`backend`, with the conservative
-        correction when the description asks for it (docs/conservative.md)."""
-        d = self.description
-        operator = d.build("operator", grid=d.grid, kernel=d.build("kernel"),
-                           restitution=d.build("restitution"), backend=self.backend)
-        if d.conservative is not None:
-            operator = ConservativeCorrection(operator, d.conservative)
-        return operator
-
-    def _check_step_limit(self, integrator, equation, f0) -> None:
-        """Refuse a fixed time step above ``integrator``'s explicit stability limit for
-        ``equation`` at f0 (unless ``health.step_limit`` is false), naming the schemes
-        that would take it (:func:`~granframe.stepping.stability.check_time_step`)."""
-        d = self.description
-        if not d.health.step_limit or integrator.adaptive:
-            return
-        registries = default_registries()
-        schemes = [(name, registries.get("time_integrators", name).factory)
-                   for name in registries.names("time_integrators")]
-        check_time_step(integrator, d.integrator.name, equation, f0, d.time_step, schemes)
+    def __getattr__(self, name):
+        if name.startswith("_") or "problem" not in self.__dict__:
+            raise AttributeError(name)
+        return getattr(self.__dict__["problem"], name)
 
     def provenance(self) -> dict:
         """Versions and plugins behind this run (stored with it)."""
@@ -651,8 +580,8 @@ class Simulation:
                              progress_entry["time"], store.snapshot_count,
                              progress_entry.get("wall_seconds", 0.0))
         d = self.description
-        stepper = Stepper(self.integrator, self.equation, self.output_points(), d.time_step,
-                          d.tolerance, self.backend.xp, d.final_time)
+        stepper = Stepper(self.problem, self.output_points(), d.time_step, d.tolerance,
+                          d.final_time)
         observers = self._observers(store, state, progress)
         storage = observers[-1]
         try:
@@ -680,37 +609,12 @@ class Simulation:
 
     def _observers(self, store, state, progress) -> list:
         """What the run does besides stepping, in order; the :class:`StorageObserver` last."""
-        d, xp = self.description, self.backend.xp
-        records = self._new_records()
-        return [MomentsObserver(self.grid, xp, records),
-                HealthObserver(d.health), ProgressObserver(state, d.final_time, progress),
-                ResolutionObserver(self.grid, xp, d.health.resolution_tolerance),
-                AccuracyObserver(self._monitors(store), xp),
-                StorageObserver(store, records, self.backend.to_numpy)]
-
-    def _layout(self):
-        """What the store holds (:func:`~granframe.run.storage.homogeneous_layout`)."""
-        return None
-
-    def _state(self, f_host):
-        """The run's state from a stored snapshot (on the backend)."""
-        return self.backend.asarray(f_host)
-
-    def _record(self, f) -> dict:
-        """The record of the state f (its moments)."""
-        return moments(self.grid, f, self.backend.xp)
-
-    def _new_records(self) -> _Records:
-        """The records a commit writes besides the step (the moments)."""
-        return _Records()
-
-    def _monitors(self, store) -> AccuracyMonitors:
-        """The accuracy monitors of a run in ``store``, from its first record (t = 0) and,
-        for a resumed run, the monitors' state at the last commit."""
-        group = store.group
-        initial = {name: group[name][0] for name in ("mass", "momentum", "temperature")}
-        return AccuracyMonitors(self.description, self.operator, initial,
-                                store.progress.get("accuracy"))
+        d, problem = self.description, self.problem
+        records = Records(problem.record_names)
+        return [RecordObserver(problem, records), HealthObserver(d.health),
+                ProgressObserver(state, d.final_time, progress, problem.progress_text),
+                AccuracyObserver(problem, problem.monitors(store)),
+                StorageObserver(store, records, problem.snapshot)]
 
     def run_in_memory(self, *, progress: bool | None = None):
         """Run to ``final_time`` in memory and return the run as an :class:`xarray.Dataset`.
@@ -739,14 +643,15 @@ class Simulation:
         d = self.description
         description = d.to_dict()
         store = None
+        problem = self.problem
         if not (resume and RunStore.exists(out)):
-            rescaling = getattr(self.equation, "rescaling", None)
+            rescaling = problem.rescaling
             try:
                 store = RunStore.create(
-                    out, description, d.to_toml(), self.grid, self.provenance(),
-                    overwrite=overwrite, protect=protect, projection=self.projection,
+                    out, description, d.to_toml(), d.grid, self.provenance(),
+                    overwrite=overwrite, protect=protect, projection=problem.projection,
                     rescaling=None if rescaling is None else rescaling.to_dict(),
-                    layout=self._layout())
+                    layout=problem.layout())
             except StoreExistsError:
                 if not resume:
                     raise         # else: another writer made it meanwhile; continue it
@@ -757,7 +662,7 @@ class Simulation:
         if entry["status"] == "finished":
             return store, None
         f_host, t = store.last_snapshot()
-        return store, RunState(self._state(f_host), t, int(entry["step"]),
+        return store, RunState(problem.state(f_host), t, int(entry["step"]),
                                float(entry["mass0"]), entry.get("dt_next"),
                                entry.get("resumes", []) + [int(entry["step"])],
                                entry.get("rollbacks", []),
@@ -765,16 +670,16 @@ class Simulation:
 
     def _first_commit(self, store, started) -> RunState:
         """Commit f0 and its moments to a new store and publish it; the state at t = 0."""
-        d = self.description
+        d, problem = self.description, self.problem
         try:
-            f = self._state(self.f0)
-            record = self._record(f)
+            f = problem.state(problem.f0)
+            record = problem.record(f)
             # adaptive schemes without a first trial step start from 1% of the run
             state = RunState(f, 0.0, 0, record["mass"], d.time_step or d.final_time / 100,
                              [], [], 0.0, started)
-            first = self._new_records()
+            first = Records(problem.record_names)
             first.add(0, 0.0, 0.0, record)
-            store.commit([(0.0, self.f0)], first.columns,
+            store.commit([(0.0, problem.f0)], first.columns,
                          {"status": "running", "step": 0, "time": 0.0, "mass0": state.mass0,
                           "dt_next": state.dt_next, "resumes": state.resumes})
             store.publish()

@@ -42,7 +42,11 @@ What is stored can be trusted:
   either old or new; ``progress`` names the last complete snapshot and the moment
   records that go with it, and anything beyond it (a commit cut short) is dropped on
   resume. There is one moment record per step, step 0 included, so the records of
-  snapshot k are ``snapshot_step[k] + 1``.
+  snapshot k are ``snapshot_step[k] + 1``. A commit is four phases
+  (:meth:`RunStore.begin_commit`, :meth:`~RunStore.write_block`,
+  :meth:`~RunStore.write_shared`, :meth:`~RunStore.end_commit`; the notes of
+  :class:`RunStore`), so that in a space run, whose f and fields are chunked by block of
+  cells, the owner of each block writes its own chunk files.
 - **Atomic creation and replacement.** A store is built beside its path, as
   ``.NAME.granframe-new-TOKEN``, up to its first commit, then renamed into place; an
   existing store being replaced is first renamed to ``.NAME.granframe-old-TOKEN`` and
@@ -63,6 +67,7 @@ from __future__ import annotations
 import datetime
 import errno
 import fcntl
+import functools
 import itertools
 import json
 import math
@@ -79,7 +84,7 @@ import numpy
 import zarr
 
 from granframe._version import __version__
-from granframe.validators import is_real
+from granframe.validators import is_integer, is_real, reject
 
 SCHEMA = "granframe.run/2"
 SWEEP_SCHEMA_KEY = "granframe_sweep"
@@ -160,6 +165,9 @@ REFERENCES = (
 
 MOMENT_CHUNK = 4096
 SNAPSHOT_CHUNK = 1024
+#: the cells axis of a space run's store: the first dimension after ``time`` of f and
+#: after ``step_time`` of the fields; the arrays that have it are written block by block
+CELLS = "x"
 #: statuses of a run that may be continued
 RESUMABLE = ("running", "interrupted")
 _STAGING, _TRASH = "granframe-new", "granframe-old"
@@ -521,14 +529,51 @@ def _chunk_file(root: pathlib.Path, name: str, index) -> pathlib.Path:
 
 @attrs.frozen
 class RecordArray:
-    """An array recorded after every step: ``shape`` and ``dimensions`` after ``step_time``."""
+    """An array recorded after every step.
+
+    Parameters
+    ----------
+    name : str
+        The array's name in the store.
+    shape, dimensions : tuple
+        Its shape and dimension names after ``step_time``.
+    dtype : str
+        Its data type ('f8', 'i8').
+    chunk : int
+        Records per chunk along ``step_time``.
+    cells_chunk : int or None
+        Cells per chunk along its first dimension after ``step_time``, which must then be
+        the cells axis ``x``: a space run's fields are chunked by block of cells
+        (``cells_chunk = block_cells``), so that the owner of a block writes chunk files
+        no other block touches (:meth:`RunStore.write_block`). None: one chunk spans
+        each dimension after ``step_time`` whole.
+    """
 
     name: str
     shape: tuple = ()
     dimensions: tuple = ()
     dtype: str = "f8"
-    #: records per chunk along step_time
     chunk: int = MOMENT_CHUNK
+    cells_chunk: int | None = attrs.field(default=None)
+
+    @cells_chunk.validator
+    def _check_cells_chunk(self, attribute, value):
+        if value is None:
+            return
+        if tuple(self.dimensions[:1]) != (CELLS,) or not self.shape:
+            reject("RecordArray", "cells_chunk", value, f"is only allowed for a record whose "
+                   f"first dimension after step_time is the cells axis '{CELLS}' (record "
+                   f"'{self.name}' has dimensions {tuple(self.dimensions)}); leave it None")
+        if not is_integer(value) or not 1 <= value <= self.shape[0]:
+            reject("RecordArray", "cells_chunk", value, f"must be None or a whole number of "
+                   f"cells from 1 to {self.shape[0]} (the cells of record '{self.name}')")
+
+    @property
+    def chunks(self) -> tuple:
+        """The chunk shape of the array in the store (``step_time`` first)."""
+        after = tuple(self.shape) if self.cells_chunk is None else \
+            (self.cells_chunk,) + tuple(self.shape[1:])
+        return (self.chunk,) + after
 
 
 @attrs.frozen
@@ -543,7 +588,8 @@ class Layout:
         Shape, chunk shape and dimension names of one snapshot of ``f`` (after ``time``;
         one snapshot per chunk along ``time``).
     records : tuple
-        The :class:`RecordArray` of each record, ``step_time``, ``step`` and ``dt`` first.
+        The :class:`RecordArray` of each record, ``step_time``, ``step`` and ``dt`` first
+        (a space run's fields chunked by block of cells: ``cells_chunk``).
     space : dict or None
         A space-inhomogeneous run's cells and blocks (kept in the metadata).
     """
@@ -568,8 +614,7 @@ class Layout:
         for name, dtype in (("time", "f8"), ("snapshot_step", "i8"), ("snapshot_dt_next", "f8")):
             _create(group, name, (0,), (SNAPSHOT_CHUNK,), dtype, ["time"], space)
         for spec in self.records:
-            _create(group, spec.name, (0,) + tuple(spec.shape),
-                    (spec.chunk,) + tuple(spec.shape),
+            _create(group, spec.name, (0,) + tuple(spec.shape), spec.chunks,
                     spec.dtype, ["step_time"] + list(spec.dimensions), space)
 
 
@@ -591,12 +636,92 @@ def homogeneous_layout(grid) -> Layout:
                   axes, records)
 
 
+@attrs.frozen
+class CommitPlan:
+    """Where one commit puts its data: what :meth:`RunStore.begin_commit` returns.
+
+    Two ranges of plain integers, so that the writer that began the commit can send the
+    plan to the writers of the blocks (an MPI broadcast pickles it).
+
+    Attributes
+    ----------
+    snapshots : range
+        The indices along ``time`` of the commit's new snapshots.
+    records : range
+        The indices along ``step_time`` of its new moment records.
+    """
+
+    snapshots: range
+    records: range
+
+
 class RunStore:
     """A run's store, opened for writing (:meth:`create`, :meth:`resume`) or reading (:meth:`open`).
 
     A store opened for writing holds the :class:`WriterLock` until :meth:`close`. A store
     created with ``path`` None is held in memory (a :class:`zarr.storage.MemoryStore`):
     the same layout, commits and metadata, no file, no lock; its ``path`` is None.
+
+    Parameters
+    ----------
+    path : str, os.PathLike or None
+        Where the store is (None: in memory).
+    group : zarr.Group
+        Its root group.
+    lock : WriterLock or None
+        The lock a writer holds on ``path``.
+
+    Notes
+    -----
+    **Commits.** A commit appends snapshots of f and moment records and makes them
+    visible at once. :meth:`commit` does it in one call, as four phases which several
+    writers can share when the store has a cells axis (a space run, whose f and fields
+    are chunked by block of cells: :attr:`cell_arrays`):
+
+    1. ``plan = store.begin_commit(snapshot_count, record_count)``, one writer (the
+       holder of the lock): every array is resized to hold the new entries (metadata
+       only); the :class:`CommitPlan` says where they go.
+    2. ``store.write_block(plan, cells=slice(a, b), f=..., records=...)``, the owner of
+       cells a..b: its cells of the new snapshots of f and of the new field records. It
+       writes the chunk files of those cells and no other file, so the owners of
+       different blocks write concurrently and in any order; a and b must lie on the
+       chunk boundaries along ``x`` of every array in :attr:`cell_arrays`.
+    3. ``store.write_shared(plan, times=..., step=..., dt_next=..., records=...)``, one
+       writer: what no block owns, the snapshot times (``time``), ``snapshot_step``,
+       ``snapshot_dt_next`` and the records without a cells axis (``step_time``,
+       ``step``, ``dt``, the totals, the wall records); in a store without a cells axis
+       (a space-homogeneous run) f and every record.
+    4. ``store.end_commit(plan, progress)``, one writer, once every write of phases 2
+       and 3 has returned: ``progress`` with the new counts, then the consolidated
+       metadata. This makes the commit visible.
+
+    Until phase 4 the store reads as before the commit: readers go by the counts in
+    ``progress``, and :meth:`resume` drops whatever lies beyond them, so a commit cut
+    short in any phase, with its blocks written in any order or some not at all, is
+    never seen. zarr writes each chunk file whole, to a temporary file renamed into
+    place, so a kill leaves every file old or new.
+
+    A writer in another process writes its blocks into a store on disk that it opens
+    with ``RunStore.open(path, mode="r+")`` (it takes no lock: it writes under the lock
+    of the writer that begins and ends the commits), with the plan that writer sends
+    it. ``path`` is where the store is then: a new store is staged beside its final
+    path until :meth:`publish` puts it in place after its first commit, so the other
+    writers open it again after that.
+
+    Examples
+    --------
+    The owner of each block of ``block`` cells writes its part of a commit of one
+    snapshot ``f`` (cells, v1, ..., vd) and the records ``fields`` (per cell) and
+    ``rest``:
+
+    >>> plan = store.begin_commit(1, len(rest["step_time"]))          # doctest: +SKIP
+    >>> for a in range(0, cells, block):                                # doctest: +SKIP
+    ...     store.write_block(plan, slice(a, a + block), f=[f[a:a + block]],
+    ...                       records={name: values[:, a:a + block]
+    ...                                for name, values in fields.items()})
+    >>> store.write_shared(plan, times=[t], step=step, dt_next=dt_next,
+    ...                    records=rest)                                # doctest: +SKIP
+    >>> store.end_commit(plan, progress)                                # doctest: +SKIP
     """
 
     def __init__(self, path, group: zarr.Group, lock: WriterLock | None = None):
@@ -924,6 +1049,14 @@ class RunStore:
                 array.resize((extent,) + array.shape[1:])
 
     # -- writing ----------------------------------------------------------------------
+    @functools.cached_property
+    def cell_arrays(self) -> tuple:
+        """The arrays split by cells, which :meth:`write_block` writes: those whose first
+        dimension after ``time`` or ``step_time`` is the cells axis ``x`` (a space run's f
+        and fields); empty in a space-homogeneous run's store."""
+        return tuple(name for name in SNAPSHOT_ARRAYS[:1] + self.record_arrays
+                     if tuple(self.group[name].metadata.dimension_names or ())[1:2] == (CELLS,))
+
     def commit(self, snapshots, records: dict, progress: dict) -> None:
         """Append snapshots [(t, f)] and moment records (name -> arrays along step_time),
         then mark them.
@@ -933,32 +1066,247 @@ class RunStore:
         ``progress`` (JSON-ready) is stored together with the new counts; the
         store is consistent before and after, whatever happens in between. Each
         snapshot is stored with the step and the proposed next step size of
-        ``progress`` (the state a run continues from).
+        ``progress`` (the state a run continues from). It runs the four phases of the
+        class notes, all cells in one :meth:`write_block`.
         """
-        group = self.group
-        k = self.snapshot_count
-        if snapshots:
-            count = len(snapshots)
-            for name in SNAPSHOT_ARRAYS:
-                group[name].resize((k + count,) + group[name].shape[1:])
-            for i, (_, f) in enumerate(snapshots):
-                group["f"][k + i] = f
-            group["time"][k:] = numpy.array([t for t, _ in snapshots], dtype=float)
-            group["snapshot_step"][k:] = int(progress["step"])
-            group["snapshot_dt_next"][k:] = float(progress["dt_next"])
-            k += count
-        n = int(self.progress["records"])
         count = len(records["step_time"]) if records else 0
+        layout, split = self.record_arrays, self.cell_arrays
+        given = {name: values for name, values in records.items() if name in layout} \
+            if count else {}
+        fs = [f for _, f in snapshots]
+        plan = self.begin_commit(len(snapshots), count)
+        if "f" in split:
+            self.write_block(plan, slice(None), f=fs,
+                             records={n: v for n, v in given.items() if n in split})
+        self.write_shared(plan, times=[t for t, _ in snapshots], step=progress.get("step"),
+                          dt_next=progress.get("dt_next"),
+                          records={n: v for n, v in given.items() if n not in split},
+                          f=None if "f" in split else fs)
+        self.end_commit(plan, progress)
+
+    def begin_commit(self, snapshot_count: int, record_count: int) -> CommitPlan:
+        """Open a commit (phase 1 of the class notes; one writer).
+
+        Parameters
+        ----------
+        snapshot_count, record_count : int
+            How many snapshots of f and moment records the commit appends (>= 0).
+
+        Returns
+        -------
+        CommitPlan
+            Where they go, for :meth:`write_block`, :meth:`write_shared` and
+            :meth:`end_commit`. Every snapshot array (``snapshot_count`` > 0) and every
+            record array (``record_count`` > 0) is resized to hold them: metadata only,
+            no chunk file is written.
+        """
+        for name, value in (("snapshot_count", snapshot_count), ("record_count", record_count)):
+            if not is_integer(value) or value < 0:
+                reject("RunStore.begin_commit", name, value, "must be a whole number >= 0")
+        k, n = self.snapshot_count, int(self.progress["records"])
+        plan = CommitPlan(range(k, k + snapshot_count), range(n, n + record_count))
+        for names, entries in ((SNAPSHOT_ARRAYS, plan.snapshots),
+                               (self.record_arrays, plan.records)):
+            for name in names if entries else ():
+                array = self.group[name]
+                array.resize((entries.stop,) + array.shape[1:])
+        return plan
+
+    def write_block(self, plan: CommitPlan, cells: slice, f=None,
+                    records: dict | None = None) -> None:
+        """Write the cells ``cells`` of a commit's new snapshots and field records (phase 2
+        of the class notes; the owner of those cells).
+
+        Only chunk files of these cells are written, so the owners of different blocks
+        may write at the same time, in any order.
+
+        Parameters
+        ----------
+        plan : CommitPlan
+            The open commit (:meth:`begin_commit`).
+        cells : slice
+            The cells a..b (``slice(a, b)``; ``slice(None)`` for all of them). a and b
+            must be multiples of the chunk width along ``x`` of every array in
+            :attr:`cell_arrays` (b may be the number of cells), so that no chunk file is
+            shared with the owner of other cells.
+        f : sequence of array_like, optional
+            The cells a..b of each new snapshot, shape (b - a, v1, ..., vd); as many as
+            the plan has snapshots (none when it has none).
+        records : dict, optional
+            name -> the cells a..b of the new records of a field, shape
+            (records, b - a, ...), for names of :attr:`cell_arrays`. A field left out
+            gets no data in this commit, which :meth:`verify` then reports as missing.
+
+        Raises
+        ------
+        ValueError
+            The store has no cells axis, ``cells`` is out of range or misaligned, or
+            ``f`` or a record does not match the plan.
+        StoreError
+            ``plan`` is not the open commit of the store (:meth:`begin_commit` not called).
+        """
+        owner = "RunStore.write_block"
+        _check_plan(owner, plan)
+        start, stop = self._block(cells)
+        region = (slice(start, stop),)
+        names = tuple(n for n in self.cell_arrays if n != "f")
+        _write(self._snapshot_writes(owner, plan, f, region)
+               + self._record_writes(owner, plan, records, names, region))
+
+    def write_shared(self, plan: CommitPlan, times=(), step: int | None = None,
+                     dt_next: float | None = None, records: dict | None = None,
+                     f=None) -> None:
+        """Write what no block owns (phase 3 of the class notes; one writer).
+
+        Parameters
+        ----------
+        plan : CommitPlan
+            The open commit (:meth:`begin_commit`).
+        times : sequence of float
+            The times of the new snapshots (``time``), one per snapshot of the plan.
+        step : int, optional
+            The step index of the new snapshots (``snapshot_step``); needed when the plan
+            has snapshots.
+        dt_next : float, optional
+            The step size proposed after them (``snapshot_dt_next``), the state a run
+            continues from; needed when the plan has snapshots.
+        records : dict, optional
+            name -> the new records of an array without a cells axis, shape
+            (records, ...): ``step_time``, ``step``, ``dt``, the moments or totals, the
+            wall records. One left out gets no data in this commit, which
+            :meth:`verify` then reports as missing.
+        f : sequence of array_like, optional
+            The new snapshots of f, shape (v1, ..., vd), in a store without a cells axis
+            only (in a space run's, :meth:`write_block` writes f).
+
+        Raises
+        ------
+        ValueError
+            An argument does not match the plan or the store.
+        StoreError
+            ``plan`` is not the open commit of the store (:meth:`begin_commit` not called).
+        """
+        owner = "RunStore.write_shared"
+        _check_plan(owner, plan)
+        split = self.cell_arrays
+        if "f" in split and f is not None:
+            raise ValueError(f"{owner}: parameter 'f' holds {len(f)} snapshot(s); it must be "
+                             "None in a store with a cells axis: each block's owner writes "
+                             "its cells of f (write_block)")
+        writes = [] if "f" in split else self._snapshot_writes(owner, plan, f, ())
+        count = len(plan.snapshots)
+        times = _shaped(owner, "times", numpy.asarray(times, dtype=float), (count,))
         if count:
-            layout = self.record_arrays
-            for name, values in records.items():
-                if name not in layout:
-                    continue
-                array = group[name]
-                array.resize((n + count,) + array.shape[1:])
-                array[n:] = numpy.asarray(values)
-            n += count
-        self._write_progress(dict(progress, snapshots=k, records=n))
+            for name, value in (("step", step), ("dt_next", dt_next)):
+                if value is None:
+                    reject(owner, name, value, f"must be given with the {count} new "
+                           "snapshot(s) of the plan: the step and the step size proposed "
+                           "after it, from which a run continues")
+            where = (slice(plan.snapshots.start, plan.snapshots.stop),)
+            writes += [(self._planned(owner, plan, name), where, values) for name, values in
+                       (("time", times), ("snapshot_step", int(step)),
+                        ("snapshot_dt_next", float(dt_next)))]
+        names = tuple(n for n in self.record_arrays if n not in split)
+        _write(writes + self._record_writes(owner, plan, records, names, ()))
+
+    def end_commit(self, plan: CommitPlan, progress: dict) -> None:
+        """Make a commit visible (phase 4 of the class notes; one writer, after every
+        :meth:`write_block` and :meth:`write_shared` of the commit has returned).
+
+        Parameters
+        ----------
+        plan : CommitPlan
+            The open commit (:meth:`begin_commit`).
+        progress : dict
+            The state of the run (JSON-ready: status, step, time, dt_next, ...), stored
+            in the metadata with the new counts of snapshots and records.
+
+        Raises
+        ------
+        StoreError
+            ``plan`` is not the open commit: the store's counts are not where it starts
+            (a commit ended twice, or a plan of another commit).
+        """
+        _check_plan("RunStore.end_commit", plan)
+        k, n = self.snapshot_count, int(self.progress["records"])
+        if (plan.snapshots.start, plan.records.start) != (k, n):
+            reject("RunStore.end_commit", "plan", plan, f"is not the open commit: the store "
+                   f"holds {k} snapshots and {n} records, the plan starts at snapshot "
+                   f"{plan.snapshots.start} and record {plan.records.start} (a commit is ended "
+                   "once; begin_commit opens the next)", error=StoreError)
+        self._write_progress(dict(progress, snapshots=plan.snapshots.stop,
+                                  records=plan.records.stop))
+
+    def _block(self, cells) -> tuple[int, int]:
+        """The first and the end cell of ``cells``, checked against the chunks along ``x``
+        of every array of :attr:`cell_arrays`."""
+        owner, split = "RunStore.write_block", self.cell_arrays
+        if "f" not in split:
+            reject(owner, "cells", cells, "has no use: the store has no cells axis (a "
+                   "space-homogeneous run); write f and every record with write_shared")
+        total = self.group["f"].shape[1]
+        if not isinstance(cells, slice) or cells.step not in (None, 1) or not all(
+                bound is None or is_integer(bound) for bound in (cells.start, cells.stop)):
+            reject(owner, "cells", cells, f"must be a slice a:b of the {total} cells (step 1)")
+        start = 0 if cells.start is None else int(cells.start)
+        stop = total if cells.stop is None else int(cells.stop)
+        if not 0 <= start < stop <= total:
+            reject(owner, "cells", cells, f"must be a slice a:b of the {total} cells with "
+                   f"0 <= a < b <= {total}")
+        for name in split:
+            width = self.group[name].chunks[1]
+            if start % width or (stop % width and stop != total):
+                reject(owner, "cells", cells, f"is not aligned with the blocks of array "
+                       f"'{name}', chunked by {width} cells along x ({total} cells): a and b "
+                       f"must be multiples of {width} (b may be {total}), so that no chunk "
+                       "file is shared with the owner of other cells")
+        return start, stop
+
+    def _planned(self, owner: str, plan: CommitPlan, name: str):
+        """The array ``name``, checked to be resized by :meth:`begin_commit` for ``plan``."""
+        array = self.group[name]
+        stop = (plan.snapshots if name in SNAPSHOT_ARRAYS else plan.records).stop
+        if array.shape[0] != stop:
+            reject(owner, "plan", plan, f"does not fit the store: array '{name}' holds "
+                   f"{array.shape[0]} entries, the plan ends at {stop}; a commit's data are "
+                   "written after its begin_commit and before its end_commit",
+                   error=StoreError)
+        return array
+
+    def _snapshot_writes(self, owner: str, plan: CommitPlan, f, region: tuple) -> list:
+        """The writes (array, selection, values) of the new snapshots ``f`` of ``plan``,
+        cut to ``region`` of the cells, checked."""
+        count, given = len(plan.snapshots), 0 if f is None else len(f)
+        if given != count:
+            raise ValueError(f"{owner}: parameter 'f' holds {given} snapshot(s); it must hold "
+                             f"the {count} new snapshot(s) of the plan")
+        if not count:
+            return []
+        array = self._planned(owner, plan, "f")
+        shape = _region_shape(array.shape[1:], region)
+        return [(array, (index,) + region, _shaped(owner, "f", numpy.asarray(snapshot), shape))
+                for index, snapshot in zip(plan.snapshots, f)]
+
+    def _record_writes(self, owner: str, plan: CommitPlan, records: dict | None, names: tuple,
+                       region: tuple) -> list:
+        """The writes (array, selection, values) of the new ``records`` of ``plan`` (names
+        among ``names``), cut to ``region`` of the cells, checked."""
+        records = records or {}
+        other = sorted(set(records) - set(names))
+        if other:
+            reject(owner, "records", other, f"must name arrays among {list(names)} (the "
+                   f"{'cell' if region else 'shared'} records of this store; the "
+                   f"{'shared ones: write_shared' if region else 'cell ones: write_block'})")
+        if records and not plan.records:
+            reject(owner, "records", sorted(records), "must be empty: the plan has no records")
+        where = (slice(plan.records.start, plan.records.stop),) + region
+        writes = []
+        for name, values in records.items():
+            array = self._planned(owner, plan, name)
+            shape = (len(plan.records),) + _region_shape(array.shape[1:], region)
+            writes.append((array, where, _shaped(owner, f"records['{name}']",
+                                                 numpy.asarray(values), shape)))
+        return writes
 
     def mark(self, status: str, **extra) -> None:
         """Set the status of the last commit (e.g. 'interrupted'), adding no data."""
@@ -986,6 +1334,32 @@ def _create(group, name, shape, chunks, dtype, dimension_names, space=False):
     return group.create_array(name, shape=shape, chunks=chunks, dtype=dtype,
                               fill_value=fill_value(dtype), dimension_names=dimension_names,
                               attributes=array_attributes(name, space), **codecs())
+
+
+def _check_plan(owner: str, plan) -> None:
+    if not isinstance(plan, CommitPlan):
+        reject(owner, "plan", plan, "must be the CommitPlan that begin_commit returned")
+
+
+def _write(writes: list) -> None:
+    """Each (array, selection, values) of ``writes``, checked beforehand: nothing is written
+    when an argument is refused."""
+    for array, selection, values in writes:
+        array[selection] = values
+
+
+def _region_shape(shape: tuple, region: tuple) -> tuple:
+    """``shape`` with its first axes cut to the slices (start and stop given) of ``region``."""
+    return tuple(s.stop - s.start for s in region) + tuple(shape[len(region):])
+
+
+def _shaped(owner: str, parameter: str, values: numpy.ndarray, shape: tuple) -> numpy.ndarray:
+    """``values``, refused unless of ``shape`` (zarr would broadcast some shapes)."""
+    if values.shape != tuple(shape):
+        raise ValueError(f"{owner}: parameter '{parameter}' has shape {values.shape}; it must "
+                         f"have shape {tuple(shape)} (the plan's entries, the cells written, "
+                         "then the array's own dimensions)")
+    return values
 
 
 def _problem(name, array, index, kind, detail="") -> dict:

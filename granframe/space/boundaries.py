@@ -17,6 +17,16 @@ with M_w(v) = exp(-|v - u_w|^2 / (2 T_w)) and u_w tangential (no v_1 component).
 maps the nodes of c^- < 0 one to one onto those of c^+ > 0 with c^+(Rv) = -c^-(v), the discrete
 mass flux sum_v c F Δv is zero to round-off: what arrives is sent back. Specular reflection
 is alpha = 0.
+
+A vibrating wall (:class:`Vibrating`) is a fully diffuse wall that moves along x with the lab
+velocity U(t) = A omega cos(omega t) in the small-amplitude approximation: it stays at its
+place and sends back the half-range Maxwellian moving with its normal velocity
+u_n(t) = +U(t) (left wall) or -U(t) (right wall, seen in its own frame), normalised the same
+way, so that its discrete mass flux is zero at every t.
+
+Every wall runs inside a time step, on the device with a GPU backend: its constant arrays are
+made once per wall, grid and array namespace (:func:`_constants`), its emission never copies
+a device array to the host.
 """
 
 from __future__ import annotations
@@ -26,10 +36,14 @@ import math
 
 import attrs
 import numpy
+from scipy import special
 
 from granframe import abc as contracts
 from granframe import validators as check
 from granframe.space.transport import reflect, upwind_speeds
+
+#: the normal velocity in a wall's own frame is the lab velocity along +x times this
+_NORMAL_SIGN = {"left": 1.0, "right": -1.0}
 
 
 @attrs.frozen
@@ -38,11 +52,11 @@ class Periodic(contracts.Boundary):
 
     periodic = True
 
-    def ghosts(self, inside, grid, xp):
+    def ghosts(self, inside, grid, xp, *, t=0.0, side="left"):
         raise TypeError("Periodic: the ghost cells of a periodic interval are filled from the "
-                        "other end (granframe.space.transport.CellBlocks.exchange)")
+                        "other end (granframe.space.domain.Domain.exchange)")
 
-    def emit(self, incoming, grid, xp):
+    def emit(self, incoming, grid, xp, *, t=0.0, side="left"):
         raise TypeError("Periodic: a periodic interval has no wall to emit from")
 
 
@@ -51,11 +65,12 @@ class Specular(contracts.Boundary):
     """Specular reflection f(x_w, v) = f(x_w, R v), R: v_1 -> -v_1: a wall that conserves
     mass, momentum parallel to it and energy exactly (on the nodes, to round-off)."""
 
-    def ghosts(self, inside, grid, xp):
+    def ghosts(self, inside, grid, xp, *, t=0.0, side="left"):
         """The mirror images f(-x, R v) of the cells next to the wall (method of images)."""
         return reflect(inside, grid.dimension, xp)
 
-    def emit(self, incoming, grid, xp):
+    def emit(self, incoming, grid, xp, *, t=0.0, side="left"):
+        """f_in(R v): the same at every t and on both sides."""
         return reflect(incoming, grid.dimension, xp)
 
 
@@ -143,32 +158,196 @@ class Diffuse(contracts.Boundary):
             [-1 if j == i else 1 for j in range(d)]) for i in range(d))
         return xp.asarray(numpy.exp(-exponent / (2.0 * self.temperature)))
 
-    def _emission(self, grid, xp):
-        """M_w / sum c^+ M_w dv at the nodes of c^+ > 0, 0 elsewhere; and |c^-| dv."""
-        emission, arriving = _emission(self, grid)
-        return xp.asarray(emission), xp.asarray(arriving)
+    def _host_constants(self, grid):
+        """NumPy arrays: M_w / sum c^+ M_w dv at the nodes of c^+ > 0 (0 elsewhere), the
+        arriving weights |c^-| dv, and the mask c^+ > 0 (see :func:`_constants`)."""
+        positive, negative = upwind_speeds(grid, numpy)
+        leaving = positive > 0
+        m = self.maxwellian(grid, numpy) * leaving
+        m = m / float((positive * m).sum() * grid.cell_volume)
+        return m, -negative * grid.cell_volume, leaving
 
-    def ghosts(self, inside, grid, xp):
+    def ghosts(self, inside, grid, xp, *, t=0.0, side="left"):
         """The emission of each cell next to the wall from its own arriving values (the
         cells' values at c < 0 kept): a smooth extension for the reconstruction."""
-        return self.emit(inside, grid, xp)
+        return self.emit(inside, grid, xp, t=t, side=side)
 
-    def emit(self, incoming, grid, xp):
-        d = grid.dimension
-        emission, arriving = self._emission(grid, xp)
-        axes = tuple(range(incoming.ndim - d, incoming.ndim))
+    def emit(self, incoming, grid, xp, *, t=0.0, side="left"):
+        """The emission of the module notes; the same at every t and on both sides (the
+        wall velocity is tangential, which the reflection v_1 -> -v_1 keeps)."""
+        emission, arriving, leaving = _constants(self, grid, xp)
+        axes = tuple(range(incoming.ndim - grid.dimension, incoming.ndim))
         flux = (arriving * incoming).sum(axis=axes, keepdims=True)
-        positive, _ = upwind_speeds(grid, xp)
         out = self.accommodation * flux * emission
         if self.accommodation < 1.0:
-            out = out + (1.0 - self.accommodation) * reflect(incoming, d, xp)
-        return xp.where(positive > 0, out, incoming)
+            out = out + (1.0 - self.accommodation) * reflect(incoming, grid.dimension, xp)
+        return xp.where(leaving, out, incoming)
 
 
-@functools.lru_cache(maxsize=16)
-def _emission(wall: Diffuse, grid):
-    """:meth:`Diffuse._emission` as NumPy arrays, computed once per wall and grid."""
-    positive, negative = upwind_speeds(grid, numpy)
-    m = wall.maxwellian(grid, numpy) * (positive > 0)
-    m = m / float((positive * m).sum() * grid.cell_volume)
-    return m, numpy.broadcast_to(-negative * grid.cell_volume, grid.shape).copy()
+def _normal_sign(side) -> float:
+    """+1 for the left wall, -1 for the right one: the normal velocity in the wall's own
+    frame is the lab velocity along +x times this."""
+    try:
+        return _NORMAL_SIGN[side]
+    except (KeyError, TypeError):
+        check.reject("Vibrating", "side", side, "must be 'left' (the wall at x = 0) or "
+                     "'right' (the wall at x = ell)")
+
+
+def _half_range_flux_error(grid, temperature: float, u: float) -> float:
+    r"""Relative error of the grid's half-range flux of exp(-|v_1 - u|^2 / (2T)) against
+    its exact value, sum_v c^+ M dv_1 / int_{v_1 > 0} v_1 M dv_1 - 1 (the node -L counted as
+    +L at the speed c^+ = L/2). Both are scaled by exp(u^2 / (2T)), so that neither
+    underflows for u << -sqrt(T):
+
+    .. math:: \int_0^\infty v e^{-(v^2 - 2 v u)/(2T)} dv
+              = T \left(1 + \sqrt{\pi/2}\, s\, \mathrm{erfcx}(-s/\sqrt{2})\right),
+              \quad s = u/\sqrt{T}.
+    """
+    positive, _ = upwind_speeds(grid, numpy)
+    speed = numpy.abs(grid.points()).reshape(positive.shape)
+    discrete = float(numpy.sum(positive * numpy.exp(-(speed * speed - 2.0 * speed * u)
+                                                    / (2.0 * temperature)))) * grid.spacing
+    s = u / math.sqrt(temperature)
+    exact = temperature * (1.0 + math.sqrt(0.5 * math.pi) * s
+                           * float(special.erfcx(-s / math.sqrt(2.0))))
+    return discrete / exact - 1.0
+
+
+@attrs.frozen
+class Vibrating(contracts.Boundary):
+    r"""A fully diffuse wall at temperature T_w vibrating along x, in the small-amplitude
+    approximation.
+
+    In the lab frame the wall is at x_w + A sin(omega t) and moves with the velocity
+    U(t) = A omega cos(omega t) along +x. It stays at x_w (its displacement, small against
+    the mean free path and the cell, is dropped; its velocity is kept), and for
+    c^+ > 0 it sends back, in its own frame (the domain at x > 0),
+
+    .. math:: f_{out}(v) = \Phi\, \frac{M_{u}(v)}{\sum_v c^+ M_{u} \Delta v},\quad
+              \Phi = \sum_v |c^-| f_{in}(v) \Delta v,\quad
+              M_u(v) = e^{-(|v_1| - u)^2 / (2T_w)} e^{-|v_t|^2 / (2T_w)},
+
+    with u = u_n(t) = +U(t) for the left wall and -U(t) for the right one (the reflection
+    v_1 -> -v_1 that maps it onto a left wall reverses the normal), v_t = (v_2, ..., v_d),
+    and |v_1| the speed with which a node leaves the wall (the node -L leaves at +L, with
+    c^+ = L/2). The sum over the nodes of c^+ f_out Δv is Φ to round-off at every
+    t: no mass is lost or made. The energy it injects per period into a given incoming f
+    is :func:`granframe.space.exact.vibrating_wall_energy_per_period` (docs/space.md,
+    "Moving and vibrating walls"). Kinetic theories of vibrated granular gases use this
+    wall at a fixed place (e.g. V. Kumaran, J. Fluid Mech. 364 (1998) 163-185; the diffuse
+    emission: J. C. Maxwell, Phil. Trans. R. Soc. 170 (1879) 231-256).
+
+    Parameters
+    ----------
+    amplitude : float
+        A >= 0, the amplitude of the wall's displacement A sin(omega t) along +x.
+    frequency : float
+        omega > 0, the angular frequency; the period is 2 pi / omega.
+    temperature : float
+        T_w > 0, in granframe's temperature units (T = int |v-u|^2 f / (d rho)).
+    """
+
+    amplitude: float = attrs.field(converter=check.to_float, validator=check.real(0.0, math.inf))
+    frequency: float = attrs.field(converter=check.to_float,
+                                   validator=check.real(0.0, math.inf, lower_open=True))
+    temperature: float = attrs.field(default=1.0, converter=check.to_float,
+                                     validator=check.real(0.0, math.inf, lower_open=True))
+
+    @property
+    def period(self) -> float:
+        """2 pi / omega."""
+        return 2.0 * math.pi / self.frequency
+
+    @property
+    def speed(self) -> float:
+        """A omega, the largest wall speed."""
+        return self.amplitude * self.frequency
+
+    def normal_velocity(self, t: float = 0.0, side: str = "left") -> float:
+        """u_n(t) = A omega cos(omega t) for the left wall, -A omega cos(omega t) for the
+        right one: the wall's velocity along the normal into the domain."""
+        return _normal_sign(side) * self.speed * math.cos(self.frequency * t)
+
+    def check(self, grid) -> None:
+        """The wall Maxwellian must fit the grid at every wall velocity |u| <= A omega:
+        resolved by the nodes at rest, sqrt(T_w) >= h / 2 (as :class:`Diffuse`); below 1e-8
+        of its peak on the faces of the box at u = A omega, (L - A omega)^2 / (2 T_w) >=
+        ln 1e8; and resolved when the wall recedes fastest (u = -A omega), where the emission
+        falls from v_1 = 0 over T_w / (A omega) once A omega > sqrt(T_w): its discrete
+        half-range flux sum c^+ M_u dv_1 must be within 50 % of the exact one (46 % is the
+        error of a wall at rest with sqrt(T_w) = h/2)."""
+        h, L = grid.spacing, grid.half_width
+        if self.temperature < 0.25 * h * h:
+            check.reject("Vibrating", "temperature", self.temperature,
+                         f"must be >= h^2 / 4 = {0.25 * h * h:.4g} (a thermal speed sqrt(T_w) of "
+                         f"at least half the node spacing h = {h:.4g}): a colder wall "
+                         "Maxwellian falls on the nodes next to its centre and its discrete "
+                         "wall flux sum c^+ M_w dv is off by 46 % or more; refine the grid "
+                         "(n_modes) or warm the wall")
+        if math.exp(-L * L / (2.0 * self.temperature)) > 1e-8:
+            check.reject("Vibrating", "temperature", self.temperature,
+                         f"gives a wall Maxwellian that does not fit the velocity box "
+                         f"[-{L:g}, {L:g}]^{grid.dimension} (above 1e-8 of its peak on its "
+                         f"faces): lower it below {L * L / (2 * math.log(1e8)):.4g} or widen "
+                         "the grid (support_radius)")
+        gap = L - self.speed
+        if not (gap > 0 and math.exp(-gap * gap / (2.0 * self.temperature)) <= 1e-8):
+            largest = L - math.sqrt(2.0 * self.temperature * math.log(1e8))
+            check.reject("Vibrating", "amplitude", self.amplitude,
+                         f"with frequency {self.frequency:g} gives the wall speed A omega = "
+                         f"{self.speed:.4g}, at which the wall Maxwellian (T_w = "
+                         f"{self.temperature:g}) does not fit the velocity box [-{L:g}, {L:g}] "
+                         f"(above 1e-8 of its peak on its faces): A omega must be <= "
+                         f"{largest:.4g}; lower the amplitude or the frequency, or widen the "
+                         "grid (support_radius)")
+        error = _half_range_flux_error(grid, self.temperature, -self.speed)
+        if abs(error) > 0.5:
+            check.reject("Vibrating", "amplitude", self.amplitude,
+                         f"with frequency {self.frequency:g} gives the wall speed A omega = "
+                         f"{self.speed:.4g}, at which the receding wall's emission (falling "
+                         f"from v_1 = 0 over about T_w / (A omega) = "
+                         f"{self.temperature / self.speed:.3g}) is not resolved by the nodes "
+                         f"(h = {h:.4g}): its discrete half-range flux is off by "
+                         f"{100 * abs(error):.0f} % (at most 50 % allowed); lower the "
+                         "amplitude or the frequency, refine the grid (n_modes) or warm the "
+                         "wall")
+
+    def _host_constants(self, grid):
+        """NumPy arrays: the speed |v_1| with which each node leaves the wall, c^+ h, the mask
+        c^+ > 0 (shape (N, 1, ..., 1)), the tangential Maxwellian exp(-|v_t|^2 / (2T_w))
+        normalised to h^(d-1) sum = 1 (shape (1, N, ..., N)), and the arriving weights
+        |c^-| dv (see :func:`_constants`)."""
+        positive, negative = upwind_speeds(grid, numpy)
+        speed = numpy.abs(grid.points()).reshape(positive.shape)       # the node -L leaves at +L
+        tangential = numpy.exp(-sum(c * c for c in grid.mesh()[1:]) / (2.0 * self.temperature))
+        tangential = tangential / (tangential.sum() * grid.spacing ** (grid.dimension - 1))
+        return (speed, positive * grid.spacing, positive > 0, tangential,
+                -negative * grid.cell_volume)
+
+    def ghosts(self, inside, grid, xp, *, t=0.0, side="left"):
+        """The emission at time t of each cell next to the wall from its own arriving values
+        (the cells' values at c < 0 kept): a smooth extension for the reconstruction."""
+        return self.emit(inside, grid, xp, t=t, side=side)
+
+    def emit(self, incoming, grid, xp, *, t=0.0, side="left"):
+        """The emission of the class notes at time ``t`` (a Python float) on ``side``.
+
+        Only the factor exp(-(|v_1| - u_n(t))^2 / (2 T_w)) on the N nodes of v_1 and its
+        normalisation are computed per call, in ``xp`` from the cached node values; the
+        normalisation stays a device scalar."""
+        speed, weight, leaving, tangential, arriving = _constants(self, grid, xp)
+        u = self.normal_velocity(t, side)
+        normal = xp.exp((speed - u) ** 2 * (-0.5 / self.temperature)) * leaving
+        normal = normal / (weight * normal).sum()
+        axes = tuple(range(incoming.ndim - grid.dimension, incoming.ndim))
+        flux = (arriving * incoming).sum(axis=axes, keepdims=True)
+        return xp.where(leaving, flux * (normal * tangential), incoming)
+
+
+@functools.lru_cache(maxsize=32)
+def _constants(wall, grid, xp):
+    """``wall._host_constants(grid)`` as arrays of the namespace ``xp``, made once per wall,
+    grid and namespace: a wall called inside a time step on a GPU copies nothing from the
+    host after its first call."""
+    return tuple(xp.asarray(a) for a in wall._host_constants(grid))

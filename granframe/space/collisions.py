@@ -21,7 +21,7 @@ import numpy
 
 from granframe.backends import to_host
 from granframe.equations.homogeneous import HomogeneousBoltzmann
-from granframe.space.fields import maxwellians
+from granframe.space.fields import FieldMoments, maxwellians
 
 
 class CellCollisions(HomogeneousBoltzmann):
@@ -29,81 +29,74 @@ class CellCollisions(HomogeneousBoltzmann):
 
     The collision operator and the heat bath act on the whole batch of cells at once;
     the stiffness is the largest over the cells, and the BGK penalisation of the
-    penalised integrators is taken cell by cell (a rate and a Maxwellian per cell).
+    penalised integrators is taken cell by cell (a rate and a Maxwellian per cell), all
+    from the moments of :class:`~granframe.space.fields.FieldMoments` on the backend.
     """
 
-    def _cells(self, f):
-        """(f as cells x nodes, rho, momentum, temperature, energy density) per cell."""
-        grid, xp = self.operator.grid, self.operator.backend.xp
-        d = grid.dimension
-        flat = f.reshape((-1,) + tuple(grid.shape))
-        volume = grid.cell_volume
-        axes = tuple(range(1, d + 1))
-        rho = flat.sum(axis=axes) * volume
-        points = xp.asarray(grid.points())
-        momentum, second = [], 0.0
-        for i in range(d):
-            marginal = flat.sum(axis=tuple(a for a in axes if a != i + 1))
-            momentum.append((marginal * points).sum(axis=1) * volume)
-            second = second + (marginal * points * points).sum(axis=1) * volume
-        momentum = xp.stack(momentum, axis=1)
-        with numpy.errstate(divide="ignore", invalid="ignore"):
-            temperature = (second - (momentum * momentum).sum(axis=1) / rho) / (d * rho)
-        return flat, rho, momentum, temperature, 0.5 * second
+    def __init__(self, operator, heat_bath: float = 0.0, knudsen: float = 1.0,
+                 penalty: float = 2.0):
+        super().__init__(operator, heat_bath, knudsen, penalty)
+        grid = operator.grid
+        self.moments = FieldMoments(grid, 1.0, operator.backend.xp)
+
+    def frequencies(self, density, temperature, energy):
+        r""":meth:`HomogeneousBoltzmann.collision_frequency` of every cell at once, on the
+        arrays' device: nu_c = C int b dsigma rho_c <s(|g|)>(T_c) phi(E_c)
+        (:func:`~granframe.equations.homogeneous.collision_frequency`), with
+        :meth:`~granframe.abc.CollisionKernel.mean_speed_parts`."""
+        kernel, d = self.operator.kernel, self.operator.grid.dimension
+        speed = kernel.mean_speed_parts(d, temperature, self.operator.backend.xp)
+        return self._frequency_constant * density * speed * kernel.energy_factors(energy)
 
     def stiffness(self, f) -> dict:
         """The largest spectral radii over the cells (:meth:`HomogeneousBoltzmann.stiffness`
-        of each cell)."""
-        xp = self.operator.backend.xp
-        flat = f.reshape((-1,) + tuple(self.operator.grid.shape))
-        rates = {}
-        for cell in range(flat.shape[0]):
-            for part, rate in super().stiffness(xp.ascontiguousarray(flat[cell])).items():
-                rates[part] = max(rates.get(part, 0.0), rate)
-        return rates
+        of each cell, whose rates grow with rho phi(E): the cell where that is largest)."""
+        grid = self.operator.grid
+        flat = f.reshape((-1,) + tuple(grid.shape))
+        rho, _, _, energy = (to_host(a) for a in self.moments.primitives(flat, node="periodic"))
+        kernel = self.operator.kernel
+        weight = rho * (kernel.energy_factors(numpy.where(energy > 0, energy, 1.0))
+                        if kernel.energy_exponent else 1.0)
+        return super().stiffness(flat[int(numpy.argmax(weight))])
 
     def relaxation(self, f):
         r"""r (M[f] - f) per cell: rate r_c = penalty nu(rho_c, T_c)/eps and the grid
         Maxwellian of the cell's mass, momentum and temperature, scaled to its grid mass
         (:meth:`HomogeneousBoltzmann.relaxation`). Cells whose mass or temperature is not
-        positive and finite get r = 0 (explicit there)."""
+        positive and finite get r = 0 (explicit there). On the device, no transfer."""
         grid, xp = self.operator.grid, self.operator.backend.xp
         d = grid.dimension
-        flat, rho, momentum, temperature, energy = self._cells(f)
-        host = [to_host(a) for a in (rho, temperature, energy)]
-        valid = numpy.isfinite(host[0]) & (host[0] > 0) & numpy.isfinite(host[1]) & (host[1] > 0)
-        frequency = numpy.zeros_like(host[0])
-        for cell in numpy.flatnonzero(valid):
-            frequency[cell] = self.collision_frequency(float(host[0][cell]),
-                                                       float(host[1][cell]),
-                                                       float(host[2][cell]))
-        rate = self.penalty * frequency / self.knudsen
-        safe_rho = xp.where(xp.asarray(valid), rho, 1.0)
-        safe_t = xp.where(xp.asarray(valid), temperature, 1.0)
-        target = maxwellians(grid, safe_rho, momentum / safe_rho[:, None], safe_t, xp)
+        flat = f.reshape((-1,) + tuple(grid.shape))
+        rho, velocity, temperature, energy = self.moments.primitives(flat, node="periodic")
+        valid = xp.isfinite(rho) & (rho > 0) & xp.isfinite(temperature) & (temperature > 0)
+        safe_rho = xp.where(valid, rho, 1.0)
+        safe_t = xp.where(valid, temperature, 1.0)
+        safe_e = xp.where(valid & (energy > 0), energy, 1.0)
+        rate = xp.where(valid, self.penalty * self.frequencies(safe_rho, safe_t, safe_e), 0.0)
+        target = maxwellians(grid, safe_rho, xp.where(valid[:, None], velocity, 0.0), safe_t,
+                             xp, self.moments.points)
         shape = f.shape[:-d] + (1,) * d
-        return xp.asarray(rate).reshape(shape), target.reshape(f.shape)
+        return (rate * (1.0 / self.knudsen)).reshape(shape), target.reshape(f.shape)
 
 
 class SplitStep:
     """One Strang step T(dt/2) C(dt) T(dt/2) on a block array (see the module notes).
 
-    The object the run's :class:`~granframe.run.runner.Stepper` drives in place of a time
-    integrator: ``step(equation, t, array, dt)`` with ``equation`` the
-    :class:`CellCollisions`. ``integrator`` None: free transport only (a collisionless
-    gas), T(dt/2) T(dt/2).
+    The time integrator of a space problem: ``step(equation, t, array, dt)`` with
+    ``equation`` the :class:`CellCollisions`. ``integrator`` None: free transport only (a
+    collisionless gas), T(dt/2) T(dt/2). The walls see the time of each transport stage.
     """
 
     adaptive = False
 
-    def __init__(self, integrator, transport, blocks):
-        self.integrator, self.transport, self.blocks = integrator, transport, blocks
+    def __init__(self, integrator, transport):
+        self.integrator, self.transport = integrator, transport
 
     def step(self, equation, t, array, dt):
         half = 0.5 * dt
-        self.transport.advance(array, half)
+        self.transport.advance(array, half, t)
         if self.integrator is not None:      # None: a collisionless gas
-            inner = self.blocks.interior(array)
+            inner = self.transport.domain.interior(array)
             inner[...] = self.integrator.step(equation, t, inner, dt)
-        self.transport.advance(array, half)
+        self.transport.advance(array, half, t + half)
         return array

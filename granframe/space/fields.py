@@ -1,21 +1,29 @@
-r"""The hydrodynamic fields of every cell in one pass, and Maxwellians of given fields.
+r"""The reductions of a space run: the moments of every cell in one pass on the backend.
 
 For f of shape (cells, *grid.shape) the raw moments of each cell are one matrix product
-f (cells x N^d) times the basis (N^d x m) of 1, v_i, v_i v_j (i <= j), v_i |v|^2 weighted
-by the cell volume of the velocity grid; from them, with rho u = J,
+f (cells x N^d) times the basis (N^d x m) of 1, v_i, v_i v_j (i <= j), v_i |v|^2 and the
+indicator of the node v_1 = -L, weighted by the cell volume of the velocity grid; from them,
+with rho u = J,
 
 .. math:: P_{ij} = M_{ij} - \rho u_i u_j,\qquad T = \frac{\operatorname{tr} P}{d\,\rho},\qquad
           q_i = \tfrac12\bigl(M^{(3)}_i - 2 u_j M_{ij} - u_i \operatorname{tr} M
           + 2 \rho u_i |u|^2\bigr),
 
 the central moments of granframe's conventions (the homogeneous ones of
-:meth:`~granframe.velocity.grid.VelocityGrid.moments`, cell by cell), with one difference:
-the node v_1 = -L, which the periodic grid shares between -L and +L and whose content the
-transport moves half each way (:func:`~granframe.space.transport.upwind_speeds`), counts
-as its two halves: v_1 = 0 in the odd powers of v_1 (momentum, P_1j for j != 1, q_i), and
-v_1^2 = L^2 in the even ones. The fields are then those of what the transport carries;
-as -L (the homogeneous convention) that node's content, which the collision operator's
-ringing puts there next to walls, would show as a bulk velocity and a heat flux.
+:meth:`~granframe.velocity.grid.VelocityGrid.moments`, cell by cell), with one convention
+for the node v_1 = -L, which the periodic grid shares between -L and +L and whose content
+the transport moves half each way (:func:`~granframe.space.transport.upwind_speeds`): it
+counts as its two halves, v_1 = 0 in the odd powers of v_1 (momentum, P_1j for j != 1,
+q_i) and v_1^2 = L^2 in the even ones. The fields are then those of what the transport
+carries; as -L (the homogeneous convention) that node's content, which the collision
+operator's ringing puts there next to walls, would show as a bulk velocity and a heat flux.
+The BGK penalisation alone takes the momentum with the node as -L, in which the collision
+operator conserves it; the last basis column, the node's content, turns one into the other.
+
+:class:`FieldMoments` is the one place a space run takes moments: the recorded fields and
+totals (with the wall totals, one device->host transfer per step), the density, velocity,
+temperature and energy of every cell on the device for the BGK penalisation, and the edge
+shares of every cell at output points.
 """
 
 from __future__ import annotations
@@ -28,17 +36,20 @@ from granframe.backends import to_host
 FIELDS = {"density": ((), ()), "velocity": (("d",), ("axis",)), "temperature": ((), ()),
           "pressure_tensor": (("d", "d"), ("axis", "axis2")), "heat_flux": (("d",), ("axis",))}
 
+#: the totals over all cells recorded after every step
+TOTALS = ("mass", "kinetic_energy", "min_f", "negative_mass_fraction")
+
 
 class FieldMoments:
-    """The fields of every cell of f (:data:`FIELDS`), totals and extremes, in one pass.
+    """The reductions of every cell of f (see the module notes), on the backend.
 
     Parameters
     ----------
     grid : VelocityGrid
     dx : float
-        The cell width (the totals are int int f dx dv).
+        The cell width (the totals are sum_j int f dv dx).
     xp : module
-        The array namespace of f.
+        The array namespace of f; the basis and the node arrays are put there once.
     """
 
     def __init__(self, grid, dx: float, xp=numpy):
@@ -46,36 +57,76 @@ class FieldMoments:
         self.grid, self.dx, self.xp, self.d = grid, float(dx), xp, d
         mesh = [m.reshape(-1) for m in numpy.meshgrid(*[grid.points()] * d, indexing="ij")]
         squared = sum(m * m for m in mesh)
-        odd = mesh[0].copy()
-        odd[mesh[0] == -grid.half_width] = 0.0        # the node -L: half at -L, half at +L
+        edge = mesh[0] == -grid.half_width            # the node -L: half at -L, half at +L
+        odd = numpy.where(edge, 0.0, mesh[0])
         mesh = [odd] + mesh[1:]
         self.pairs = [(i, j) for i in range(d) for j in range(i, d)]
         columns = ([numpy.ones_like(odd)] + mesh
                    + [squared - sum(m * m for m in mesh[1:]) if (i, j) == (0, 0)
                       else mesh[i] * mesh[j] for i, j in self.pairs]
-                   + [m * squared for m in mesh])
+                   + [m * squared for m in mesh] + [edge.astype(float)])
         self.basis = xp.asarray(numpy.stack(columns, axis=1) * grid.cell_volume)
+        #: the nodes v (d, N^d) with v_1 = -L at the node -L, and |v|^2 (N^d), for the
+        #: edge shares (where the collision operator sees that node)
+        self.nodes = xp.asarray(numpy.stack([numpy.where(edge, -grid.half_width, odd)]
+                                            + mesh[1:]))
+        self.squared = xp.asarray(squared)
+        #: the 1-D nodes, for the Maxwellians of :func:`maxwellians`
+        self.points = xp.asarray(grid.points())
+        self._diagonal = [1 + d + self.pairs.index((i, i)) for i in range(d)]
 
-    def __call__(self, f) -> dict:
-        """Fields (NumPy arrays over cells) and totals of f (cells, *grid.shape).
+    def raw(self, f):
+        """The raw moments (cells, m) of f (cells, *grid.shape): one matrix product."""
+        return f.reshape(f.shape[0], -1) @ self.basis
 
-        Returns density (cells), velocity (cells, d), temperature (cells),
-        pressure_tensor (cells, d, d), heat_flux (cells, d), and the scalars mass
-        (sum rho dx), kinetic_energy (sum int |v|^2/2 f dv dx), min_f and
-        negative_mass_fraction (int max(-f, 0) / int |f| over all cells).
+    def primitives(self, f, node: str = "halves"):
+        """rho, u (cells, d), T and the kinetic energy density int |v|^2/2 f dv of every cell
+        of f, on the device (no transfer).
+
+        ``node`` "halves": the node -L as its two halves (the fields' convention);
+        "periodic": as -L, the periodic grid's own convention, in which the collision
+        operator conserves momentum (:meth:`~granframe.velocity.grid.VelocityGrid.momentum`;
+        the BGK penalisation takes these, so that it conserves what Q conserves). Both come
+        from the same raw moments: the last column is the content of the node -L.
         """
-        xp, d = self.xp, self.d
-        flat = f.reshape(f.shape[0], -1)
-        raw = to_host(flat @ self.basis)
-        negative = float(to_host(xp.maximum(-flat, 0.0).sum()))
-        absolute = float(to_host(xp.abs(flat).sum()))
-        minimum = float(to_host(flat.min()))
+        d = self.d
+        raw = self.raw(f)
         rho = raw[:, 0]
         momentum = raw[:, 1:1 + d]
-        second = numpy.zeros((len(rho), d, d))
+        if node == "periodic":
+            shift = -self.grid.half_width * raw[:, -1]
+            momentum = self.xp.concatenate([(momentum[:, 0] + shift)[:, None],
+                                            momentum[:, 1:]], axis=1)
+        trace = raw[:, self._diagonal].sum(axis=1)
+        with numpy.errstate(divide="ignore", invalid="ignore"):
+            velocity = momentum / rho[:, None]
+            temperature = (trace - (momentum * momentum).sum(axis=1) / rho) / (d * rho)
+        return rho, velocity, temperature, 0.5 * trace
+
+    def packed(self, f, extra=None):
+        """The raw moments, min f, int max(-f, 0), int |f| and ``extra`` (a device array of
+        further values, e.g. the wall totals) as one device vector: what one transfer takes
+        to the host (:meth:`unpack`)."""
+        xp = self.xp
+        flat = f.reshape(f.shape[0], -1)
+        parts = [self.raw(f).reshape(-1),
+                 xp.stack([flat.min(), xp.maximum(-flat, 0.0).sum(), xp.abs(flat).sum()])]
+        if extra is not None:
+            parts.append(extra.reshape(-1))
+        return xp.concatenate(parts)
+
+    def unpack(self, vector, cells: int) -> dict:
+        """The fields and totals (:data:`FIELDS`, :data:`TOTALS`) from :meth:`packed`'s vector
+        on the host; the values beyond them as ``extra``."""
+        d, m = self.d, self.basis.shape[1]
+        raw = vector[:cells * m].reshape(cells, m)
+        minimum, negative, absolute = vector[cells * m:cells * m + 3]
+        rho = raw[:, 0]
+        momentum = raw[:, 1:1 + d]
+        second = numpy.zeros((cells, d, d))
         for k, (i, j) in enumerate(self.pairs):
             second[:, i, j] = second[:, j, i] = raw[:, 1 + d + k]
-        third = raw[:, 1 + d + len(self.pairs):]
+        third = raw[:, 1 + d + len(self.pairs):-1]
         with numpy.errstate(divide="ignore", invalid="ignore"):
             u = momentum / rho[:, None]
             pressure = second - rho[:, None, None] * u[:, :, None] * u[:, None, :]
@@ -88,16 +139,54 @@ class FieldMoments:
                 "pressure_tensor": pressure, "heat_flux": heat,
                 "mass": float(rho.sum() * self.dx),
                 "kinetic_energy": float(0.5 * trace.sum() * self.dx),
-                "min_f": minimum,
-                "negative_mass_fraction": negative / absolute if absolute > 0 else 0.0}
+                "min_f": float(minimum),
+                "negative_mass_fraction": float(negative / absolute) if absolute > 0 else 0.0,
+                "extra": vector[cells * m + 3:]}
+
+    def __call__(self, f) -> dict:
+        """Fields (NumPy arrays over cells) and totals of f (cells, *grid.shape), in one
+        device->host transfer.
+
+        Returns density (cells), velocity (cells, d), temperature (cells),
+        pressure_tensor (cells, d, d), heat_flux (cells, d), and the scalars mass
+        (sum rho dx), kinetic_energy (sum int |v|^2/2 f dv dx), min_f and
+        negative_mass_fraction (int max(-f, 0) / int |f| over all cells).
+        """
+        fields = self.unpack(to_host(self.packed(f)), f.shape[0])
+        del fields["extra"]
+        return fields
+
+    def edge_shares(self, f, velocity, radius: float):
+        r"""The shares of mass and energy of each cell of f beyond ``radius`` about its
+        velocity u_c (``velocity``, (cells, d) on the device), as (cells, 2) on the device:
+
+        .. math:: \frac{\sum_{|v_j - u_c| > r} f_{c,j}}{\sum_j f_{c,j}}, \qquad
+                  \frac{\sum_{|v_j - u_c| > r} |v_j - u_c|^2 f_{c,j}}
+                  {\sum_j |v_j - u_c|^2 f_{c,j}},
+
+        :func:`granframe.run.monitors.edge_shares` for every cell at once, with the node
+        -L at -L, where the collision operator meets its periodic images. NaN where a
+        denominator is not positive.
+        """
+        xp = self.xp
+        flat = f.reshape(f.shape[0], -1)
+        distance = (self.squared[None, :] - 2.0 * (velocity @ self.nodes)
+                    + (velocity * velocity).sum(axis=1)[:, None])
+        beyond = distance > float(radius) ** 2
+        weighted = flat * distance
+        totals = xp.stack([flat.sum(axis=1), weighted.sum(axis=1)], axis=1)
+        outside = xp.stack([(flat * beyond).sum(axis=1), (weighted * beyond).sum(axis=1)],
+                           axis=1)
+        with numpy.errstate(divide="ignore", invalid="ignore"):
+            return xp.where(totals > 0.0, outside / totals, xp.nan)
 
 
-def maxwellians(grid, density, velocity, temperature, xp=numpy):
+def maxwellians(grid, density, velocity, temperature, xp=numpy, points=None):
     """rho (2 pi T)^{-d/2} exp(-|v - u|^2 / (2T)) for each cell, (cells, *grid.shape),
     each scaled to have exactly the grid mass rho (``density``, ``velocity`` (cells, d),
-    ``temperature`` arrays in ``xp``)."""
+    ``temperature`` arrays in ``xp``; ``points``: the 1-D nodes already in ``xp``)."""
     d = grid.dimension
-    points = xp.asarray(grid.points())
+    points = xp.asarray(grid.points()) if points is None else points
     cells = density.shape[0]
     result = xp.ones((cells,) + tuple(grid.shape))
     for i in range(d):

@@ -18,8 +18,8 @@ A fixed step above a limit would amplify the stiff modes from round-off on
 and blow up a few hundred steps later; the runner refuses it up front, with
 the limit, the rate behind it and the schemes that do not have it.
 
-:func:`time_step_limit` gives the same limit from a description alone, before anything of
-the operator is built: every radius but the drift's reads only the grid, the kernel, the
+:func:`granframe.run.problems.time_step_limit` gives the same limit from a description
+alone, before anything of the operator is built (on an :class:`OperatorOutline`): every radius but the drift's reads only the grid, the kernel, the
 restitution law and the moments of f0, and the drift's needs the cooling rate a_0, whose
 collision integral, the energy dissipation D(f0), is taken in closed form from the weak
 form of Q (:meth:`~granframe.equations.conservative.ConservativeCorrection.dissipation`).
@@ -130,71 +130,11 @@ class OperatorOutline(CollisionOperator):
     and backend, which is all that the stiffness estimates (:meth:`Equation.stiffness`) and
     the closed-form energy dissipation
     (:meth:`~granframe.equations.conservative.ConservativeCorrection.dissipation`) read.
-    :func:`time_step_limit` builds the equation on it; it cannot be evaluated."""
+    :func:`granframe.run.problems.time_step_limit` builds the problem on it; it cannot be
+    evaluated."""
 
     name = "operator outline"
 
     def __call__(self, f):
         raise TypeError("an OperatorOutline has no precomputation and cannot evaluate Q; "
                         "build the run's collision operator (Simulation)")
-
-
-def time_step_limit(description) -> StepLimit | None:
-    """The explicit step limit of a run, from its description alone (no operator built).
-
-    The same :class:`StepLimit` that :class:`~granframe.run.runner.Simulation` checks
-    (:func:`check_time_step`): the radii of the heat bath, the collisions and the energy
-    dissipation are computed by the same code, from f0 sampled and projected as the runner
-    does; a rescaled run's drift radius takes its cooling rate a_0 from the energy
-    dissipation D(f0) in closed form
-    (:meth:`~granframe.equations.conservative.ConservativeCorrection.dissipation`, on an
-    :class:`OperatorOutline`) in place of one evaluation of Q. With ``conservative`` set,
-    the runner's operator dissipates D(f) itself and the two limits agree to round-off;
-    otherwise they differ by the operator's error in D: at 2D N = 48, S = 5 with the
-    direct method by 7e-8 for Maxwell molecules (T0 = 1) and 5e-6 for hard spheres (two
-    Gaussians of T = 0.6 at u = (+-1, 0)), at 2D N = 32 with fast_spectral on 16 x 8
-    points by 1e-5 (Maxwell, T0 = 8, S = 10). None when the equation has no part the scheme
-    treats explicitly. A space run's limit is that of the collisions in its stiffest cell
-    (:class:`~granframe.space.collisions.CellCollisions`); the transport's CFL limit is
-    :meth:`~granframe.run.description.Space.transport_limit`. At 3D N = 32 it takes a few tenths of a second, where building the run's
-    operator takes seconds (tests/test_frictions.py).
-
-    Examples
-    --------
-    >>> import granframe
-    >>> from granframe.run.description import RunDescription
-    >>> d = RunDescription.from_toml(open("heated.toml").read())  # doctest: +SKIP
-    >>> limit = granframe.time_step_limit(d)                                # doctest: +SKIP
-    >>> limit.limit, limit.dominant, limit.rates                            # doctest: +SKIP
-    """
-    from granframe.backends import NumpyBackend
-    from granframe.equations.conservative import ConservativeCorrection
-    from granframe.equations.homogeneous import HomogeneousBoltzmann
-    from granframe.equations.rescaled import RescaledBoltzmann
-    from granframe.run.description import RunDescription
-
-    if not isinstance(description, RunDescription):
-        check.reject("time_step_limit", "description", description,
-                     "must be a RunDescription", error=TypeError)
-    d = description
-    grid = d.grid
-    outline = OperatorOutline(grid, d.build("kernel"), d.build("restitution"),
-                              NumpyBackend(threads=1))
-    if d.space is not None:         # the collisions of every cell (docs/space.md)
-        import numpy
-
-        from granframe.space.collisions import CellCollisions
-        from granframe.space.initial import initial_cells
-
-        if not d.space.collisions:
-            return None
-        f0 = numpy.stack([grid.project(f) for f in initial_cells(d)[0]])
-        return step_limit(d.build("integrator"), CellCollisions(outline, d.heat_bath,
-                                                                d.knudsen), f0)
-    f0 = grid.project(d.build("initial").sample(grid))
-    if d.rescaled:
-        dissipation = float(ConservativeCorrection(outline).dissipation(f0))
-        equation = RescaledBoltzmann(outline, f0, d.knudsen, dissipation=dissipation)
-    else:
-        equation = HomogeneousBoltzmann(outline, d.heat_bath, d.knudsen)
-    return step_limit(d.build("integrator"), equation, f0)

@@ -530,7 +530,8 @@ def _sweep(args) -> int:
 def _limits(args) -> int:
     from granframe.registry import default_registries
     from granframe.run.runner import load_study
-    from granframe.stepping.stability import PART_NAMES, time_step_limit
+    from granframe.run.problems import time_step_limit
+    from granframe.stepping.stability import PART_NAMES
 
     runs = load_study(args.source, quick=args.quick).runs
     if args.set:

@@ -22,6 +22,7 @@ import attrs
 import numpy
 
 from granframe import validators as check
+from granframe.abc import Grid
 from granframe.backends import to_host
 from granframe.errors import AliasingWarning
 
@@ -35,7 +36,7 @@ SCALE_RANGE = (1e-50, 1e50)
 
 
 @attrs.frozen
-class VelocityGrid:
+class VelocityGrid(Grid):
     """Uniform periodic velocity grid of ``n_modes**dimension`` points.
 
     Parameters

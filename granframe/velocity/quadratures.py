@@ -22,6 +22,9 @@ import scipy.special
 
 from granframe import validators as check
 from granframe.abc import Quadrature, SurfaceQuadrature
+from granframe.rules import circle_rule, gauss_legendre, legendre
+# defined in the core, whose contracts need them too; the rules' users import them here
+from granframe.rules import antipodal_pairs, sphere_area  # noqa: F401
 
 #: Largest Gauss-Legendre rule: numpy's ``leggauss`` solves a dense n x n eigenproblem
 #: (4096: 128 MiB, a few seconds), and 4096 nodes resolve radial oscillations far beyond
@@ -57,16 +60,7 @@ class GaussLegendre(Quadrature):
         """Nodes and weights on [0, radius]: rho_i = R (x_i + 1)/2, w_i = R w_i^GL / 2."""
         if not check.is_real(radius) or not (0.0 < float(radius) < math.inf):
             check.reject("GaussLegendre", "radius", radius, "must be a positive finite number")
-        x, w = _gauss_legendre(self.n_points)
-        return 0.5 * radius * (x + 1.0), 0.5 * radius * w
-
-
-@functools.lru_cache(maxsize=32)
-def _gauss_legendre(n: int):
-    x, w = numpy.polynomial.legendre.leggauss(n)
-    x.setflags(write=False)
-    w.setflags(write=False)
-    return x, w
+        return gauss_legendre(self.n_points, radius)
 
 
 @attrs.frozen
@@ -90,9 +84,7 @@ class CircleTrapezoid(SurfaceQuadrature):
         return self.n_points - 1
 
     def _rule(self):
-        phi = self.phase + 2.0 * math.pi * numpy.arange(self.n_points) / self.n_points
-        return (numpy.stack([numpy.cos(phi), numpy.sin(phi)], axis=1),
-                numpy.full(self.n_points, 2.0 * math.pi / self.n_points))
+        return circle_rule(self.n_points, self.phase)
 
 
 @attrs.frozen
@@ -156,57 +148,12 @@ class SphereProduct(SurfaceQuadrature):
 
     def _rule(self):
         n = self.n_polar
-        z, wz = _gauss_legendre(n)
+        z, wz = legendre(n)
         phi = math.pi * numpy.arange(2 * n) / n
         s = numpy.sqrt(1.0 - z * z)
         nodes = numpy.stack([numpy.outer(s, numpy.cos(phi)), numpy.outer(s, numpy.sin(phi)),
                              numpy.outer(z, numpy.ones_like(phi))], axis=-1).reshape(-1, 3)
         return nodes, numpy.repeat(wz * math.pi / n, 2 * n)
-
-
-def antipodal_pairs(nodes, weights):
-    """Group a rule's directions into pairs (ghat, -ghat).
-
-    Returns representative directions (P, d) and the weights of ghat and of
-    -ghat (zero when -ghat is not a node). The fast spectral method needs one
-    transform per pair, so antipodal rules halve its work. Node i, in order, is a
-    representative unless it was paired before; its partner is the node closest to -ghat_i
-    when that matches -ghat_i to 1e-12 (``numpy.isclose``), found for all nodes at once
-    from |ghat_i + ghat_j|^2 in blocks (Lebedev 131, 5810 nodes: about 1 s), else by a scan of
-    the nodes not yet paired.
-    """
-    nodes = numpy.asarray(nodes, dtype=float)
-    weights = numpy.asarray(weights, dtype=float)
-    count = len(weights)
-    squares = numpy.einsum("ij,ij->i", nodes, nodes)
-    closest = numpy.empty(count, dtype=int)
-    for start in range(0, count, 512):
-        block = slice(start, min(start + 512, count))
-        gap = squares[block, None] + squares[None, :] + 2.0 * (nodes[block] @ nodes.T)
-        closest[block] = numpy.argmin(gap, axis=1)
-    paired = numpy.zeros(count, dtype=bool)
-    reps, w_plus, w_minus = [], [], []
-    for i in range(count):
-        if paired[i]:
-            continue
-        paired[i] = True
-        j = int(closest[i])
-        if paired[j] or not numpy.allclose(nodes[j], -nodes[i], atol=1e-12):
-            j = next((k for k in range(i + 1, count) if not paired[k]
-                      and numpy.allclose(nodes[k], -nodes[i], atol=1e-12)), None)
-        reps.append(nodes[i])
-        w_plus.append(weights[i])
-        if j is None:
-            w_minus.append(0.0)
-        else:
-            paired[j] = True
-            w_minus.append(weights[j])
-    return numpy.array(reps), numpy.array(w_plus), numpy.array(w_minus)
-
-
-def sphere_area(dimension: int) -> float:
-    """|S^{d-1}| = 2 pi^{d/2} / Gamma(d/2)."""
-    return 2.0 * math.pi ** (dimension / 2) / math.gamma(dimension / 2)
 
 
 def monomial_sphere_integral(exponents) -> float:

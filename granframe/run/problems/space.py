@@ -1,0 +1,197 @@
+"""The space problem d_t f + v_1 d_x f = Q(f, f)/eps (+ tau Delta_v f) on [0, ell].
+
+:class:`SpaceProblem` is what a description with a ``space`` section runs
+(docs/space.md):
+
+- the state is the block array of a :class:`~granframe.space.domain.Domain` (the owned
+  cells, each block with its ghost cells), stepped by
+  :class:`~granframe.space.collisions.SplitStep` (Strang: transport, collisions on all
+  cells in one batched call per stage, transport);
+- after every step the fields of every cell, the totals, and the mass and energy that
+  entered through each wall over the step are recorded (:func:`space_layout`), all from
+  one device vector (:class:`~granframe.space.fields.FieldMoments`) and one transfer;
+- a snapshot is f(x, v) of every cell, chunked by block;
+- at each output point the accuracy monitors are the shares of mass and energy beyond the
+  edge radius in the worst cell (:class:`~granframe.run.monitors.CellEdgeMonitors`),
+  computed for every cell at once on the backend.
+"""
+
+from __future__ import annotations
+
+import numpy
+
+from granframe.abc import Problem
+from granframe.backends import NumpyBackend, to_host
+from granframe.memory import check_run_memory
+from granframe.model.initial import check_fits, check_projection
+from granframe.run.monitors import CellEdgeMonitors
+from granframe.run.problems.parts import build_operator, check_step
+from granframe.run.storage import STEP_RECORDS, Layout, RecordArray
+from granframe.space.collisions import CellCollisions, SplitStep
+from granframe.space.domain import Domain
+from granframe.space.fields import FIELDS, TOTALS, FieldMoments
+from granframe.space.initial import initial_cells
+from granframe.space.transport import Transport
+from granframe.stepping.stability import OperatorOutline, step_limit
+from granframe.validators import reject
+
+#: what entered the interval through each wall over each step (mass, energy)
+WALL_RECORDS = ("wall_mass", "wall_energy")
+
+
+def space_layout(grid, domain: Domain) -> Layout:
+    """The store of a space run: f (time, x, v1, ..., vd) chunked by snapshot and block,
+    the coordinates v1 ... vd and x (the cell centres), and after every step the totals,
+    the fields (step_time, x, ...) chunked by block along x, and the wall records
+    (step_time, wall)."""
+    d = grid.dimension
+    axes = tuple(f"v{i + 1}" for i in range(d))
+    cells, block = domain.cells, domain.block_cells
+    chunk = max(1, 4096 // block)
+    fields = tuple(RecordArray(name, (cells,) + tuple(d if c == "d" else c for c in shape),
+                               ("x",) + dims, chunk=chunk, cells_chunk=block)
+                   for name, (shape, dims) in FIELDS.items())
+    walls = tuple(RecordArray(name, (2,), ("wall",)) for name in WALL_RECORDS)
+    points = grid.points()
+    return Layout(tuple((name, points, (name,)) for name in axes)
+                  + (("x", domain.centres(), ("x",)),),
+                  (cells,) + tuple(grid.shape), (block,) + tuple(grid.shape),
+                  ("x",) + axes,
+                  STEP_RECORDS + tuple(RecordArray(n) for n in TOTALS) + fields + walls,
+                  space={"cells": cells, "length": domain.length, "block_cells": block})
+
+
+def _cell(condition, mass):
+    """One cell of ``condition`` for :func:`check_fits`: its intended mass, under the
+    condition's name (which the messages show)."""
+    return type(type(condition).__name__, (), {"intended_mass": mass})()
+
+
+class SpaceProblem(Problem):
+    """A space run, built once from a description with a ``space`` section
+    (:class:`granframe.abc.Problem`; see the module notes).
+
+    f0 is sampled as cell averages (:mod:`granframe.space.initial`; a space-homogeneous
+    condition is uniform in x), checked in every cell against the grid (non-negative,
+    finite, inside the box, its intended mass) and projected cell by cell onto the
+    Nyquist-free modes, all before anything is written. With ``outline`` the operator is
+    an :class:`~granframe.stepping.stability.OperatorOutline` (nothing precomputed, on
+    NumPy), which is all that :meth:`step_limit` reads; f0 is then not checked.
+    """
+
+    def __init__(self, description, outline: bool = False):
+        if getattr(description, "space", None) is None:
+            reject("SpaceProblem", "description", description, "must have a space section",
+                   error=TypeError)
+        self.description = d = description
+        self.grid = grid = d.grid
+        space = d.space
+        parts = d.build("space")
+        self.reconstruction, self.left, self.right = (parts["reconstruction"], parts["left"],
+                                                      parts["right"])
+        collide = space.collisions
+        if outline:
+            self.backend = NumpyBackend(threads=1)
+            self.operator = OperatorOutline(grid, d.build("kernel"), d.build("restitution"),
+                                            self.backend) if collide else None
+        else:
+            self.backend = d.build("backend")
+            check_run_memory(d, self.backend)
+            self.operator = build_operator(d, self.backend) if collide else None
+        xp = self.backend.xp
+        self.collision_integrator = d.build("integrator") if collide else None
+        ghost = self.reconstruction.ghost
+        self.domain = Domain(space.cells, space.length, space.blocks(ghost), ghost, grid, xp)
+        self.transport = Transport(self.domain, self.reconstruction, self.left, self.right)
+        self.projection = None
+        self.f0 = self._initial(check=not outline)
+        self.equation = (CellCollisions(self.operator, d.heat_bath, d.knudsen) if collide
+                         else None)
+        self.integrator = SplitStep(self.collision_integrator, self.transport)
+        self.fields = FieldMoments(grid, self.domain.dx, xp)
+
+    def _initial(self, check: bool):
+        """f0 as cell averages (cells, *grid.shape), checked and projected cell by cell.
+
+        Sets :attr:`projection`, the moments before and after the Nyquist projection of
+        the cell they change most (:func:`~granframe.model.initial.check_projection`, which
+        refuses a cell the grid does not resolve).
+        """
+        d, grid = self.description, self.grid
+        sampled, masses = initial_cells(d)
+        if not check:
+            return numpy.stack([grid.project(f) for f in sampled])
+        initial = d.build("initial")
+        edges = self.domain.edges()
+        projected, worst = [], -1.0
+        for index, (f, mass) in enumerate(zip(sampled, masses)):
+            cell = _cell(initial, mass)
+            try:
+                check_fits(grid, f, cell, d.health.edge_tolerance,
+                           d.health.initial_mass_tolerance)
+                projected.append(grid.project(f))
+                moments = check_projection(grid, f, projected[-1], cell,
+                                           d.health.projection_tolerance,
+                                           d.health.projection_kurtosis_tolerance)
+            except ValueError as exc:
+                raise ValueError(f"{exc} (in cell {index} of {d.space.cells}, x = "
+                                 f"{0.5 * (edges[index] + edges[index + 1]):.6g})") from None
+            change = max(abs(m["after"] / m["before"] - 1.0) for m in moments.values())
+            if change > worst:
+                worst, self.projection = change, moments
+        return numpy.stack(projected)
+
+    rescaling = None
+
+    def layout(self):
+        return space_layout(self.grid, self.domain)
+
+    @property
+    def record_names(self) -> tuple:
+        return TOTALS + tuple(FIELDS) + WALL_RECORDS
+
+    def state(self, f_host):
+        return self.domain.from_cells(self.backend.asarray(f_host))
+
+    def snapshot(self, state):
+        return self.backend.to_numpy(self.domain.to_cells(state))
+
+    def record(self, state) -> dict:
+        """The fields of every cell, the totals and the wall totals since the last record,
+        from one device vector (:meth:`FieldMoments.packed`): one device->host transfer."""
+        cells = self.domain.to_cells(state)
+        walls = self.transport.take_wall_totals()
+        record = self.fields.unpack(to_host(self.fields.packed(cells, walls)), len(cells))
+        extra = record.pop("extra").reshape(2, 2)
+        record["wall_mass"], record["wall_energy"] = extra[:, 0], extra[:, 1]
+        return record
+
+    def monitors(self, store) -> CellEdgeMonitors:
+        return CellEdgeMonitors(self.description, store.progress.get("accuracy"))
+
+    def report(self, state, record, monitors):
+        """The edge shares of every cell about its own velocity (one pass over f on the
+        backend, one transfer), the largest into the monitors; no resolution report."""
+        shares = None
+        if monitors.radius > 0.0:
+            cells = self.domain.to_cells(state.f)
+            velocity = self.fields.primitives(cells)[1]
+            shares = to_host(self.fields.edge_shares(cells, velocity, monitors.radius))
+        return None, monitors.update(monitors.shape(shares), state.step, state.t)
+
+    def progress_text(self, record, mass0) -> str:
+        t = record["temperature"]
+        return (f"T in [{numpy.nanmin(t):.4g}, {numpy.nanmax(t):.4g}], mass drift "
+                f"{record['mass'] / mass0 - 1:+.1e}")
+
+    def step_limit(self):
+        """The collisions' explicit limit in the stiffest cell (None for a collisionless
+        gas); the transport's CFL limit is
+        :meth:`~granframe.run.description.Space.transport_limit`."""
+        if self.equation is None:
+            return None
+        return step_limit(self.collision_integrator, self.equation, self.f0)
+
+    def check_step(self) -> None:
+        if self.equation is not None:
+            check_step(self.description, self.collision_integrator, self.equation, self.f0)

@@ -1,0 +1,161 @@
+r"""The cells of [0, ell], the part of them this process owns, and their ghost cells.
+
+A :class:`Domain` is to the space discretisation what PETSc's DMDA is to a structured grid
+(S. Balay et al., PETSc users manual, "DMDA"): it knows the global cells and their edges,
+the range of cells this process owns (``start`` to ``stop``, whole blocks), the ghost width
+of the reconstruction and which global boundaries the owned range touches. Numerics see
+blocks of owned cells with their ghosts and never ask who their neighbours are.
+
+The owned cells are held as contiguous blocks of ``block_cells`` cells, each with its own
+``ghost`` ghost cells on either side: an array of shape
+(blocks, block_cells + 2 ghost, *grid.shape). :meth:`Domain.exchange` is the one place that
+fills ghost cells: between the owned blocks from each other, at a global wall from the
+wall's :meth:`~granframe.abc.Boundary.ghosts`, at the two ends of a periodic interval from
+each other when this process owns both, and at an end of the owned range inside the
+interval (or a periodic end owned elsewhere) from the process next to it, through
+:attr:`Domain.neighbours` (docs/space.md, "Blocks and their distribution"). With one
+process the domain owns every cell and touches both ends.
+"""
+
+from __future__ import annotations
+
+import numpy
+
+from granframe import validators as check
+
+
+def reflect(f, dimension: int, xp=numpy):
+    """f(R v) with R: v_1 -> -v_1, exactly on the nodes: i -> (N - i) mod N along the v_1
+    axis (axis ``-dimension``)."""
+    axis = f.ndim - dimension
+    return xp.roll(xp.flip(f, axis=axis), 1, axis=axis)
+
+
+class Domain:
+    """The global cells of [0, ell], the owned range, its blocks and their ghost cells.
+
+    Parameters
+    ----------
+    cells : int
+        The number of cells of the whole interval.
+    length : float
+        ell, the length of the interval; cell j is [j dx, (j + 1) dx], dx = ell / cells.
+    block_cells : int
+        Cells per block (a divisor of ``cells``); the unit of ownership and of storage.
+    ghost : int
+        Ghost cells on each side of a block (the reconstruction's stencil half-width).
+    grid : VelocityGrid
+    xp : module
+        The array namespace of the blocks.
+    owned : tuple of int, optional
+        ``(start, stop)``: the cells this process owns, whole blocks; all cells by default.
+
+    Attributes
+    ----------
+    start, stop : int
+        The owned cells are ``start <= j < stop``.
+    touches_left, touches_right : bool
+        Whether the owned range contains the first (x = 0) or the last (x = ell) cell.
+    neighbours : object or None
+        Fills the ghost cells of an end of the owned range that another process holds:
+        ``neighbours.fill(domain, array, side)`` with ``side`` "left" or "right". None
+        for a domain that owns every cell.
+    """
+
+    def __init__(self, cells: int, length: float, block_cells: int, ghost: int, grid,
+                 xp=numpy, owned: tuple | None = None):
+        if cells % block_cells:
+            check.reject("Domain", "block_cells", block_cells,
+                         f"must divide the number of cells ({cells})")
+        start, stop = (0, cells) if owned is None else (int(owned[0]), int(owned[1]))
+        if not (0 <= start < stop <= cells and start % block_cells == 0
+                and stop % block_cells == 0):
+            check.reject("Domain", "owned", owned, f"must be (start, stop) with 0 <= start < "
+                         f"stop <= {cells}, both multiples of block_cells = {block_cells}")
+        self.cells, self.length, self.block_cells, self.ghost = cells, float(length), \
+            block_cells, ghost
+        self.start, self.stop = start, stop
+        self.touches_left, self.touches_right = start == 0, stop == cells
+        self.blocks = (stop - start) // block_cells
+        self.grid, self.xp = grid, xp
+        self.shape = (self.blocks, block_cells + 2 * ghost) + tuple(grid.shape)
+        self.neighbours = None
+
+    # -- geometry ---------------------------------------------------------------------------
+    @property
+    def dx(self) -> float:
+        """The cell width ell / cells."""
+        return self.length / self.cells
+
+    def edges(self) -> numpy.ndarray:
+        """The cells + 1 global cell edges 0 = x_0 < ... < x_cells = ell."""
+        return numpy.linspace(0.0, self.length, self.cells + 1)
+
+    def centres(self) -> numpy.ndarray:
+        """The global cell centres (j + 1/2) dx."""
+        return (numpy.arange(self.cells) + 0.5) * self.dx
+
+    @property
+    def owned(self) -> slice:
+        """The owned cells as a slice of the global cells."""
+        return slice(self.start, self.stop)
+
+    @property
+    def owned_cells(self) -> int:
+        return self.stop - self.start
+
+    # -- blocks -----------------------------------------------------------------------------
+    def empty(self):
+        """A block array (ghosts unset)."""
+        return self.xp.zeros(self.shape)
+
+    def interior(self, array):
+        """The owned cells of ``array`` (a view), shape (blocks, block_cells, *grid.shape)."""
+        g = self.ghost
+        return array[:, g:g + self.block_cells]
+
+    def from_cells(self, f):
+        """A block array holding the owned cells ``f`` (owned cells, *grid.shape)."""
+        array = self.empty()
+        self.interior(array)[...] = self.xp.asarray(f).reshape(
+            (self.blocks, self.block_cells) + tuple(self.grid.shape))
+        return array
+
+    def to_cells(self, array):
+        """The owned cells of a block array as one array (owned cells, *grid.shape), a
+        copy."""
+        return self.xp.ascontiguousarray(self.interior(array)).reshape(
+            (self.owned_cells,) + tuple(self.grid.shape))
+
+    # -- ghost cells ------------------------------------------------------------------------
+    def exchange(self, array, left, right, t: float = 0.0) -> None:
+        """Fill every ghost cell of ``array`` (see the module notes); ``left`` and
+        ``right`` are the boundaries of the interval, acting at time ``t``."""
+        g, n, d = self.ghost, self.block_cells, self.grid.dimension
+        if g == 0:
+            return
+        array[1:, :g] = array[:-1, n:n + g]
+        array[:-1, g + n:] = array[1:, g:2 * g]
+        xp = self.xp
+        if left.periodic and self.touches_left and self.touches_right:
+            array[0, :g] = array[-1, n:n + g]
+            array[-1, g + n:] = array[0, g:2 * g]
+            return
+        if self.touches_left and not left.periodic:
+            ghosts = left.ghosts(array[0, g:2 * g], self.grid, xp, t=t, side="left")
+            array[0, :g] = xp.flip(ghosts, axis=0)                # from the wall outwards
+        else:
+            self._neighbours().fill(self, array, "left")
+        if self.touches_right and not right.periodic:
+            inside = reflect(xp.flip(array[-1, n:n + g], axis=0), d, xp)   # as a left wall
+            array[-1, g + n:] = reflect(right.ghosts(inside, self.grid, xp, t=t,
+                                                     side="right"), d, xp)
+        else:
+            self._neighbours().fill(self, array, "right")
+
+    def _neighbours(self):
+        if self.neighbours is None:
+            raise RuntimeError(f"Domain: cells {self.start}..{self.stop - 1} of {self.cells} "
+                               "have an end that another process owns, and no neighbours "
+                               "to fill its ghost cells")
+        return self.neighbours

@@ -1,0 +1,109 @@
+"""A space step keeps the host out: counted on a backend that tells host from device.
+
+:class:`granframe.testing.transfers.CountingBackend` runs the step with NumPy but counts every
+copy that a GPU backend would make between host and device (CuPy's rules). A step of a
+space run with diffuse walls on both sides, WENO5, a heat bath and penalised collisions
+(the BGK rate and Maxwellian of every cell) makes at most 2 device->host copies (the
+record of the step: fields, totals and wall totals in one vector), and no copy from the
+host of a constant array (the upwind speeds, the wall Maxwellians, the moment basis)."""
+
+import collections
+
+import numpy
+import pytest
+
+from granframe.run.description import RunDescription
+from granframe.run.problems import make_problem
+from granframe.testing.transfers import CountingBackend, DeviceArray
+
+TOML = """
+final_time = 0.02
+time_step = 0.004
+knudsen = 0.1
+integrator = "penalised_ars222"
+heat_bath = 0.05
+[grid]
+dimension = 2
+n_modes = 24
+support_radius = 3.2
+[kernel]
+name = "hard_spheres"
+[restitution]
+name = "constant"
+value = 0.8
+[initial]
+name = "riemann"
+left = {density = 1.0, velocity = 0.2, temperature = 1.0}
+right = {density = 0.5, temperature = 0.8}
+[operator]
+name = "fast_spectral"
+quadrature = "review"
+[space]
+cells = 24
+block_cells = 8
+reconstruction = "weno5"
+left = {name = "diffuse", temperature = 1.1, velocity = 0.3, accommodation = 0.7}
+right = {name = "diffuse", temperature = 0.9}
+"""
+
+STEPS = 3
+
+
+@pytest.fixture(scope="module")
+def counted():
+    """A problem on the counting backend after one warm-up step, and the crossings of
+    STEPS steps, each a step and its record."""
+    description = RunDescription.from_toml(TOML)
+    backend = CountingBackend()
+    original = RunDescription.build
+
+    def build(self, field, **extra):
+        return backend if field == "backend" else original(self, field, **extra)
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(RunDescription, "build", build)
+        problem = make_problem(description)
+    state = problem.state(problem.f0)
+    state = problem.step(0.0, state, description.time_step)      # caches fill here
+    problem.record(state)
+    backend.reset()
+    records = []
+    for k in range(1, STEPS + 1):
+        state = problem.step(k * description.time_step, state, description.time_step)
+        records.append(problem.record(state))
+    return problem, state, backend, records
+
+
+def test_a_space_step_makes_at_most_two_device_to_host_copies(counted):
+    _, _, backend, _ = counted
+    counts = backend.counts()
+    assert counts["to_host"] <= 2 * STEPS, collections.Counter(backend.log)
+
+
+def test_a_space_step_copies_no_constant_array_from_the_host(counted):
+    _, _, backend, _ = counted
+    uploads = collections.Counter(entry for entry in backend.log if entry[0] == "to_device")
+    assert not uploads, uploads
+
+
+def test_the_state_stays_on_the_device_and_the_record_is_on_the_host(counted):
+    problem, state, _, records = counted
+    assert isinstance(state, DeviceArray)
+    record = records[-1]
+    for name in problem.record_names:
+        assert not isinstance(record[name], DeviceArray), name
+    assert numpy.isfinite(record["density"]).all() and record["wall_mass"].shape == (2,)
+
+
+def test_the_counting_backend_counts_what_cupy_would_copy():
+    backend = CountingBackend()
+    xp = backend.xp
+    a = xp.ones(4)
+    assert backend.counts() == {"to_host": 0, "to_device": 0}
+    float(a.sum())
+    bool(a[0] > 0)
+    backend.to_numpy(a)
+    assert backend.counts()["to_host"] == 3
+    a + numpy.arange(4.0)                          # a host operand: CuPy would need a copy
+    xp.asarray(numpy.zeros(3))
+    assert backend.counts()["to_device"] == 2
