@@ -178,7 +178,7 @@ class RescaledBoltzmann(HomogeneousBoltzmann):
         As for :class:`~granframe.equations.homogeneous.HomogeneousBoltzmann`.
     dissipation : float or None
         int Q(g0, g0) |xi - u|^2 dxi, the numerator of a_0 (before the 1/eps); None: from
-        the operator, one evaluation of Q. :func:`granframe.stepping.stability.time_step_limit`
+        the operator, one evaluation of Q. :func:`granframe.run.problems.time_step_limit`
         gives an estimate in closed form, to have the step limit without the operator.
     """
 

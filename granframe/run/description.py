@@ -302,7 +302,7 @@ class Space:
     length : float
         ell > 0.
     block_cells : int or None
-        Cells per block (:class:`~granframe.space.transport.CellBlocks`); a divisor of
+        Cells per block (:class:`~granframe.space.domain.Domain`); a divisor of
         ``cells``, at least the reconstruction's ghost width. The store's f is chunked by
         block. None: the largest such divisor up to 64 (one block if there is none).
     reconstruction : Component
