@@ -15,36 +15,9 @@ import pytest
 from granframe.run.description import RunDescription
 from granframe.run.problems import make_problem
 from granframe.testing.transfers import CountingBackend, DeviceArray
+from test_space_backends import TOML as SPACE_TOML
 
-TOML = """
-final_time = 0.02
-time_step = 0.004
-knudsen = 0.1
-integrator = "penalised_ars222"
-heat_bath = 0.05
-[grid]
-dimension = 2
-n_modes = 24
-support_radius = 3.2
-[kernel]
-name = "hard_spheres"
-[restitution]
-name = "constant"
-value = 0.8
-[initial]
-name = "riemann"
-left = {density = 1.0, velocity = 0.2, temperature = 1.0}
-right = {density = 0.5, temperature = 0.8}
-[operator]
-name = "fast_spectral"
-quadrature = "review"
-[space]
-cells = 24
-block_cells = 8
-reconstruction = "weno5"
-left = {name = "diffuse", temperature = 1.1, velocity = 0.3, accommodation = 0.7}
-right = {name = "diffuse", temperature = 0.9}
-"""
+TOML = SPACE_TOML.replace('right = "specular"', 'right = {name = "diffuse", temperature = 0.9}')
 
 STEPS = 3
 
