@@ -10,6 +10,8 @@ plugins; :mod:`granframe.testing` checks an implementation against its contract.
 from __future__ import annotations
 
 import abc
+import contextlib
+import contextvars
 import enum
 import math
 import time
@@ -108,6 +110,11 @@ class ArrayBackend:
         function()
         self.synchronize()
         return time.perf_counter() - start
+
+    #: whether the arrays live in device memory, where every copy to the host (``float``
+    #: of a reduction, a check's flag) waits for the queued work: such copies are kept out
+    #: of the steps of a run
+    on_device: bool = False
 
     def device_memory(self) -> int | None:
         """Bytes of device memory the backend holds; None for host backends."""
@@ -686,6 +693,28 @@ class Boundary(abc.ABC):
 
 # -- Problems: what a run steps --------------------------------------------------------------
 
+_DEFERRED = contextvars.ContextVar("granframe_deferred_checks", default=False)
+
+
+@contextlib.contextmanager
+def deferred_checks():
+    """Within it, a check of an operand that would copy a device array to the host (the
+    operators' finiteness check of f) is not made on a backend whose arrays live on a
+    device (:attr:`ArrayBackend.on_device`): a run steps inside it, and its health check
+    of each step's record (one transfer) finds a non-finite f instead."""
+    token = _DEFERRED.set(True)
+    try:
+        yield
+    finally:
+        _DEFERRED.reset(token)
+
+
+def checks_deferred(backend) -> bool:
+    """Whether a host-copying check of an operand on ``backend`` is left out here
+    (:func:`deferred_checks`)."""
+    return bool(getattr(backend, "on_device", False)) and _DEFERRED.get()
+
+
 class Problem(abc.ABC):
     """What a run is made of: the one contract between a discretised equation and the runner.
 
@@ -732,8 +761,11 @@ class Problem(abc.ABC):
         """f of ``state`` on the host, as the store's snapshot array holds it."""
 
     def step(self, t: float, state, dt: float):
-        """One step of length ``dt`` from time ``t``; returns the new state."""
-        return self.integrator.step(self.equation, t, state, dt)
+        """One step of length ``dt`` from time ``t``; returns the new state. The operators'
+        per-call checks that would copy to the host are left to the health check of the
+        step's record (:func:`deferred_checks`)."""
+        with deferred_checks():
+            return self.integrator.step(self.equation, t, state, dt)
 
     @abc.abstractmethod
     def record(self, state) -> dict:

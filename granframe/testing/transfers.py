@@ -184,6 +184,7 @@ class CountingBackend(SciPyFFTBackend):
 
     name = "counting"
     concurrency = 1
+    on_device = True
 
     def __init__(self):
         self.log = []

@@ -14,6 +14,7 @@ import numpy
 import scipy.special
 
 from granframe import validators as check
+from granframe.abc import checks_deferred
 from granframe.errors import NonFiniteError
 from granframe.velocity.quadratures import GaussLegendre
 
@@ -50,9 +51,13 @@ def check_operands(owner: str, grid, f, backend):
     backend; return it as a stack of shape (B, *grid.shape) with the batch shape.
 
     A plain ``grid.shape`` f is the stack of one distribution, batch shape (). Finiteness
-    costs one reduction, the sum of f (NaN or Inf anywhere makes it non-finite), in the
-    backend's namespace, so that every backend refuses alike; a NaN or Inf in f would
-    otherwise spread through the transforms to every point of Q.
+    costs one reduction, the sum of f (NaN or Inf anywhere makes it non-finite), and its
+    copy to the host. On a backend whose arrays live on a device
+    (:attr:`~granframe.abc.ArrayBackend.on_device`) that copy would stop the device at every
+    call, several times per time step, so within a run's step
+    (:func:`granframe.abc.deferred_checks`) it is not made there: a NaN or Inf in f spreads
+    through the transforms to every point of Q, and the runner's health check of the
+    step's record (one transfer per step) reports it.
     """
     xp = backend.xp
     if not isinstance(f, xp.ndarray):
@@ -66,7 +71,7 @@ def check_operands(owner: str, grid, f, backend):
     if f.dtype.kind != "f":
         check.reject(owner, "f.dtype", str(f.dtype), "must be a real floating-point type",
                      error=TypeError)
-    if not math.isfinite(float(xp.sum(f))):
+    if not checks_deferred(backend) and not math.isfinite(float(xp.sum(f))):
         bad = int(xp.sum(~xp.isfinite(f)))
         check.reject(owner, "f", f"{bad} non-finite values" if bad else "values summing to "
                      "infinity", "must be finite everywhere on the grid (NaN or Inf in f, "
