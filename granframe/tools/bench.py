@@ -359,11 +359,11 @@ def measure_space(dimension: int, n_modes: int, cells: int, radial_points: int,
     start = time.perf_counter()
     problem = make_problem(description)
     precompute = time.perf_counter() - start
-    backend = problem.backend
+    array_backend = problem.backend
     transport, domain = problem.transport, problem.domain
     dt = 2.0 * transport.time_step_limit()
     array = problem.state(problem.f0)
-    cells_f = backend.asarray(problem.f0)
+    cells_f = array_backend.asarray(problem.f0)
     collide = problem.collision_integrator
     equation = problem.equation
 
@@ -379,7 +379,7 @@ def measure_space(dimension: int, n_modes: int, cells: int, radial_points: int,
         transport.advance(array, 0.5 * dt, 0.5 * dt)
 
     def walls():
-        g, xp = domain.ghost, backend.xp
+        g, xp = domain.ghost, array_backend.xp
         for _ in range(6):
             domain.exchange(array, transport.left, transport.right, 0.0)
             transport.left.emit(array[0, g], problem.grid, xp, t=0.0, side="left")
@@ -398,7 +398,7 @@ def measure_space(dimension: int, n_modes: int, cells: int, radial_points: int,
     times = {name: [] for name in parts}
     for _ in range(repeats):
         for name, function in parts.items():
-            times[name].append(backend.elapsed(function))
+            times[name].append(array_backend.elapsed(function))
     medians = {name: float(numpy.median(values)) for name, values in times.items()}
     per_distribution = medians["operator"] / cells
     target = cells * per_distribution * 4
