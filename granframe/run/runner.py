@@ -1,14 +1,14 @@
 """Run a :class:`~granframe.run.description.RunDescription` into a store.
 
-:class:`Simulation` builds every object once (operator precomputation
-included) and checks f0 against the grid; :meth:`Simulation.run` is a loop over
-the steps a :class:`Stepper` yields (fixed or adaptive, from a fresh or a resumed
-state) and a list of :class:`Observer` objects, each on its schedule: the moments
-after every step (one fused pass, :meth:`VelocityGrid.moments`), the health
-limits, the progress bar, and at the output points a commit of f with the pending
-moment records (see :mod:`granframe.run.storage` for why a stop at any moment
-leaves a valid store). ``resume=True`` continues from the last committed
-snapshot; the result equals that of an uninterrupted run to round-off.
+:class:`Simulation` builds the run's problem once (:func:`~granframe.run.problems.make_problem`:
+operator precomputation included, f0 checked against the grid) and drives it through the
+:class:`granframe.abc.Problem` contract; :meth:`Simulation.run` is a loop over the steps a
+:class:`Stepper` yields (fixed or adaptive, from a fresh or a resumed state) and a list of
+:class:`Observer` objects, each on its schedule: the problem's record after every step (one
+transfer to the host), the health limits, the progress bar, the accuracy monitors, and at
+the output points a commit of f with the pending records (see :mod:`granframe.run.storage`
+for why a stop at any moment leaves a valid store). ``resume=True`` continues from the last
+committed snapshot; the result equals that of an uninterrupted run to round-off.
 """
 
 from __future__ import annotations
@@ -233,7 +233,7 @@ class RunState:
     """Where a run stands: f at step ``step`` and time ``t``, and what a commit records.
 
     The :class:`Stepper` advances it in place; the observers read it (the
-    :class:`MomentsObserver` leaves the step's moments in ``record``).
+    :class:`RecordObserver` leaves the step's record in ``record``).
     """
 
     f: object
