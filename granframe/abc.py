@@ -492,8 +492,7 @@ class CollisionKernel(abc.ABC):
         of a space run), in ``xp``: no transfer to the host. By default the same 64-point
         Gauss-Legendre rule on [0, 18 sqrt(T)], in the variable x = r / (18 sqrt T) whose
         weights x^{d-1} exp(-81 x^2) do not depend on T."""
-        x, w = numpy.polynomial.legendre.leggauss(64)
-        x, w = 0.5 * (x + 1.0), 0.5 * w
+        x, w = gauss_legendre(64, 1.0)
         density = w * x ** (dimension - 1) * numpy.exp(-81.0 * x * x)
         speeds = 18.0 * xp.sqrt(temperature)[..., None] * xp.asarray(x)
         return self.speed_part(speeds, xp) @ xp.asarray(density / density.sum())
