@@ -8,7 +8,7 @@ import pytest
 import granframe as gf
 from granframe.equations.homogeneous import HomogeneousBoltzmann
 from granframe.space.collisions import CellCollisions
-from granframe.space.fields import FieldMoments, maxwellians
+from granframe.space.fields import FieldMoments
 
 GRID = gf.VelocityGrid(2, 16, 3.5)
 
@@ -103,18 +103,6 @@ def test_fields_of_every_cell_equal_the_grid_moments(dimension):
                                       atol=1e-12)
         numpy.testing.assert_allclose(fields["heat_flux"][c], moments["heat_flux"], atol=1e-11)
     assert fields["mass"] == pytest.approx(0.25 * fields["density"].sum(), rel=1e-14)
-
-
-def test_maxwellians_of_fields_have_the_fields_as_moments():
-    grid = gf.VelocityGrid(2, 48, 4.5)      # the Maxwellians' tails inside the box to 1e-16
-    rho = numpy.array([0.5, 1.0, 2.0])
-    u = numpy.array([[0.3, -0.2], [0.0, 0.0], [-0.5, 0.1]])
-    t = numpy.array([0.8, 1.0, 1.3])
-    m = maxwellians(grid, rho, u, t)
-    fields = FieldMoments(grid, dx=1.0)(m)
-    numpy.testing.assert_allclose(fields["density"], rho, rtol=1e-14)
-    numpy.testing.assert_allclose(fields["velocity"], u, atol=1e-12)
-    numpy.testing.assert_allclose(fields["temperature"], t, rtol=1e-10)
 
 
 @pytest.mark.parametrize("dimension", [2, 3])

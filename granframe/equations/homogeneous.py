@@ -7,6 +7,7 @@ import math
 import numpy
 
 from granframe.abc import Part
+from granframe.velocity.equilibrium import discrete_maxwellians
 from granframe.velocity.heatbath import HeatBath
 from granframe.stepping.integrators import Equation
 
@@ -107,9 +108,10 @@ class HomogeneousBoltzmann(Equation):
         default) must bound the spectrum of the linearised collision operator, which
         extends beyond -nu: in the stiff limit ARS(2,2,2) is stable only for modes with
         |lambda| <= r eps, and the stability map (docs/stability.md) blows up with penalty
-        1 and 1.5 and holds with 2. M[f] is the
-        grid Maxwellian with the mass, momentum and temperature of f, scaled to f's grid
-        mass exactly. P(f) = r (M[f] - f) conserves them, so M is invariant under P
+        1 and 1.5 and holds with 2. M[f] is the discrete Maxwellian with exactly the grid
+        mass, momentum and energy of f
+        (:func:`~granframe.velocity.equilibrium.discrete_maxwellians`): P(f) = r (M[f] - f)
+        conserves them to round-off, so M is invariant under P whatever r dt
         [Filbet & Jin, J. Comput. Phys. 229 (2010), section 4]. Where T is not positive
         and finite, r = 0: the step goes on explicitly and the runner's health check
         reports the state.
@@ -118,12 +120,14 @@ class HomogeneousBoltzmann(Equation):
         density = grid.mass(f, xp)
         if not (density > 0.0 and math.isfinite(density)):
             return 0.0, f
-        velocity = grid.momentum(f, xp) / density
+        momentum = grid.momentum(f, xp)
         temperature = grid.temperature(f, xp)
         if not (temperature > 0.0 and math.isfinite(temperature)):
             return 0.0, f
-        target = grid.maxwellian(density, velocity, temperature, xp)
-        target *= density / grid.mass(target, xp)
         energy = grid.kinetic_energy(f, xp)
+        target, _ = discrete_maxwellians(grid, xp.asarray([density]),
+                                         xp.asarray(momentum).reshape(1, -1),
+                                         xp.asarray([2.0 * energy]), xp)
+        target = target[0]
         rate = self.penalty * self.collision_frequency(density, temperature, energy)
         return rate / self.knudsen, target

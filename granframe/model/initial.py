@@ -444,7 +444,7 @@ def check_fits(grid, f, condition: InitialCondition, edge_tolerance: float,
 
 
 def check_projection(grid, f, projected, condition: InitialCondition, tolerance: float,
-                     kurtosis_tolerance: float) -> dict:
+                     kurtosis_tolerance: float, positivity_tolerance: float = 1.0) -> dict:
     """Refuse f0 that its Nyquist projection (:meth:`VelocityGrid.project`) changes.
 
     The operators evolve f0 without its modes |k_i| = N/2, so a run starts from
@@ -453,9 +453,20 @@ def check_projection(grid, f, projected, condition: InitialCondition, tolerance:
     (:class:`granframe.run.description.Health`): the grid does not resolve f0, and the run
     would silently start from other data. Returns the moments before and after,
     name -> {"before", "after"}, which the run stores and reports
-    (:func:`projection_note`).
+    (:func:`projection_note`). Refused too: a negative mass share
+    sum max(-f, 0) / sum |f| of ``projected`` above ``positivity_tolerance`` (the run's
+    health limit ``health.positivity_tolerance``, which would stop it at its first step).
     """
     owner = f"initial condition {type(condition).__name__}"
+    total = float(numpy.abs(projected).sum())
+    negative = float(numpy.maximum(-projected, 0.0).sum()) / total if total > 0 else 0.0
+    if negative > positivity_tolerance:
+        check.reject(owner, "negative mass share of f0 after the Nyquist projection", negative,
+                     f"must be <= health.positivity_tolerance = {positivity_tolerance:g}, "
+                     f"which the run checks after every step: N = {grid.n_modes} modes (spacing "
+                     f"h = {grid.spacing:.4g}) do not resolve f0, whose projection rings below "
+                     "zero; use a larger grid.n_modes, or a smaller grid.support_radius if f0 "
+                     "is negligible well inside the faces of the box (h = 2L/N falls with it)")
     moments = {}
     for name, moment, limit, field in (
             ("mass", grid.mass, tolerance, "projection_tolerance"),

@@ -165,22 +165,37 @@ class HealthError(RuntimeError):
     dataset = None
 
 
+#: what to change, after each kind of health stop
+UNSTABLE = ("the step is unstable, or f left the velocity grid: a smaller time_step (granframe "
+            "limits prints the stability limits), a larger grid.support_radius if f reaches "
+            "the faces of the box, or for a stiff collision term (small knudsen) a penalised "
+            "integrator with conservative = true")
+MASS_LOST = ("the collision step does not conserve mass: conservative = true conserves it "
+             "exactly; otherwise a larger grid.n_modes or a smaller time_step")
+RINGING = ("f rings below zero where the grid does not resolve it: a larger grid.n_modes "
+           "(spacing h = 2L/N against the narrowest sqrt(T) of the run), a larger "
+           "grid.support_radius if f reaches the faces of the box, or a smaller time_step if "
+           "the step makes it")
+
+
 def health_problem(record: dict, mass0: float, health) -> str | None:
-    """What is wrong with the state behind ``record``, or None (see :class:`Health`)."""
+    """What is wrong with the state behind ``record`` and what to change, or None (see
+    :class:`Health`)."""
     values = [record["mass"], record["kinetic_energy"], record["min_f"]]
     if not all(math.isfinite(v) for v in values):
-        return "f is not finite (NaN or Inf)"
+        return f"f is not finite (NaN or Inf); {UNSTABLE}"
     if record["mass"] <= 0.0:
-        return f"the mass is not positive ({record['mass']:.6g})"
+        return f"the mass is not positive ({record['mass']:.6g}); {UNSTABLE}"
     drift = abs(record["mass"] / mass0 - 1.0)
     if drift > health.mass_tolerance:
         shown, limit = distinct(drift, health.mass_tolerance)
         return (f"mass drift |mass/mass(0) - 1| = {shown} exceeds health.mass_tolerance = "
-                f"{limit}")
+                f"{limit}; {MASS_LOST}")
     if record["negative_mass_fraction"] > health.positivity_tolerance:
         shown, limit = distinct(record["negative_mass_fraction"], health.positivity_tolerance)
         return (f"loss of positivity: negative mass share {shown} exceeds "
-                f"health.positivity_tolerance = {limit} (min f = {record['min_f']:.3g})")
+                f"health.positivity_tolerance = {limit} (min f = {record['min_f']:.3g}); "
+                f"{RINGING}")
     return None
 
 
@@ -351,8 +366,8 @@ class Stepper:
                 dt, t_end = self._fixed_step(state.step + 1)
                 state.f = self.problem.step(state.t, state.f, dt)
         except (NonFiniteError, StepSizeError) as exc:   # a stage blew up, or dt fell to
-            problem = (exc if isinstance(exc, StepSizeError)   # round-off
-                       else "f is not finite (NaN or Inf) within the step")
+            problem = (f"{exc}; {UNSTABLE}" if isinstance(exc, StepSizeError)  # round-off
+                       else f"f is not finite (NaN or Inf) within the step; {UNSTABLE}")
             raise Stopped(f"health check failed at step {state.step + 1}, t = {state.t:.6g}: "
                           f"{problem}") from exc
         state.step += 1

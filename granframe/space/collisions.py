@@ -20,8 +20,10 @@ from __future__ import annotations
 import numpy
 
 from granframe.backends import to_host
+from granframe.equations.conservative import ConservativeCorrection
 from granframe.equations.homogeneous import HomogeneousBoltzmann
-from granframe.space.fields import FieldMoments, maxwellians
+from granframe.space.fields import FieldMoments
+from granframe.velocity.equilibrium import discrete_maxwellians
 
 
 class CellCollisions(HomogeneousBoltzmann):
@@ -38,6 +40,16 @@ class CellCollisions(HomogeneousBoltzmann):
         super().__init__(operator, heat_bath, knudsen, penalty)
         grid = operator.grid
         self.moments = FieldMoments(grid, 1.0, operator.backend.xp)
+        speeds = numpy.linspace(0.0, grid.truncation_radius, 65)
+        elastic = bool(numpy.all(operator.restitution(speeds) == 1.0))
+        #: what the collision step conserves exactly in every cell, which :meth:`restore`
+        #: keeps against round-off: with the conservative correction the mass, and without
+        #: a heat bath (whose periodic Laplacian moves momentum by the grid's edge terms)
+        #: the momentum and, for an elastic gas, the energy; nothing without the correction
+        self.invariants = ()
+        if isinstance(operator, ConservativeCorrection):
+            self.invariants = (("mass",) if self.heat.tau else
+                               ("mass", "momentum") + (("energy",) if elastic else ()))
 
     def frequencies(self, density, temperature, energy):
         r""":meth:`HomogeneousBoltzmann.collision_frequency` of every cell at once, on the
@@ -60,10 +72,12 @@ class CellCollisions(HomogeneousBoltzmann):
         return super().stiffness(flat[int(numpy.argmax(weight))])
 
     def relaxation(self, f):
-        r"""r (M[f] - f) per cell: rate r_c = penalty nu(rho_c, T_c)/eps and the grid
-        Maxwellian of the cell's mass, momentum and temperature, scaled to its grid mass
-        (:meth:`HomogeneousBoltzmann.relaxation`). Cells whose mass or temperature is not
-        positive and finite get r = 0 (explicit there). On the device, no transfer."""
+        r"""r (M[f] - f) per cell: rate r_c = penalty nu(rho_c, T_c)/eps and M[f] the
+        discrete Maxwellian with exactly the cell's grid mass, momentum and energy
+        (:func:`~granframe.velocity.equilibrium.discrete_maxwellians`), so that the
+        penalisation conserves them to round-off however large r dt is. Cells whose mass
+        or temperature is not positive and finite get r = 0 (explicit there). On the
+        device, no transfer."""
         grid, xp = self.operator.grid, self.operator.backend.xp
         d = grid.dimension
         flat = f.reshape((-1,) + tuple(grid.shape))
@@ -73,10 +87,48 @@ class CellCollisions(HomogeneousBoltzmann):
         safe_t = xp.where(valid, temperature, 1.0)
         safe_e = xp.where(valid & (energy > 0), energy, 1.0)
         rate = xp.where(valid, self.penalty * self.frequencies(safe_rho, safe_t, safe_e), 0.0)
-        target = maxwellians(grid, safe_rho, xp.where(valid[:, None], velocity, 0.0), safe_t,
-                             xp, self.moments.points)
+        target, _ = discrete_maxwellians(
+            grid, safe_rho, safe_rho[:, None] * xp.where(valid[:, None], velocity, 0.0),
+            xp.where(valid, 2.0 * energy, d * safe_t), xp, self.moments.points)
         shape = f.shape[:-d] + (1,) * d
         return (rate * (1.0 / self.knudsen)).reshape(shape), target.reshape(f.shape)
+
+
+    def conserved(self, f):
+        """The grid mass, momentum (node -L at -L) and second moment h^d sum |v|^2 f of every
+        cell of f (..., *grid.shape), on the device: what :meth:`restore` takes."""
+        grid = self.operator.grid
+        flat = f.reshape((-1,) + tuple(grid.shape))
+        rho, velocity, _, energy = self.moments.primitives(flat, node="periodic")
+        return rho, rho[:, None] * velocity, 2.0 * energy
+
+    def restore(self, f, before):
+        r"""f with the cell moments in :attr:`invariants` set back to ``before``
+        (:meth:`conserved` of the data of the collision step).
+
+        The stages of a penalised step sum terms of size dt |Q|/eps whose round-off,
+        u dt |Q|/eps with u the unit round-off, shows in the moments that the step
+        conserves exactly: 1e-7 of the mass per step at eps = 1e-10 and dt/eps = 1e8.
+        The correction adds the difference of two discrete Maxwellians,
+
+        .. math:: f \leftarrow f + \mathcal M[\rho^0, J^0, S^0] - \mathcal M[\rho, J, S],
+
+        (with J^0 = J and S^0 = S for what is not conserved), whose moments are exactly the
+        defect: it is of the size of the round-off and changes nothing else. Cells where
+        either Maxwellian does not converge are left as they are.
+        """
+        if not self.invariants:
+            return f
+        grid, xp = self.operator.grid, self.operator.backend.xp
+        flat = f.reshape((-1,) + tuple(grid.shape))
+        now = self.conserved(flat)
+        goal = (before[0], before[1] if "momentum" in self.invariants else now[1],
+                before[2] if "energy" in self.invariants else now[2])
+        points = self.moments.points
+        wanted, ok_wanted = discrete_maxwellians(grid, *goal, xp, points)
+        present, ok_present = discrete_maxwellians(grid, *now, xp, points)
+        ok = (ok_wanted & ok_present).reshape((-1,) + (1,) * grid.dimension)
+        return (flat + xp.where(ok, wanted - present, 0.0)).reshape(f.shape)
 
 
 class SplitStep:
@@ -97,6 +149,7 @@ class SplitStep:
         self.transport.advance(array, half, t)
         if self.integrator is not None:      # None: a collisionless gas
             inner = self.transport.domain.interior(array)
-            inner[...] = self.integrator.step(equation, t, inner, dt)
+            before = equation.conserved(inner) if equation.invariants else None
+            inner[...] = equation.restore(self.integrator.step(equation, t, inner, dt), before)
         self.transport.advance(array, half, t + half)
         return array
