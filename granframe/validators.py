@@ -7,6 +7,7 @@ which value and what would have been accepted.
 
 from __future__ import annotations
 
+import difflib
 import math
 import numbers
 from typing import Any, Callable
@@ -134,12 +135,26 @@ def boolean(instance, attribute: attrs.Attribute, value):
         reject(_owner(instance), attribute.name, value, "must be True or False", error=TypeError)
 
 
+def did_you_mean(word, choices) -> str:
+    """``"; did you mean 'x'?"`` for the choice closest to ``word``
+    (:func:`difflib.get_close_matches`), or ``""`` when none is close."""
+    close = difflib.get_close_matches(str(word), [str(c) for c in choices], n=1)
+    return f"; did you mean '{close[0]}'?" if close else ""
+
+
 def from_table(cls, table: dict, owner: str):
-    """``cls(**table)`` for an attrs class, an unknown key reported with the keys it knows."""
-    known = {a.name for a in attrs.fields(cls)}
+    """``cls(**table)`` for an attrs class, an unknown key reported with the keys it knows
+    (the parameters of ``__init__``; private state is not one) and the closest of them, a
+    missing required one by name."""
+    known = {a.alias or a.name for a in attrs.fields(cls) if a.init}
     unknown = sorted(set(table) - known)
     if unknown:
         reject(owner, unknown[0], table[unknown[0]],
-               f"is not a parameter of {cls.__name__}; known: {', '.join(sorted(known))}",
+               f"is not a parameter of {cls.__name__}; known: {', '.join(sorted(known))}"
+               f"{did_you_mean(unknown[0], known)}", error=TypeError)
+    missing = [a.alias or a.name for a in attrs.fields(cls)
+               if a.init and a.default is attrs.NOTHING and (a.alias or a.name) not in table]
+    if missing:
+        reject(owner, missing[0], None, f"is required by {cls.__name__} (it has no default)",
                error=TypeError)
     return cls(**table)

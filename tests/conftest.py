@@ -11,6 +11,59 @@ from granframe_cupy import gpu_available
 
 FAKE_SITE = pathlib.Path(__file__).parent / "fake_site"
 
+#: Test files whose every test is marked ``slow`` (runs of studies, space
+#: validation, resume and kill tests in subprocesses, sweeps on Dask, fuzzing): the fast
+#: subset ``pytest -m "not slow"`` leaves them out (README, "Tests").
+SLOW_FILES = frozenset({
+    "test_bench_space.py", "test_cli_fuzz.py", "test_fault_injection.py",
+    "test_resume.py", "test_space_validation.py", "test_store_safety.py", "test_studies.py",
+    "test_sweep.py", "test_validation_fuzz.py",
+})
+
+#: Tests marked ``slow`` one by one (``file::name``, every parametrisation), from the
+#: durations of ``pytest -m "not slow" --durations=80`` on this 2-core machine: those of
+#: about 5 s of CPU time or more (runs to an exact law, 3D runs, plots of stores, CLI runs).
+SLOW_TESTS = frozenset({
+    "test_advise.py::test_isotropic_3d_temperature_is_not_run_at_full_resolution",
+    "test_default_quadrature.py::test_default_3d_n32_heated_maxwell_temperature_law_holds_to_2e5",
+    "test_operators.py::test_float32_heated_maxwell_temperature",
+    "test_operators.py::test_hard_sphere_dissipation_in_3d_against_the_exact_rate",
+    "test_operators.py::test_heated_maxwell_limited_by_truncation_radius",
+    "test_operators.py::test_heated_maxwell_temperature_of_the_review",
+    "test_plotting.py::test_plot_dpi_sets_the_png_resolution",
+    "test_plotting.py::test_plot_format_writes_vector_files",
+    "test_plotting.py::test_the_figures_of_a_store_written_with_the_cupy_backend_are_drawn_on_a_cpu",
+    "test_plugins.py::test_cli_bench_runs_and_reports_the_floor",
+    "test_pressure_tensor.py::test_a_heated_2d_run_at_small_knudsen_follows_the_exact_pressure_law",
+    "test_pressure_tensor.py::test_a_heated_3d_run_follows_the_exact_pressure_law",
+    "test_pressure_tensor.py::test_a_store_without_pressure_records_opens_checks_plots_and_resumes",
+    "test_rescaling.py::test_hard_spheres_rescaled_run_equals_the_unscaled_one",
+    "test_rescaling.py::test_maxwell_molecules_follow_the_exact_cooling_law_in_physical_variables",
+    "test_rescaling.py::test_plots_of_a_rescaled_run_are_in_physical_time_and_temperature",
+    "test_runner.py::test_a_store_written_on_a_gpu_is_read_on_a_machine_without_one",
+    "test_runner.py::test_cli_run_plot_info",
+    "test_runner.py::test_resume_discards_a_commit_cut_short",
+    "test_space_bad_input.py::test_fuzzed_space_initial_conditions_build_or_name_a_parameter",
+    "test_space_collisions.py::test_the_edge_monitors_flag_the_worst_cell_of_a_narrow_box",
+    "test_space_limits.py::test_energy_balance_between_diffuse_walls",
+    "test_space_limits.py::test_sod_tube_reaches_the_euler_solution_as_eps_vanishes",
+    "test_space_limits.py::test_uniform_granular_gas_cools_by_the_homogeneous_law_in_every_cell",
+    "test_space_limits.py::test_uniform_heated_granular_gas_follows_the_heated_law_in_every_cell",
+    "test_space_store.py::test_a_run_killed_at_any_write_opens_as_before_or_resumes_bitwise",
+    "test_space_store.py::test_plot_draws_maps_profiles_and_totals",
+    "test_store_blocks.py::test_blocks_in_any_order_give_the_store_commit_gives",
+    "test_unbuilt_description.py::test_a_cupy_store_is_read_without_building_its_backend",
+})
+
+
+def pytest_collection_modifyitems(config, items):
+    """Mark ``slow`` every test of :data:`SLOW_FILES` and those of :data:`SLOW_TESTS`."""
+    for item in items:
+        name = item.path.name
+        if name in SLOW_FILES or f"{name}::{getattr(item, 'originalname', item.name)}" in (
+                SLOW_TESTS):
+            item.add_marker(pytest.mark.slow)
+
 _GPU = [pytest.mark.gpu, pytest.mark.skipif(not gpu_available(),
                                             reason="needs CuPy and a CUDA GPU")]
 

@@ -94,14 +94,18 @@ def test_final_time_1e30_is_refused_not_hung():
 
 
 def test_final_time_1e308_is_refused():
-    with pytest.raises(ValueError, match=r"'final_time' = 1e\+308 is invalid; must be at most"):
+    with pytest.raises(ValueError, match=r"'final_time' = 1e\+308 is invalid; must lie in "
+                                         r"\[1e-100, 1e\+100\]"):
         heated(final_time=1e308)
 
 
 def test_time_step_1e_320_is_refused():
-    with pytest.raises(ValueError, match=r"'final_time' = 1.0 is invalid; must be at most "
-                                         r"1e\+09 steps of time_step = 1e-320"):
+    with pytest.raises(ValueError, match=r"'time_step' = 1e-320 is invalid; must lie in "
+                                         r"\[1e-100, 1e\+100\]"):
         heated(time_step=1e-320)
+    with pytest.raises(ValueError, match=r"'final_time' = 1.0 is invalid; must be at most "
+                                         r"1e\+09 steps of time_step = 1e-12"):
+        heated(time_step=1e-12)
 
 
 def test_snapshot_count_is_bounded():
@@ -322,7 +326,7 @@ def test_a_step_that_blows_up_within_its_stages_is_a_health_stop(tmp_path):
     from granframe.run.storage import RunStore
     from test_runner import heated
 
-    d = heated(heat_bath=1e300, health={"step_limit": False}, final_time=0.5)
+    d = heated(heat_bath=1e100, health={"step_limit": False}, final_time=0.5)
     with pytest.raises(HealthError, match=r"step 1, t = 0: f is not finite \(NaN or Inf\) "
                                           "within the step"):
         Simulation(d).run(tmp_path / "s.zarr", progress=False)
@@ -362,3 +366,114 @@ def test_the_nyquist_projection_of_f0_is_reported_and_stored(tmp_path, capsys):
 def test_velocity_scales_beyond_floating_point_range_are_refused(changes, parameter):
     with pytest.raises(ValueError, match=f"parameter '{parameter}'"):
         gf.VelocityGrid(dimension=2, n_modes=16, **changes)
+
+
+# -- 8. extreme values, size-driving parameters and what the command line says -------------
+@pytest.mark.parametrize("changes,parameter,allowed", [
+    ({"output": {"snapshot_interval": 1.7e308}}, "snapshot_interval", r"\[1e-100, 1e\+100\]"),
+    ({"knudsen": 1e300}, "knudsen", r"\[1e-100, 1e\+100\]"),
+    ({"knudsen": 5e-324}, "knudsen", r"\[1e-100, 1e\+100\]"),
+    ({"heat_bath": 1e300}, "heat_bath", r"\[0, 1e\+100\]"),
+    ({"integrator": "dopri54", "tolerance": 1e300}, "tolerance", r"\[1e-100, 1e\+100\]"),
+    ({"final_time": 1.7e308}, "final_time", r"\[1e-100, 1e\+100\]")])
+def test_every_float_of_a_description_has_a_range_that_keeps_the_arithmetic_finite(
+        changes, parameter, allowed):
+    with pytest.raises(ValueError, match=rf"parameter '{parameter}' = .* is invalid; must lie "
+                                         rf"in {allowed}"):
+        heated(**changes)
+
+
+def test_a_huge_knudsen_number_runs_and_resumes(tmp_path):
+    """eps = 9.2e18 (Q/eps negligible): the run finishes, and a resume of it says so."""
+    from granframe.run.storage import RunStore
+    from granframe.tools.cli import main
+
+    d = heated(grid={"dimension": 2, "n_modes": 16, "support_radius": 10.0}, knudsen=9.2e18,
+               final_time=0.1)
+    (tmp_path / "d.toml").write_text(d.to_toml())
+    arguments = ["run", str(tmp_path / "d.toml"), "--out", str(tmp_path / "s.zarr"),
+                 "--no-progress"]
+    assert main(arguments) == 0
+    assert main(arguments + ["--resume"]) == 0
+    assert RunStore.open(tmp_path / "s.zarr").progress["status"] == "finished"
+
+
+def test_a_truncation_radius_beyond_the_box_is_refused_before_the_operator_is_built():
+    """R = 1e30 made the default quadratures 4096 x 2048 points: minutes of building."""
+    with pytest.raises(ValueError, match=r"parameter 'grid.truncation_radius' = 1e\+30 is "
+                                         r"invalid; must be <= 2 sqrt\(d\) L = 62.4264"):
+        heated(grid={"dimension": 2, "n_modes": 32, "support_radius": 10.0,
+                     "truncation_radius": 1e30})
+    heated(grid={"dimension": 2, "n_modes": 32, "support_radius": 10.0,
+                 "truncation_radius": 62.0})
+
+
+def _cli(tmp_path, capsys, *arguments):
+    """``granframe ARGUMENTS`` run in ``tmp_path``: (status, stderr)."""
+    from granframe.tools.cli import main
+
+    status = main([str(a) for a in arguments])
+    return status, capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["run", "limits"])
+def test_run_and_limits_refuse_a_precision_that_is_a_list_alike(tmp_path, capsys, command):
+    (tmp_path / "d.toml").write_text(heated().to_toml())
+    out = ["--out", tmp_path / "s.zarr"] if command == "run" else []
+    status, err = _cli(tmp_path, capsys, command, tmp_path / "d.toml", *out,
+                       "--set", "operator.precision=[1.0, 2.0]")
+    assert status == 2 and "unhashable" not in err
+    assert ("parameter 'operator.precision' = [1.0, 2.0] is invalid; must be one of "
+            "['float64', 'float32']") in err
+    assert not (tmp_path / "s.zarr").exists()
+
+
+@pytest.mark.parametrize("initial", [
+    {"name": "riemann", "left": {"density": 1.0}, "right": {"density": 0.5}},
+    {"name": "sinusoidal_mode"}])
+def test_space_initial_data_without_a_space_section_is_refused(initial):
+    """It ran the average over the interval as a homogeneous run and said 'finished'."""
+    with pytest.raises(ValueError, match=rf"parameter 'initial' = '{initial['name']}' is "
+                                         r"invalid; applies to space runs only: add a \[space\]"):
+        heated(initial=initial)
+
+
+def test_a_toml_key_typo_gets_the_closest_key_and_private_state_is_not_listed():
+    text = heated().to_toml().replace("heat_bath", "heat_bth")
+    with pytest.raises(TypeError, match=r"'heat_bth' = 0.1 is invalid; is not a parameter of "
+                                        r"RunDescription; known: .*; did you mean 'heat_bath'\?"
+                       ) as info:
+        RunDescription.from_toml(text)
+    assert "_light" not in str(info.value) and "light" not in str(info.value)
+
+
+@pytest.mark.parametrize("command", ["run", "limits", "sweep", "advise"])
+def test_a_binary_file_is_refused_naming_it(tmp_path, capsys, command):
+    (tmp_path / "bin.toml").write_bytes(bytes(range(128, 256)) * 4)
+    out = ["--out", tmp_path / "s.zarr"] if command in ("run", "sweep") else []
+    status, err = _cli(tmp_path, capsys, command, tmp_path / "bin.toml", *out)
+    assert status == 2 and f"'{tmp_path / 'bin.toml'}' is invalid; it is not UTF-8 text" in err
+    assert not (tmp_path / "s.zarr").exists()
+
+
+@pytest.mark.parametrize("command", ["run", "limits"])
+def test_a_study_that_exits_is_an_error_not_a_silent_success(tmp_path, capsys, command):
+    (tmp_path / "exits.py").write_text("import sys\nsys.exit(0)\n")
+    out = ["--out", tmp_path / "s.zarr"] if command == "run" else []
+    status, err = _cli(tmp_path, capsys, command, tmp_path / "exits.py", *out)
+    assert status == 2
+    assert "is invalid; it called sys.exit(0) while granframe loaded it" in err
+
+
+def test_space_keys_can_be_set_on_the_command_line(tmp_path, capsys):
+    """space.collisions was 'not a key of the description'; the walls' parameters are keys."""
+    from test_space_bad_input import BASE
+    import tomli_w
+
+    (tmp_path / "d.toml").write_text(tomli_w.dumps(BASE))
+    status, err = _cli(tmp_path, capsys, "limits", tmp_path / "d.toml", "--set",
+                       "space.collisions=false", "--set", "kernel.name=hard_spheres")
+    assert status == 0, err
+    status, err = _cli(tmp_path, capsys, "limits", tmp_path / "d.toml", "--set",
+                       "space.right.accomodation=0.5")
+    assert status == 2 and "did you mean 'space.right.accommodation'?" in err

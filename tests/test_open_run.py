@@ -206,3 +206,26 @@ def test_a_rescaled_run_states_its_variables(tmp_path):
     ds.to_netcdf(tmp_path / "r.nc")
     with xarray.open_dataset(tmp_path / "r.nc") as back:
         numpy.testing.assert_array_equal(back.attrs["rescaling_velocity"], law["velocity"])
+
+
+def test_a_space_run_opens_with_its_fields_on_the_time_axis(tmp_path):
+    """``time_axis="steps"``: ``ds.temperature.sel(time=t)`` is the profile of the step at t,
+    the snapshots of f are along ``snapshot_time``, and both agree where they meet."""
+    from test_space_store import DESCRIPTION
+
+    store = tmp_path / "sod.zarr"
+    Simulation(DESCRIPTION).run(store, progress=False)
+    default, steps = gf.open_run(store), gf.open_run(store, time_axis="steps")
+    assert steps.temperature.dims == ("time", "x") and steps.f.dims[:2] == ("snapshot_time", "x")
+    assert steps.sizes["time"] == default.sizes["step_time"] == 9
+    assert steps.sizes["snapshot_time"] == default.sizes["time"] == 5
+    t = float(default.time.values[2])
+    profile = steps.temperature.sel(time=t, method="nearest")
+    numpy.testing.assert_array_equal(profile.values,
+                                     default.temperature.sel(step_time=t, method="nearest"))
+    assert float(profile.time) == pytest.approx(t)
+    numpy.testing.assert_array_equal(steps.f.sel(snapshot_time=t).values,
+                                     default.f.sel(time=t).values)
+    assert steps.time.attrs == default.step_time.attrs
+    with pytest.raises(ValueError, match="'time_axis' = 'records' is invalid"):
+        gf.open_run(store, time_axis="records")

@@ -166,9 +166,9 @@ def test_info_describes_cells_blocks_walls_fields_and_totals(store, capsys):
 
 def test_check_reads_every_block_of_f_and_names_a_damaged_one(store, tmp_path):
     intact, lines = check(store)
-    # f: 5 snapshots x 3 blocks; 14 record arrays, the 5 fields among them in 3 blocks of
+    # f: 5 snapshots x 3 blocks; 15 record arrays, the 5 fields among them in 3 blocks of
     # cells each (their chunks never straddle blocks), 3 snapshot arrays, 3 coordinates
-    assert intact and "5 snapshots, 9 records; 45 committed chunks read, 0 problems" in \
+    assert intact and "5 snapshots, 9 records; 46 committed chunks read, 0 problems" in \
         lines[0], lines
     damaged = tmp_path / "damaged.zarr"
     subprocess.run(["cp", "-r", str(store), str(damaged)], check=True)

@@ -488,3 +488,85 @@ def test_resume_with_rollback_of_a_health_stop_exits_3(workdir, capsys):
     assert main(["run", "bad.toml", "--out", "bad.zarr", "--resume", "--rollback",
                  "--no-progress"]) == 3
     assert "stopped earlier by a health check" in capsys.readouterr().err
+
+
+# -- 10. what an interruption or a kill leaves, said in one line ---------------------------
+def test_a_ctrl_c_just_after_the_store_is_published_says_resume(workdir, capsys, monkeypatch):
+    """The store exists with status 'running' (cut before the run could mark it): the
+    message points to --resume, which then finishes the run."""
+    publish = RunStore.publish
+
+    def then_ctrl_c(self, *args, **kwargs):
+        publish(self, *args, **kwargs)
+        raise KeyboardInterrupt
+    monkeypatch.setattr(RunStore, "publish", then_ctrl_c)
+    assert main(["run", "base.toml", "--out", "s.zarr", "--no-progress"]) == 130
+    err = capsys.readouterr().err
+    assert "holds every complete snapshot (status running): continue with --resume" in err
+    assert "as it was before this run" not in err
+    monkeypatch.setattr(RunStore, "publish", publish)
+    assert main(["run", "base.toml", "--out", "s.zarr", "--resume", "--no-progress"]) == 0
+    assert RunStore.open("s.zarr").progress["status"] == "finished"
+
+
+def test_a_ctrl_c_while_the_process_exits_ends_it_without_a_traceback(workdir):
+    """A Ctrl-C during the atexit callbacks (Dask, thread pools) after the command ends the
+    process with the command's status, not with "Exception ignored in atexit callback"."""
+    script = textwrap.dedent("""
+        import atexit, os, signal, sys, time
+        from granframe.tools import cli
+        atexit.register(lambda: (os.kill(os.getpid(), signal.SIGINT), time.sleep(5)))
+        sys.argv = ["granframe", "plugins", "restitution_laws"]
+        cli.entry()
+        """)
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert "Exception ignored" not in done.stderr and "Traceback" not in done.stderr
+    assert "restitution_laws" in done.stdout
+
+
+def test_stray_entries_left_in_a_store_give_no_zarr_warning(workdir):
+    """A directory that is not a zarr node (a kill during an array's creation, a user's
+    folder) is ignored by every read, without zarr's warning, and named by check in one
+    line (a process of its own: pytest shows every warning)."""
+    finished(workdir / "s.zarr")
+    (workdir / "s.zarr" / "leftover").mkdir()
+    command = "from granframe.tools.cli import entry; entry()"
+    for arguments, status in ((["info", "s.zarr"], 0), (["check", "s.zarr"], 0)):
+        done = subprocess.run([sys.executable, "-c", command, *arguments], capture_output=True,
+                              text=True, timeout=120)
+        assert done.returncode == status, done.stderr
+        assert "Warning" not in done.stderr, done.stderr
+    assert "1 entry that no run writes (ignored; left by a write cut short, or added by " \
+           "hand): leftover" in done.stdout
+
+
+def test_a_damaged_moment_chunk_is_rolled_back_from_intact_f(workdir, capsys):
+    """f is intact but the chunk of kurtosis records is damaged: --resume names the damage
+    and the rollback; --rollback continues from the last snapshot, drops the damaged
+    records (NaN), writes the step numbers again and says so."""
+    store = finished(workdir / "s.zarr")
+    cut = RunStore.open(store, mode="r+")
+    meta = cut.metadata
+    meta["progress"] = dict(meta["progress"], snapshots=3, records=5, step=4, time=0.2,
+                            status="running")
+    cut.group.attrs["granframe"] = meta
+    flip(store / "kurtosis" / "c" / "0", 4)
+    flip(store / "step" / "c" / "0", 4)
+    assert main(["run", "base.toml", "--out", "s.zarr", "--resume", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "last intact commit is snapshot 2 at t = 0.2 (step 4)" in err
+    assert "moment records of the damaged chunks (10 records) are dropped (NaN)" in err
+    assert main(["run", "base.toml", "--out", "s.zarr", "--resume", "--rollback",
+                 "--no-progress"]) == 0
+    err = capsys.readouterr().err
+    assert ("the rollback dropped the moment records of damaged chunks: kurtosis 0 .. 4 (now "
+            "NaN); step 0 .. 4 (written again: record i is step i)") in err
+    assert check(store)[0]
+    group = zarr.open_group(str(store), mode="r")
+    kurtosis = group["kurtosis"][:]
+    assert numpy.isnan(kurtosis[:5]).all() and numpy.isfinite(kurtosis[5:]).all()
+    assert (group["step"][:] == numpy.arange(len(kurtosis))).all()
+    assert main(["info", "s.zarr"]) == 0
+    assert "rollback    dropped the moment records" in capsys.readouterr().out

@@ -496,3 +496,58 @@ def test_the_table_and_info_flag_the_runs_that_end_under_resolved(cluster, tmp_p
     text = capsys.readouterr().out
     assert "resolution  1 of the finished runs end under-resolved" in text
     assert "velocity resolution: spectral tail" in text
+
+
+SPACE = {"cells": 8, "left": "specular", "right": "specular"}
+
+
+@pytest.mark.parametrize("changes, parameter", [
+    ({"base": {**BASE, "space": SPACE}}, "base.space"),
+    ({"product": {"space.cells": [8, 16]}}, "space.cells"),
+    ({"zip": {"space": [SPACE]}}, "space"),
+])
+def test_a_sweep_of_space_runs_is_refused_before_its_store_is_made(tmp_path, capsys, changes,
+                                                                  parameter):
+    """A space description would end in a traceback of the table (its moments are per
+    cell) and a store left running: it is refused up front, nothing written."""
+    import tomli_w
+
+    from granframe.tools.cli import main
+
+    data = {"base": BASE, "product": {"kernel": ["maxwell"]}, **changes}
+    with pytest.raises(ValueError, match=rf"^Sweep: parameter '{parameter}' = .* is invalid; "
+                                         "is not supported: a sweep runs space-homogeneous"):
+        Sweep.from_dict(data)
+    (tmp_path / "sweep.toml").write_text(tomli_w.dumps(data))
+    out = tmp_path / "out.zarr"
+    assert main(["sweep", str(tmp_path / "sweep.toml"), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and f"parameter '{parameter}'" in err
+    assert not out.exists()
+
+
+def test_info_counts_a_failed_run_as_failed_and_names_inaccurate_runs(tmp_path, monkeypatch,
+                                                                      capsys):
+    """A failed run's resolution warning does not make it 'under-resolved'; the accuracy
+    warnings of a finished run are counted as ``granframe run`` prints them."""
+    import zarr
+
+    from granframe.run import sweep as sweeps
+    from granframe.run.storage import SWEEP_SCHEMA_KEY
+
+    sweep = Sweep(BASE, product={"restitution.value": [0.5, 0.8, 0.9]})
+    out = tmp_path / "s.zarr"
+    root = zarr.open_group(str(out), mode="w")
+    root.attrs[SWEEP_SCHEMA_KEY] = {"schema": sweeps.SCHEMA, "sweep": sweep.to_dict()}
+    names = [run_name(p) for p in sweep.points()]
+    rows = {names[0]: {**sweeps._PENDING, "status": "failed", "message": "health check",
+                       "resolution_warning": "raise grid.n_modes"},
+            names[1]: {**sweeps._PENDING, "status": "finished",
+                       "accuracy_warning": "temperature law: |T/T_law - 1| = 0.3"},
+            names[2]: {**sweeps._PENDING, "status": "finished"}}
+    monkeypatch.setattr(sweeps, "_stored_rows", lambda path: rows)
+    text = sweeps.describe_sweep(out)
+    assert "points      3: 2 finished, 1 failed" in text
+    assert "under-resolved" not in text
+    assert "accuracy    1 of the finished runs end inaccurate" in text
+    assert "|T/T_law - 1| = 0.3" in text

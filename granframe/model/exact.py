@@ -84,7 +84,8 @@ def heated_maxwell_temperature(time, initial_temperature, restitution, heat_bath
     if e == 1.0:
         return initial_temperature + 2.0 * tau * t
     limit = 8.0 * tau / ((1.0 - e * e) * density)
-    return (initial_temperature - limit) * numpy.exp(-density * (1 - e * e) / 4 * t) + limit
+    rate = density * (1 - e * e) / 4 * t   # T0 e^-rate + limit (1 - e^-rate), no cancellation
+    return initial_temperature * numpy.exp(-rate) - limit * numpy.expm1(-rate)
 
 
 def heated_maxwell_law(kernel, restitution, heat_bath: float, knudsen: float = 1.0):

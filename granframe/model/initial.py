@@ -458,15 +458,6 @@ def check_projection(grid, f, projected, condition: InitialCondition, tolerance:
     health limit ``health.positivity_tolerance``, which would stop it at its first step).
     """
     owner = f"initial condition {type(condition).__name__}"
-    total = float(numpy.abs(projected).sum())
-    negative = float(numpy.maximum(-projected, 0.0).sum()) / total if total > 0 else 0.0
-    if negative > positivity_tolerance:
-        check.reject(owner, "negative mass share of f0 after the Nyquist projection", negative,
-                     f"must be <= health.positivity_tolerance = {positivity_tolerance:g}, "
-                     f"which the run checks after every step: N = {grid.n_modes} modes (spacing "
-                     f"h = {grid.spacing:.4g}) do not resolve f0, whose projection rings below "
-                     "zero; use a larger grid.n_modes, or a smaller grid.support_radius if f0 "
-                     "is negligible well inside the faces of the box (h = 2L/N falls with it)")
     moments = {}
     for name, moment, limit, field in (
             ("mass", grid.mass, tolerance, "projection_tolerance"),
@@ -482,6 +473,15 @@ def check_projection(grid, f, projected, condition: InitialCondition, tolerance:
                          f"larger n_modes (spacing h = {grid.spacing:.4g}), or a larger "
                          "support_radius if f0 is not negligible near the faces of the box, or "
                          f"raise health.{field} to accept it")
+    total = float(numpy.abs(projected).sum())
+    negative = float(numpy.maximum(-projected, 0.0).sum()) / total if total > 0 else 0.0
+    if negative > positivity_tolerance:
+        check.reject(owner, "negative mass share of f0 after the Nyquist projection", negative,
+                     f"must be <= health.positivity_tolerance = {positivity_tolerance:g}, "
+                     f"which the run checks after every step: N = {grid.n_modes} modes (spacing "
+                     f"h = {grid.spacing:.4g}) do not resolve f0, whose projection rings below "
+                     "zero; use a larger grid.n_modes, or a smaller grid.support_radius if f0 "
+                     "is negligible well inside the faces of the box (h = 2L/N falls with it)")
     return moments
 
 

@@ -20,9 +20,12 @@ from granframe.run.storage import (SNAPSHOT_ARRAYS, RunStore, StoreDamagedError,
 
 #: the coordinate of a space run's wall records: the wall at x = 0, then at x = ell
 WALLS = ("left", "right")
+#: the time axes :func:`open_run` can name ``time``: the snapshots' (the default) or the
+#: steps'
+TIME_AXES = ("snapshots", "steps")
 
 
-def open_run(path) -> xarray.Dataset:
+def open_run(path, *, time_axis: str = "snapshots") -> xarray.Dataset:
     """The committed contents of the run store ``path``, as a labelled dataset.
 
     The store is checked the way ``granframe info`` checks it: its metadata, every
@@ -34,6 +37,14 @@ def open_run(path) -> xarray.Dataset:
     ----------
     path : str or os.PathLike
         A granframe run store (``granframe run ... --out PATH``).
+    time_axis : {"snapshots", "steps"}
+        Which time axis is called ``time``. ``"snapshots"`` (the default): the snapshots
+        of f are along ``time`` and the records of every step along ``step_time``, as
+        below. ``"steps"``: the records of every step (the moments, a space run's fields
+        and wall records) are along ``time`` and the snapshots along ``snapshot_time``
+        (:func:`steps_on_time`), so that ``ds.temperature.sel(time=t)`` selects the step
+        at time t; every output time is a step, so ``ds.f.sel(snapshot_time=t)`` is f
+        there.
 
     Returns
     -------
@@ -79,12 +90,21 @@ def open_run(path) -> xarray.Dataset:
         - ``wall_mass`` and ``wall_energy`` (``step_time``, ``wall``): the mass and the
           energy that entered the interval through each wall over the step (a
           time-integrated flux, positive inwards; 0 at t = 0), so that
-          m(t) - m(0) = the sum of ``wall_mass`` up to t.
+          m(t) - m(0) = the sum of ``wall_mass`` up to t;
+        - ``wall_momentum`` (``step_time``, ``wall``, ``axis``): the momentum, components
+          ``v1`` (normal) ... ``vd`` (tangential), that entered through each wall over the
+          step (positive along +v_i; 0 at t = 0). Divided by ``dt`` it is the force per
+          unit area of the wall on the gas; the gas acts on the wall with minus it: the
+          ``v1`` component is the pressure on the left wall and minus the pressure on the
+          right one, the tangential components are minus the shear stress on the wall
+          (docs/space.md, "Wall pressure and shear stress").
 
     Raises
     ------
     TypeError
         ``path`` is not a path.
+    ValueError
+        ``time_axis`` is not one of :data:`TIME_AXES`.
     granframe.run.storage.StoreError
         ``path`` is not a granframe run store, or its replacement was cut short
         (``--resume`` completes it).
@@ -100,10 +120,15 @@ def open_run(path) -> xarray.Dataset:
     >>> ds.temperature.sel(step_time=1.0).item()                # doctest: +SKIP
     >>> ds.f.isel(time=-1).plot()                               # doctest: +SKIP
     >>> ds.to_netcdf("h.nc")                                    # doctest: +SKIP
+    >>> steps = granframe.open_run("runs/sod.zarr", time_axis="steps")  # doctest: +SKIP
+    >>> steps.temperature.sel(time=0.1, method="nearest")      # doctest: +SKIP
     """
     if not isinstance(path, (str, os.PathLike)):
         check.reject("open_run", "path", path, "must be the path (str or os.PathLike) of a "
                      "granframe run store", error=TypeError)
+    if time_axis not in TIME_AXES:
+        check.reject("open_run", "time_axis", time_axis,
+                     f"must be one of {', '.join(repr(a) for a in TIME_AXES)}")
     store = RunStore.open(path)
     problems = store.verify([name for name in sorted(store.group.array_keys()) if name != "f"])
     if problems:
@@ -113,7 +138,27 @@ def open_run(path) -> xarray.Dataset:
         raise StoreDamagedError(f"open_run: store '{path}' holds no commit: its creation was "
                                 "cut short (a store is put in place with its first commit); "
                                 "run it again")
-    return run_dataset(store)
+    dataset = run_dataset(store)
+    return steps_on_time(dataset) if time_axis == "steps" else dataset
+
+
+def steps_on_time(dataset: xarray.Dataset) -> xarray.Dataset:
+    """``dataset`` (as :func:`open_run` gives it) with the steps' time axis named ``time``.
+
+    The records of every step (``step_time``: the moments, a space run's fields and wall
+    records, ``step`` and ``dt``) move to ``time``, and the snapshots of f (``time``) to
+    ``snapshot_time``; nothing is read or copied. ``open_run(path, time_axis="steps")``
+    opens a store this way; this function does it to a dataset already open, or to one
+    from :func:`granframe.run_in_memory`.
+
+    Examples
+    --------
+    >>> import granframe
+    >>> from granframe.run.dataset import steps_on_time
+    >>> ds = steps_on_time(granframe.run_in_memory(description))   # doctest: +SKIP
+    >>> ds.temperature.sel(time=0.1, method="nearest").plot()     # doctest: +SKIP
+    """
+    return dataset.rename({"time": "snapshot_time"}).rename({"step_time": "time"})
 
 
 def run_dataset(store: RunStore) -> xarray.Dataset:

@@ -56,6 +56,8 @@ from granframe.model.initial import callable_reference, resolve_callable
 from granframe.registry import default_registries
 from granframe.equations.rescaled import check_rescalable
 from granframe.equations.conservative import WEIGHTS as CONSERVATIVE_WEIGHTS
+from granframe.space.initial import SpaceCondition
+from granframe.velocity.grid import SCALE_RANGE
 
 #: Tolerance on "final_time and snapshot_interval are whole multiples of time_step".
 _MULTIPLE_TOLERANCE = 1e-9
@@ -92,6 +94,24 @@ MAX_SNAPSHOTS = 10 ** 6
 #: epsilons), so a tolerance below 100 eps (2.2e-14 in float64, 1.2e-5 in float32) is
 #: met only by accident: steps shrink to round-off or are accepted on noise.
 TOLERANCE_FLOOR_EPSILONS = 100
+
+#: Range of the times (final_time, time_step, output.snapshot_interval) and of the
+#: tolerance: their sums, ratios and products with the rates below stay finite in float64.
+TIME_RANGE = (1e-100, 1e100)
+
+#: Range of the Knudsen number eps and largest heat bath tau: the rates 1/eps and
+#: tau |k|^2 times any step of TIME_RANGE stay finite in float64.
+RATE_RANGE = (1e-100, 1e100)
+
+
+def _in(lower: float, upper: float):
+    """attrs validator: a finite real number in [lower, upper]."""
+    return check.real(lower, upper)
+
+
+def _optional_in(lower: float, upper: float):
+    """attrs validator: None or a finite real number in [lower, upper]."""
+    return attrs.validators.optional(check.real(lower, upper))
 
 
 def _is_json_scalar(value) -> bool:
@@ -176,7 +196,7 @@ class Output:
     """
 
     snapshot_interval: float | None = attrs.field(default=None, converter=check.to_float,
-                                                  validator=check.optional_positive)
+                                                  validator=_optional_in(*TIME_RANGE))
 
 
 @attrs.frozen(kw_only=True)
@@ -300,7 +320,7 @@ class Space:
         2 ghost + 1 (3 for ``upwind``, 5 for ``muscl``, 7 for ``weno5``), at most
         :data:`MAX_CELLS`.
     length : float
-        ell > 0.
+        ell, in the velocity grid's scale range (1e-50 to 1e50).
     block_cells : int or None
         Cells per block (:class:`~granframe.space.domain.Domain`); a divisor of
         ``cells``, at least the reconstruction's ghost width. The store's f is chunked by
@@ -321,7 +341,7 @@ class Space:
 
     cells: int = attrs.field(converter=check.to_int, validator=check.integer(1, MAX_CELLS))
     length: float = attrs.field(default=1.0, converter=check.to_float,
-                                validator=check.real(0.0, math.inf, lower_open=True))
+                                validator=_in(*SCALE_RANGE))
     block_cells: int | None = attrs.field(default=None, converter=check.to_int)
     reconstruction: Component = component_field(default=Component("muscl"))
     left: Component = component_field(default=Component("periodic"))
@@ -482,7 +502,8 @@ class RunDescription:
     ----------
     grid : VelocityGrid (or a table of its parameters)
     final_time : float
-        End of the run (it starts at t = 0).
+        End of the run (it starts at t = 0). The times (final_time, time_step, the
+        snapshot interval) and the tolerance lie in :data:`TIME_RANGE`.
     kernel, restitution, initial : Component
         Registered collision kernel, restitution law and initial condition.
     operator : Component
@@ -500,9 +521,9 @@ class RunDescription:
     tolerance : float or None
         Error tolerance of adaptive integrators (required for them).
     heat_bath : float
-        tau >= 0.
+        tau >= 0, at most the upper end of :data:`RATE_RANGE`.
     knudsen : float
-        epsilon > 0.
+        epsilon, in :data:`RATE_RANGE`.
     rescaled : bool
         Solve free cooling in self-similar variables (:mod:`granframe.equations.rescaled`):
         the stored f is g(s, xi) and the run's times are the rescaled time s
@@ -527,8 +548,7 @@ class RunDescription:
 
     grid: VelocityGrid = attrs.field(converter=_table(VelocityGrid),
                                      validator=instance_of(VelocityGrid, "a VelocityGrid"))
-    final_time: float = attrs.field(converter=check.to_float,
-                                    validator=check.real(0.0, math.inf, lower_open=True))
+    final_time: float = attrs.field(converter=check.to_float, validator=_in(*TIME_RANGE))
     kernel: Component = component_field()
     restitution: Component = component_field()
     initial: Component = component_field()
@@ -536,13 +556,13 @@ class RunDescription:
     backend: Component = component_field(default=Component(AUTO))
     integrator: Component = component_field(default=Component("rk4"))
     time_step: float | None = attrs.field(default=None, converter=check.to_float,
-                                          validator=check.optional_positive)
+                                          validator=_optional_in(*TIME_RANGE))
     tolerance: float | None = attrs.field(default=None, converter=check.to_float,
-                                          validator=check.optional_positive)
+                                          validator=_optional_in(*TIME_RANGE))
     heat_bath: float = attrs.field(default=0.0, converter=check.to_float,
-                                   validator=check.real(0.0, math.inf))
+                                   validator=_in(0.0, RATE_RANGE[1]))
     knudsen: float = attrs.field(default=1.0, converter=check.to_float,
-                                 validator=check.real(0.0, math.inf, lower_open=True))
+                                 validator=_in(*RATE_RANGE))
     rescaled: bool = attrs.field(default=False, validator=check.boolean)
     conservative: str | None = attrs.field(default=None, converter=_conservative_weight,
                                            validator=_check_conservative)
@@ -560,12 +580,22 @@ class RunDescription:
     _light: dict = attrs.field(init=False, factory=dict, eq=False, repr=False)
 
     def __attrs_post_init__(self):
+        self._check_grid()
         check_component("collision_operators", self.operator, grid=None, kernel=None,
                         restitution=None, backend=None)
+        precision = self.operator.params.get("precision", "float64")
+        if not (isinstance(precision, str) and precision in PRECISIONS):
+            check.reject("RunDescription", "operator.precision", precision,
+                         f"must be one of {list(PRECISIONS)}")
         check_component("array_backends", Component(resolve_backend(self.backend.name),
                                                     self.backend.params))
         for field in LIGHT_COMPONENTS:
             self._light[field] = self._create(field)
+        if self.space is None and isinstance(self._light["initial"], SpaceCondition):
+            check.reject("RunDescription", "initial", self.initial.name,
+                         "applies to space runs only: add a [space] section (cells, length, "
+                         "walls), or use a space-homogeneous initial condition (maxwellian, "
+                         "bkw, ...)")
         if self.rescaled:
             check_rescalable(self._light["kernel"], self._light["restitution"],
                              self.heat_bath, "RunDescription")
@@ -578,6 +608,17 @@ class RunDescription:
         if self.space is not None:
             self._check_space()
         self.to_dict()  # everything can be written to TOML and a store
+
+    def _check_grid(self):
+        """Refuse a truncation radius beyond the largest relative speed on the grid."""
+        grid = self.grid
+        reach = 2.0 * math.sqrt(grid.dimension) * grid.half_width
+        if grid.truncation_radius > reach * (1.0 + 1e-12):
+            check.reject("RunDescription", "grid.truncation_radius", grid.truncation_radius,
+                         f"must be <= 2 sqrt(d) L = {reach:.6g}, the largest relative speed "
+                         f"of two nodes of the box [-L, L]^d (L = grid.half_width = "
+                         f"{grid.half_width:.6g}, d = {grid.dimension}): no pair of the grid "
+                         "is faster, and the operators' quadratures grow with R")
 
     def _check_space(self):
         owner = "RunDescription"
@@ -608,6 +649,10 @@ class RunDescription:
                              f"must be >= {floor:.3g} ({TOLERANCE_FLOOR_EPSILONS} machine "
                              f"epsilons of the operator's {precision}): a smaller error is "
                              "below round-off and cannot be controlled")
+        interval = self.output.snapshot_interval
+        if interval is not None and interval > self.final_time:
+            check.reject(owner, "output.snapshot_interval", interval,
+                         f"must be <= final_time = {self.final_time!r}")
         if not adaptive:
             if self.time_step is None:
                 check.reject(owner, "time_step", None,
@@ -623,7 +668,6 @@ class RunDescription:
             # final_time need not be a multiple: the last step is shortened (fixed_steps).
             # Snapshot times must be step ends: shortening a step before each of them
             # would make the solution depend on the output schedule.
-            interval = self.output.snapshot_interval
             if interval is not None:
                 whole, rest = fixed_steps(interval, self.time_step)
                 if whole < 1 or rest:
@@ -634,10 +678,6 @@ class RunDescription:
                                  f"{self.time_step!r} (ratio {ratio:.12g}), so that snapshots "
                                  f"fall on step ends and the output schedule never changes "
                                  f"the steps; e.g. {whole * self.time_step:.12g}")
-        interval = self.output.snapshot_interval
-        if interval is not None and interval > self.final_time:
-            check.reject(owner, "output.snapshot_interval", interval,
-                         f"must be <= final_time = {self.final_time!r}")
         if interval is not None and not self.final_time / interval <= MAX_SNAPSHOTS:
             check.reject(owner, "output.snapshot_interval", interval,
                          f"must give at most {MAX_SNAPSHOTS:.0e} snapshots up to final_time = "

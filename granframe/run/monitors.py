@@ -45,6 +45,7 @@ import math
 import numpy
 
 from granframe import validators as check
+from granframe.velocity.estimators import resolution_entry
 
 #: The monitors, in the order they are reported.
 MONITORS = ("momentum", "temperature", "edge_mass", "edge_energy", "spectral_tail")
@@ -157,6 +158,34 @@ def temperature_law(description) -> TemperatureLaw | None:
         return TemperatureLaw("T = T0 + 2 tau t (elastic collisions conserve energy)",
                               lambda t, T0, rho0: T0 + 2.0 * tau * numpy.asarray(t, dtype=float))
     return None
+
+
+def cooling_hint(description) -> str | None:
+    """The hint for a space-homogeneous run that cools freely, or None.
+
+    An inelastic gas without a heat bath cools without bound (Haff's law T ~ t^-2), so f
+    narrows on a fixed grid until the grid no longer resolves it; the rescaled formulation
+    (:mod:`granframe.equations.rescaled`) follows f in self-similar variables, where it
+    keeps its width. A run that is already rescaled, heated, elastic or in space gets no
+    hint, nor one the rescaled formulation does not hold for
+    (:func:`~granframe.equations.rescaled.check_rescalable`: a speed-dependent e, a
+    kernel that is not a power law).
+    """
+    from granframe.equations.rescaled import check_rescalable
+
+    if description.rescaled or description.heat_bath or description.space is not None:
+        return None
+    restitution = description.build("restitution")
+    if _is_elastic(restitution, description.grid):
+        return None
+    try:
+        check_rescalable(description.build("kernel"), restitution, 0.0, "cooling_hint")
+    except (ValueError, TypeError):
+        return None
+    return ("free cooling (inelastic, no heat bath): T falls without bound and f narrows "
+            "on the fixed grid until it is no longer resolved; rescaled = true solves it in "
+            "self-similar variables, where f keeps its width (docs/stability.md, "
+            "\"Concentration under free cooling\")")
 
 
 def quadrature_settings(operator) -> str:
@@ -315,14 +344,63 @@ def describe(entry: dict, time: float) -> list[str]:
     return lines
 
 
+#: The per-cell indicators of :meth:`granframe.space.fields.FieldMoments.resolution`, in
+#: its column order.
+CELL_INDICATORS = ("spectral_tail", "pairs_beyond_support", "negative_mass_fraction",
+                   "heat_flux_shell")
+
+#: The opening words of each warning of
+#: :func:`~granframe.velocity.estimators.resolution_entry`, and its indicator.
+_WARNED = {"velocity resolution": "spectral_tail", "positivity": "negative_mass_fraction",
+           "support": "pairs_beyond_support"}
+
+
+def cell_resolution_report(grid, indicators, centres, tolerance: float) -> dict:
+    r"""The resolution report of a space run from the indicators of every cell.
+
+    ``indicators`` (cells, 4), the columns of :data:`CELL_INDICATORS`
+    (:meth:`~granframe.space.fields.FieldMoments.resolution`); ``centres`` the cell centres.
+    The report of a space-homogeneous run
+    (:func:`~granframe.velocity.estimators.resolution_entry`) is made from the largest
+    value of each indicator over the cells, and each warning names the cell it comes from.
+    Added to it: ``heat_flux_shell``, the largest heat flux of the outermost shell of modes
+    in units of ho T^{3/2} (the estimated error of the heat flux on the grid), which warns
+    above ``tolerance`` and names ``grid.n_modes``; ``cells``, the index of the worst cell
+    of each indicator; ``x``, its centre. Cells where an indicator is NaN (no mass) are
+    left out of its largest value.
+    """
+    indicators = numpy.asarray(indicators, dtype=float)
+    finite = numpy.where(numpy.isfinite(indicators), indicators, -numpy.inf)
+    worst = {name: int(numpy.argmax(finite[:, k])) for k, name in enumerate(CELL_INDICATORS)}
+    largest = {name: max(float(finite[worst[name], k]), 0.0)
+               for k, name in enumerate(CELL_INDICATORS)}
+    report = resolution_entry(grid, largest["spectral_tail"],
+                              largest["pairs_beyond_support"],
+                              largest["negative_mass_fraction"], tolerance)
+
+    def where(name):
+        return f" (in cell {worst[name]}, x = {float(centres[worst[name]]):.4g})"
+
+    warnings = [warning + where(_WARNED[warning.split(":")[0]])
+                for warning in report["warnings"]]
+    heat = largest["heat_flux_shell"]
+    if heat > tolerance:
+        shown, limit = check.distinct(heat, tolerance)
+        warnings.append(f"heat-flux resolution: the outermost shell of modes carries a heat "
+                        f"flux {shown} rho T^(3/2) > health.resolution_tolerance = {limit}; "
+                        f"raise grid.n_modes (N = {grid.n_modes})" + where("heat_flux_shell"))
+    return {**report, "heat_flux_shell": heat, "warnings": warnings,
+            "cells": worst, "x": {name: float(centres[i]) for name, i in worst.items()}}
+
+
 class CellEdgeMonitors(AccuracyMonitors):
     """The edge monitors of a space run: ``edge_mass`` and ``edge_energy`` of every cell
-    (:func:`edge_shares` about the cell's own bulk velocity), the largest over the cells.
+    (:func:`edge_shares` about the cell's own bulk velocity), the largest over the cells,
+    and the ``spectral_tail`` of the worst cell (from :func:`cell_resolution_report`).
 
     The drifts and the temperature law of :class:`AccuracyMonitors` belong to a gas that
-    conserves its momentum or follows a law as a whole, which walls break; the spectral
-    tail is not taken per cell. ``state``: the ``accuracy`` entry of the last commit of a
-    resumed run.
+    conserves its momentum or follows a law as a whole, which walls break. ``state``: the
+    ``accuracy`` entry of the last commit of a resumed run.
     """
 
     def __init__(self, description, state: dict | None = None):
@@ -332,13 +410,19 @@ class CellEdgeMonitors(AccuracyMonitors):
         """None: walls exchange momentum and energy with the gas, so neither is a drift."""
         return {}
 
-    def shape(self, shares) -> dict:
+    def shape(self, shares, resolution: dict | None = None) -> dict:
         """The largest ``edge_mass`` and ``edge_energy`` over the cells from ``shares``
         (cells, 2), each cell's about its own bulk velocity (computed for every cell at
-        once on the backend, :meth:`granframe.space.fields.FieldMoments.edge_shares`);
-        none when r_e <= 0 (``shares`` None)."""
-        if shares is None:
-            return {}
-        shares = numpy.asarray(shares, dtype=float)
-        return {name: float(numpy.nanmax(column)) if numpy.isfinite(column).any() else math.nan
-                for name, column in zip(("edge_mass", "edge_energy"), shares.T)}
+        once on the backend, :meth:`granframe.space.fields.FieldMoments.edge_shares`;
+        none when r_e <= 0, ``shares`` None), and ``spectral_tail``, the tail error of the
+        worst cell of ``resolution`` (:func:`cell_resolution_report`)."""
+        values = {}
+        if shares is not None:
+            shares = numpy.asarray(shares, dtype=float)
+            values = {name: float(numpy.nanmax(column)) if numpy.isfinite(column).any()
+                      else math.nan
+                      for name, column in zip(("edge_mass", "edge_energy"), shares.T)}
+        if resolution is not None:
+            values["spectral_tail"] = float(resolution["tail_error"])
+            self._tail_warned = values["spectral_tail"] > self.resolution_tolerance
+        return values

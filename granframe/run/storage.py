@@ -86,6 +86,12 @@ import zarr
 from granframe._version import __version__
 from granframe.validators import is_integer, is_real, reject
 
+#: zarr warns of every entry of a store that is not a zarr array or group (a directory left
+#: by a write a kill cut short, a file a user dropped in); granframe reads only the arrays of
+#: its layout, and ``granframe check`` names those entries in one line (:func:`stray_entries`)
+warnings.filterwarnings("ignore", message="Object at .* is not recognized as a component of a "
+                        "Zarr hierarchy", category=UserWarning)
+
 SCHEMA = "granframe.run/2"
 SWEEP_SCHEMA_KEY = "granframe_sweep"
 SCALAR_MOMENTS = ("mass", "temperature", "kinetic_energy", "min_f", "negative_mass_fraction",
@@ -135,6 +141,10 @@ _SPACE_LONG_NAMES = {
     "wall_energy": "energy that entered the interval through the wall over the step (the "
                    "time integral of the upwind wall flux int v_1 |v|^2/2 f dv, positive "
                    "inwards)",
+    "wall_momentum": "momentum (components v1 ... vd) that entered the interval through the "
+                     "wall over the step (the time integral of the upwind wall flux "
+                     "int v_1 v f dv, positive along +v_i); per unit time, the force of the "
+                     "wall on the gas",
 }
 #: CF version whose attribute names the stores and :func:`granframe.open_run` use
 CONVENTIONS = "CF-1.10"
@@ -993,18 +1003,21 @@ class RunStore:
         return problems
 
     def _continue_from_intact(self, rollback: bool) -> None:
-        """Check what a resumed run reads; roll back to the last intact commit if asked."""
+        """Check what a resumed run reads; roll back to the last intact commit if asked.
+
+        The run continues from the last snapshot whose f and snapshot entries are intact.
+        A damaged chunk of the moment records before it does not stop that: with
+        ``rollback`` its records are dropped (NaN; the step numbers, record i being step i,
+        are written again) and listed in the metadata's ``dropped_records``
+        (:func:`describe` shows them).
+        """
         k = self.snapshot_count
         small = [n for n in self._names() if n != "f" and n not in self.coordinate_arrays]
         problems = self.verify(small)
         bad_snapshot = min((p["first"] for p in problems if p["array"] in SNAPSHOT_ARRAYS),
                            default=k)
-        bad_record = min((p["first"] for p in problems if p["array"] in self.record_arrays),
-                         default=math.inf)
         intact = None
         for j in range(min(k, bad_snapshot) - 1, -1, -1):
-            if int(self.group["snapshot_step"][j]) + 1 > bad_record:
-                continue
             damage = self.verify(["f"], snapshots={j})
             if not damage:
                 intact = j
@@ -1018,19 +1031,46 @@ class RunStore:
                                     "intact commit to continue from; start afresh with "
                                     "--overwrite", problems)
         t = float(self.group["time"][intact])
+        step = int(self.group["snapshot_step"][intact])
+        records = [p for p in problems if p["array"] in self.record_arrays
+                   and p["first"] <= step and p["kind"] != "missing array"]
+        dropped = [self._drop_records(p["array"], tuple(p["chunk"]), step + 1)
+                   for p in records]
         if not rollback:
+            lost = (f"; the moment records of the damaged chunks ({sum(d['count'] for d in dropped)}"
+                    " records) are dropped (NaN)" if dropped else "")
             raise StoreDamagedError(
                 f"store '{self.path}' is damaged ({where}); the last intact commit is "
-                f"snapshot {intact} at t = {t:.6g} (step {int(self.group['snapshot_step'][intact])}"
-                f"): run again with --resume --rollback to continue from it (the "
-                f"{k - 1 - intact} snapshots after it are dropped)", problems)
-        step = int(self.group["snapshot_step"][intact])
+                f"snapshot {intact} at t = {t:.6g} (step {step}): run again with --resume "
+                f"--rollback to continue from it (the {k - 1 - intact} snapshots after it are "
+                f"dropped{lost})", problems)
+        for problem in records:
+            self._drop_records(problem["array"], tuple(problem["chunk"]), step + 1, write=True)
+        if dropped:
+            meta = self.metadata
+            meta["dropped_records"] = meta.get("dropped_records", []) + dropped
+            self.group.attrs["granframe"] = meta
         progress = self.progress
         self._write_progress(dict(progress, snapshots=intact + 1, records=step + 1, step=step,
                                   time=t, status="running",
                                   dt_next=float(self.group["snapshot_dt_next"][intact]),
                                   rollbacks=progress.get("rollbacks", []) + [k - 1]))
         self._truncate()
+
+    def _drop_records(self, name: str, index: tuple, extent: int, write: bool = False) -> dict:
+        """The records of the chunk ``index`` of the record array ``name`` up to entry
+        ``extent``: ``{"array", "first", "count"}``; with ``write`` its damaged file is
+        replaced by NaN (-1 in integer arrays), and ``step`` by the step numbers."""
+        array = self.group[name]
+        region = tuple(slice(i * c, min((i + 1) * c, n))
+                       for i, c, n in zip(index, array.chunks, (extent,) + array.shape[1:]))
+        if write:
+            shape = tuple(r.stop - r.start for r in region)
+            values = (numpy.arange(region[0].start, region[0].stop).reshape(shape)
+                      if name == "step" else numpy.full(shape, fill_value(array.dtype)))
+            _chunk_file(self.path, name, index).unlink(missing_ok=True)
+            array.with_config({"write_empty_chunks": True})[region] = values   # NaN: the fill
+        return {"array": name, "first": region[0].start, "count": region[0].stop - region[0].start}
 
     def _truncate(self) -> None:
         """Drop whatever lies beyond the last commit (a commit cut short).
@@ -1438,7 +1478,32 @@ def check(path) -> tuple[bool, list[str]]:
     if partial:
         lines.append(f"  {len(partial)} file(s) of a write cut short (removed on --resume): "
                      + ", ".join(partial[:3]))
+    stray = stray_entries(path)
+    if stray:
+        lines.append(f"  {len(stray)} entr{'y' if len(stray) == 1 else 'ies'} that no run "
+                     f"writes (ignored; left by a write cut short, or added by hand): "
+                     + ", ".join(stray[:3]))
     return not problems, lines
+
+
+def dropped_note(metadata: dict) -> str | None:
+    """The moment records a rollback dropped (the metadata's ``dropped_records``), in
+    words; None when it dropped none."""
+    dropped = metadata.get("dropped_records")
+    if not dropped:
+        return None
+    return "dropped the moment records of damaged chunks: " + "; ".join(
+        f"{d['array']} {d['first']} .. {d['first'] + d['count'] - 1} ("
+        + ("written again: record i is step i" if d["array"] == "step" else "now NaN") + ")"
+        for d in dropped)
+
+
+def stray_entries(path) -> list[str]:
+    """The directories at the top of the run store ``path`` that are not zarr arrays or
+    groups (no ``zarr.json``), which every read ignores."""
+    path = pathlib.Path(path)
+    return sorted(p.name for p in path.iterdir()
+                  if p.is_dir() and not (p / "zarr.json").is_file())
 
 
 def _named(component: dict) -> str:
@@ -1509,6 +1574,9 @@ def describe(path) -> str:
             for name in ("mass", "temperature", "kurtosis", "min_f"):
                 values = group[name][[0, n - 1]]
                 lines.append(f"  {name:<12s}{values[0]:.10g} -> {values[1]:.10g}")
+    note = dropped_note(meta)
+    if note:
+        lines.append(f"rollback    {note}")
     resolution = progress.get("resolution")
     if resolution:
         lines.append(f"resolution  at t = {progress['time']:g} (the last commit): spectral tail "
@@ -1516,6 +1584,10 @@ def describe(path) -> str:
                      f"{resolution['tail_error']:.3g}), negative mass share "
                      f"{resolution['negative_mass_fraction']:.3g}, share of pairs beyond 2S "
                      f"{resolution['pairs_beyond_support']:.3g}")
+        if "cells" in resolution:           # a space run: the worst cell of each indicator
+            lines.append("  worst cells " + ", ".join(
+                f"{name} {resolution[name]:.3g} in cell {cell} (x = {resolution['x'][name]:.4g})"
+                for name, cell in resolution["cells"].items()))
         lines.extend(f"  warning: {warning}" for warning in resolution["warnings"])
     if progress.get("accuracy"):
         from granframe.run.monitors import describe as describe_accuracy

@@ -68,7 +68,10 @@ TABLE_MOMENTS = ("temperature", "kurtosis", "sonine_a2", "mass", "negative_mass_
 #: the resolution indicators of a run's last commit the table keeps
 #: (:func:`granframe.velocity.estimators.resolution_report`), and its warnings as one text
 TABLE_RESOLUTION = ("tail_error", "pairs_beyond_support")
-_NO_RESOLUTION = {**{name: math.nan for name in TABLE_RESOLUTION}, "resolution_warning": ""}
+#: the columns a table written before them lacks, and their values there; the warnings of
+#: the run's last commit are what ``granframe run`` prints when the run ends
+_NO_RESOLUTION = {**{name: math.nan for name in TABLE_RESOLUTION}, "resolution_warning": "",
+                  "accuracy_warning": ""}
 #: the table row of a run not run yet (or cut short); every column of the table
 _PENDING = {"status": "pending", "message": "", "wall_seconds": math.nan, "steps": 0,
             "time": math.nan, **{name: math.nan for name in TABLE_MOMENTS}, **_NO_RESOLUTION}
@@ -82,6 +85,12 @@ def _axes(owner: str, name: str, value) -> dict:
         check.reject(owner, name, value, "must be a table of dotted parameter -> non-empty list "
                      "of values", error=TypeError)
     return {k: list(v) for k, v in value.items()}
+
+
+#: why a sweep of space runs is refused (before its store is made)
+_SPACE_REFUSED = ("is not supported: a sweep runs space-homogeneous descriptions (its table "
+                  "holds their final moments); run the points of a space description with "
+                  "granframe run --set, one store each")
 
 
 @attrs.frozen
@@ -120,6 +129,12 @@ class Sweep:
             check.reject("Sweep", "zip", sorted(both), "must not repeat a product parameter")
         if not self.product and not self.zip:
             check.reject("Sweep", "product", {}, "or zip must give at least one axis")
+        spatial = [key for key in (*self.product, *self.zip) if key.split(".")[0] == "space"]
+        if "space" in self.base:
+            check.reject("Sweep", "base.space", self.base["space"], _SPACE_REFUSED)
+        if spatial:
+            check.reject("Sweep", spatial[0], {**self.product, **self.zip}[spatial[0]],
+                         _SPACE_REFUSED)
 
     @classmethod
     def from_dict(cls, data: dict) -> "Sweep":
@@ -191,6 +206,7 @@ def _summary(path) -> dict:
     resolution = progress.get("resolution") or {}
     row.update({name: float(resolution.get(name, math.nan)) for name in TABLE_RESOLUTION})
     row["resolution_warning"] = "; ".join(resolution.get("warnings", ()))
+    row["accuracy_warning"] = "; ".join((progress.get("accuracy") or {}).get("warnings", ()))
     return row
 
 
@@ -520,6 +536,10 @@ _RESULTS = {
     "resolution_warning": {"long_name": "what the run's resolution warnings say to raise "
                                         "(grid.n_modes, grid.support_radius); empty when f "
                                         "was resolved"},
+    "accuracy_warning": {"long_name": "the run's accuracy warnings at its end (momentum drift, "
+                                      "distance from the exact temperature law, mass and "
+                                      "energy near the box edge); empty when it stayed "
+                                      "accurate"},
 }
 def _sweep_metadata(path, owner: str) -> dict:
     """The ``granframe_sweep`` attributes of the sweep store at ``path``, or a clear error."""
@@ -596,7 +616,9 @@ def open_sweep(path) -> "xarray.Dataset":
     Variables on the grid: ``status``, ``message``, ``run`` (the run store under
     ``runs/``), ``wall_seconds``, ``steps``, ``time`` and the final moments
     (:data:`TABLE_MOMENTS`), NaN unless the run finished, and the resolution of the last
-    commit (:data:`TABLE_RESOLUTION` and ``resolution_warning``, the warnings' text). Every quantity is
+    commit (:data:`TABLE_RESOLUTION` and ``resolution_warning``, the warnings' text) and
+    its accuracy warnings (``accuracy_warning``), as ``granframe run`` prints them at the
+    end of a run. Every quantity is
     dimensionless (units "1") but the wall time (s). The root attributes (``title``,
     ``source``, ``history``, ``Conventions``, ``granframe_schema``, and the sweep as TOML
     text in ``sweep_toml``) are flat, so ``to_netcdf`` writes the dataset as it is.
@@ -628,7 +650,7 @@ def open_sweep(path) -> "xarray.Dataset":
                          {"long_name": "name of the run store (STORE/runs/<run>)"})}
     for key, attributes in _RESULTS.items():
         values = numpy.array([row[key] for row in rows])
-        if key in ("status", "message", "resolution_warning"):
+        if key in ("status", "message", "resolution_warning", "accuracy_warning"):
             values = values.astype(str)
         elif key == "steps":
             values = values.astype(numpy.int64)
@@ -708,11 +730,13 @@ def describe_sweep(path) -> str:
     if len(failed) > 5:
         lines.append(f"  ... and {len(failed) - 5} more failed (open_sweep gives every "
                      "message)")
-    coarse = [n for n, r in rows.items() if r["resolution_warning"]]
-    if coarse:
-        lines.append(f"resolution  {len(coarse)} of the finished runs end under-resolved "
-                     "(resolution_warning in open_sweep), e.g.")
-        lines.append(f"  {coarse[0]}: {rows[coarse[0]]['resolution_warning']}")
+    for kind, what in (("resolution", "under-resolved"), ("accuracy", "inaccurate")):
+        warned = [n for n, r in rows.items()
+                  if r["status"] == "finished" and r[f"{kind}_warning"]]
+        if warned:
+            lines.append(f"{kind:<12s}{len(warned)} of the finished runs end {what} "
+                         f"({kind}_warning in open_sweep), e.g.")
+            lines.append(f"  {warned[0]}: {rows[warned[0]][f'{kind}_warning']}")
     grid = " x ".join(f"{d} {len(next(iter(a.values())))}" for d, _, a in dims)
     lines.append(f"table       {grid}: granframe.open_sweep('{os.fspath(path)}'); the flat "
                  f"table: xarray.open_zarr('{os.fspath(path)}', group='table')")

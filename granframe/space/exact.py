@@ -453,6 +453,186 @@ def free_molecular_walls_grid(grid, T1: float, T2: float, density: float, rest=N
             "q": moments["heat_flux"], "q1": float(moments["heat_flux"][0])}
 
 
+def _couette_arguments(owner, temperature, velocity, density, accommodation):
+    temperature = _positive(owner, "temperature", temperature)
+    if not check.is_real(velocity) or not math.isfinite(float(velocity)):
+        check.reject(owner, "velocity", velocity, "must be a finite real number (the speed U "
+                     "of the walls relative to each other)")
+    density = _positive(owner, "density", density)
+    if not check.is_real(accommodation) or not 0.0 < float(accommodation) <= 1.0:
+        check.reject(owner, "accommodation", accommodation, "must be a real number in (0, 1]: "
+                     "between specular walls (0) the gas keeps its initial shear")
+    return temperature, float(velocity), density, float(accommodation)
+
+
+def free_molecular_couette(dimension: int, temperature: float, velocity: float,
+                           density: float, accommodation: float = 1.0) -> dict:
+    r"""Steady free-molecular plane Couette flow: no collisions, between Maxwell walls at
+    the same temperature T_w with accommodation alpha, the wall at x = 0 moving along v_2
+    with -U/2 and the wall at x = ell with +U/2.
+
+    Each wall sends back a (1 - alpha) share of what arrives specularly and an alpha share
+    diffusely, as the half-range Maxwellian of its own velocity (Maxwell 1879). Neither
+    reflection changes the profile in v_1, so f is uniform in x, and
+    f = rho (2 pi T_w)^{-1/2} e^{-v_1^2/(2T_w)} t^±(v_t) on v_1 ≷ 0 (the two streams carry
+    the same mass flux rho sqrt(T_w/(2 pi)), so each has the density rho) with unit-mass
+    tangential profiles t^± that satisfy
+
+    .. math:: t^+ = (1 - \alpha)\, t^- + \alpha\, m_{-U/2},\qquad
+              t^- = (1 - \alpha)\, t^+ + \alpha\, m_{+U/2},
+              \qquad t^\pm = \frac{m_{\mp U/2} + (1 - \alpha)\, m_{\pm U/2}}{2 - \alpha},
+
+    m_w the tangential Maxwellian of temperature T_w and mean w along v_2. The streams'
+    mean tangential velocities are -+ alpha U / (2 (2 - alpha)); with the half-range moments
+    int_{v_1>0} v_1 M dv_1 = sqrt(T_w / (2 pi)), int_{v_1>0} v_1^2 M dv_1 = T_w / 2 of the
+    unit Maxwellian M in v_1,
+
+    .. math:: P_{12} = \rho \sqrt{\frac{T_w}{2\pi}}\,\bigl(\bar v_2^+ - \bar v_2^-\bigr)
+              = -\frac{\alpha}{2 - \alpha}\, \rho\, U \sqrt{\frac{T_w}{2\pi}},\qquad
+              P_{11} = \rho\, T_w,\qquad P_{22} = \rho\,(T_w + U^2/4),
+
+    P_33 = rho T_w (3D), u = 0, T = T_w + U^2 / (4d), q = 0 (both t^± have the second
+    moment T_w + U^2/4 about 0, and the two streams' odd moments cancel). The pressure on
+    each wall is P_11 = rho T_w and the tangential momentum flux P_12, the same at every x:
+    through the wall at x = 0 the gas receives P_12 per unit time, through the wall at
+    x = ell -P_12, and the shear stress on the walls is -+P_12 (a drag against each
+    wall's motion). With alpha = 1 this is the free-molecular limit of Couette flow (C.
+    Cercignani, Rarefied Gas Dynamics, Cambridge University Press, 2000, ch. 6; Y. Sone,
+    Molecular Gas Dynamics, Birkhauser, 2007, sec. 4.2); the factor alpha / (2 - alpha)
+    is that of Maxwell's boundary condition between two plates (J. C. Maxwell, Phil.
+    Trans. R. Soc. 170 (1879) 231-256).
+
+    Parameters
+    ----------
+    dimension : int
+        d, 2 or 3.
+    temperature, velocity, density : float
+        T_w > 0, U (finite) and rho > 0, the mean density.
+    accommodation : float
+        alpha in (0, 1], the same at both walls.
+
+    Returns
+    -------
+    dict
+        ``rho``, ``u`` (length d), ``T``, ``P`` (d x d), ``P11``, ``P12``, ``q`` (length d),
+        ``stream_velocity`` (the mean v_2 of the stream leaving the wall at x = 0), and
+        ``wall_momentum``: (2, d), the momentum that enters the gas through the walls at
+        x = 0 and ell per unit time ((P_11, P_12, 0) and its negative; what the store
+        records as ``wall_momentum`` / ``dt``).
+    """
+    owner = "free_molecular_couette"
+    if not check.is_integer(dimension) or dimension not in (2, 3):
+        check.reject(owner, "dimension", dimension, "must be 2 or 3")
+    T, U, rho, alpha = _couette_arguments(owner, temperature, velocity, density, accommodation)
+    shear = -alpha / (2.0 - alpha) * rho * U * math.sqrt(T / (2.0 * math.pi))
+    P = rho * T * numpy.eye(dimension)
+    P[0, 1] = P[1, 0] = shear
+    P[1, 1] += 0.25 * rho * U * U
+    flux = numpy.zeros(dimension)
+    flux[:2] = P[0, 0], shear
+    return {"rho": rho, "u": numpy.zeros(dimension), "T": T + U * U / (4.0 * dimension),
+            "P": P, "P11": rho * T, "P12": shear, "q": numpy.zeros(dimension),
+            "stream_velocity": -alpha * U / (2.0 * (2.0 - alpha)),
+            "wall_momentum": numpy.stack([flux, -flux])}
+
+
+def free_molecular_couette_grid(grid, temperature: float, velocity: float, density: float,
+                                accommodation: float = 1.0, rest=None) -> dict:
+    r"""The free-molecular Couette flow of :func:`free_molecular_couette` on a velocity grid:
+    the discrete steady state of the transport between two grid walls
+    :class:`~granframe.space.boundaries.Diffuse` (temperature T_w, velocities -U/2 at
+    x = 0 and +U/2 at x = ell, accommodation alpha).
+
+    With A_i = exp(-v_{1,i}^2 / (2 T_w)) on the v_1 nodes and m_w(v_t) =
+    exp(-|v_t - w e_2|^2 / (2 T_w)) normalised to h^{d-1} sum_t m_w = 1 on the tangential
+    nodes, the state is f = n A_i t^+(v_t) on the nodes with v_1 > 0 and n A_i t^-(v_t) on
+    those with v_1 < 0, t^± = (m_{-+U/2} + (1 - alpha) m_{±U/2}) / (2 - alpha) as in the
+    continuum. It is steady on the grid: the wall's emission alpha Phi M_w / sum_v c^+ M_w
+    Delta v + (1 - alpha) f_in(Rv) is n A_i t^+ at every leaving node, because
+    Phi = sum_v |c^-| f_in Delta v = n h sum_{c^- < 0} |c^-| A and the reflection maps
+    |c^-| A onto c^+ A node by node (the same v_1 profile leaves as arrives). The node -L,
+    which moves both ways, holds the mean n A(L) (t^+ + t^-)/2 of the two walls' emissions
+    (in a run a profile between them, of relative size exp(-L^2 / (2 T_w))); the nodes
+    v_1 = 0 carry no flux and keep ``rest`` (None: the same mean, n A(0) (t^+ + t^-)/2).
+    n follows from the grid mass h^d sum f = rho.
+
+    The moments are taken as the recorded fields count them
+    (:class:`~granframe.space.fields.FieldMoments`: the node -L as its two halves). The
+    wall momentum per unit time is the flux of the state through each wall,
+    h^d sum_v v_1 v f (the node -L, whose two halves cancel, left out): (P_11, P_12, 0)
+    through the wall at x = 0 and its negative through the other, since u = 0. The
+    half-range sums in v_1 are the trapezoidal rule on [0, L] of integrands with a kink at
+    v_1 = 0 (their end value v_1 = 0 carries no flux), so P_12 and P_11 differ from the
+    continuum's by O(h^2) on a fixed box.
+
+    Parameters
+    ----------
+    grid : VelocityGrid
+    temperature, velocity, density : float
+        T_w > 0, U and the grid mass rho = h^d sum_j f_j of the state, > 0.
+    accommodation : float
+        alpha in (0, 1].
+    rest : None or array_like
+        Values at the nodes v_1 = 0: None (see above) or an array of the grid's shape whose
+        values there are kept (the initial data of a run).
+
+    Returns
+    -------
+    dict
+        ``f`` (the grid's shape), ``n``, the fields ``rho``, ``u``, ``T``, ``P``, ``P11``,
+        ``P12``, ``q``, and ``wall_momentum`` (2, d) as in :func:`free_molecular_couette`.
+    """
+    from granframe.space.fields import FieldMoments
+
+    owner = "free_molecular_couette_grid"
+    T, U, rho, alpha = _couette_arguments(owner, temperature, velocity, density, accommodation)
+    n_modes, d = grid.n_modes, grid.dimension
+    points = grid.points()
+    along = (-1,) + (1,) * (d - 1)
+    normal = numpy.exp(-points ** 2 / (2.0 * T)).reshape(along)
+    tangential = grid.mesh()[1:]
+
+    def profile(w):
+        m = numpy.exp(-((tangential[0] - w) ** 2 + sum(c * c for c in tangential[1:]))
+                      / (2.0 * T))
+        return m / (m.sum() * grid.spacing ** (d - 1))
+
+    left, right = profile(-0.5 * U), profile(0.5 * U)
+    plus = (left + (1.0 - alpha) * right) / (2.0 - alpha)
+    minus = (right + (1.0 - alpha) * left) / (2.0 - alpha)
+    index = numpy.arange(n_modes).reshape(along)
+    unit = numpy.where(index > n_modes // 2, normal * plus,
+                       numpy.where(index == n_modes // 2, 0.0,
+                                   normal * numpy.where(index == 0, 0.5 * (plus + minus),
+                                                        minus)))
+    unit = numpy.broadcast_to(unit, grid.shape)
+    resting = numpy.broadcast_to(index == n_modes // 2, grid.shape)
+    h = grid.cell_volume
+    if rest is None:
+        n = rho / (h * float(unit.sum()) + h * float(numpy.sum(normal[n_modes // 2]
+                                                             * 0.5 * (plus + minus))))
+        f = numpy.where(resting, n * normal * 0.5 * (plus + minus), n * unit)
+    else:
+        kept = numpy.asarray(rest, dtype=float)
+        if kept.shape != grid.shape or not numpy.isfinite(kept).all():
+            check.reject(owner, "rest", rest, f"must be None or a finite array of the grid's "
+                         f"shape {grid.shape}")
+        remaining = rho - h * float(kept[resting].sum())
+        if not remaining > 0.0:
+            check.reject(owner, "rest (grid mass at the nodes v_1 = 0)", rho - remaining,
+                         f"must be below density = {rho:.6g}; the moving nodes would need "
+                         "a negative mass")
+        n = remaining / (h * float(unit.sum()))
+        f = numpy.where(resting, kept, n * unit)
+    fields = FieldMoments(grid, 1.0)(f[None])
+    P, u, mass = fields["pressure_tensor"][0], fields["velocity"][0], fields["density"][0]
+    flux = P[0] + mass * u[0] * u                       # h^d sum_v v_1 v f
+    return {"f": f, "n": float(n), "rho": float(mass), "u": u,
+            "T": float(fields["temperature"][0]), "P": P,
+            "P11": float(P[0, 0]), "P12": float(P[0, 1]), "q": fields["heat_flux"][0],
+            "wall_momentum": numpy.stack([flux, -flux])}
+
+
 # -- Free transport ------------------------------------------------------------------------
 
 

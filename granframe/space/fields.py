@@ -71,7 +71,8 @@ class FieldMoments:
         self.nodes = xp.asarray(numpy.stack([numpy.where(edge, -grid.half_width, odd)]
                                             + mesh[1:]))
         self.squared = xp.asarray(squared)
-        #: the 1-D nodes, for the Maxwellians of :func:`maxwellians`
+        #: the 1-D nodes, for the discrete Maxwellians of the BGK penalisation
+        #: (:func:`~granframe.velocity.equilibrium.discrete_maxwellians`)
         self.points = xp.asarray(grid.points())
         self._diagonal = [1 + d + self.pairs.index((i, i)) for i in range(d)]
 
@@ -181,19 +182,76 @@ class FieldMoments:
             return xp.where(totals > 0.0, outside / totals, xp.nan)
 
 
-def maxwellians(grid, density, velocity, temperature, xp=numpy, points=None):
-    """rho (2 pi T)^{-d/2} exp(-|v - u|^2 / (2T)) for each cell, (cells, *grid.shape),
-    each scaled to have exactly the grid mass rho (``density``, ``velocity`` (cells, d),
-    ``temperature`` arrays in ``xp``; ``points``: the 1-D nodes already in ``xp``)."""
-    d = grid.dimension
-    points = xp.asarray(grid.points()) if points is None else points
-    cells = density.shape[0]
-    result = xp.ones((cells,) + tuple(grid.shape))
-    for i in range(d):
-        shape = [cells] + [1] * d
-        shape[1 + i] = -1
-        factor = xp.exp(-(points[None, :] - velocity[:, i:i + 1]) ** 2
-                        / (2.0 * temperature[:, None]))
-        result = result * factor.reshape(shape)
-    mass = result.reshape(cells, -1).sum(axis=1) * grid.cell_volume
-    return result * (density / mass).reshape((cells,) + (1,) * d)
+    def resolution(self, f, backend):
+        r"""The resolution indicators of every cell of f, (cells, 4) on the device: the
+        spectral tail, the share of pairs beyond 2S, the negative mass share and the heat
+        flux of the outermost shell.
+
+        With \hat f_{c,k} the DFT of cell c over the velocity axes and B the outermost
+        evolved shell, max_i |k_i| = N/2 - 1 (:func:`~granframe.velocity.estimators.outer_band`):
+
+        - tail: max_{k in B} |\hat f_{c,k}| / |\hat f_{c,0}|
+          (:func:`~granframe.velocity.estimators.spectral_tail`);
+        - pairs: the share of the autocorrelation of |f_c| (FFT on the grid padded to 2N)
+          at lags |g| > 2S (:func:`~granframe.velocity.estimators.pair_share_beyond`,
+          p = 0);
+        - negative share: \sum_j \max(-f_{c,j}, 0) / \sum_j |f_{c,j}|;
+        - heat flux of the shell: with s_c the part of f_c on B (the inverse DFT of
+          \hat f_{c,k} 1_B(k)) and q[g] the heat flux of the module notes taken with the
+          bulk velocity u_c of f_c,
+
+          .. math:: \frac{|q[s_c]|}{\rho_c T_c^{3/2}},
+
+          the heat flux carried by the last modes the grid keeps, in units of the cell's
+          thermal heat flux scale (the estimate of what the modes it cuts off carry).
+          The weight v |v|^2 is of size L^3 at the faces of the box, where the modes of B
+          spread, so q needs more of N than f does.
+
+        Three batched FFTs over the cells, by ``backend``'s transforms (``rfftn``,
+        ``irfftn``: on its device); NaN where the mass or T is not positive.
+        """
+        from granframe.velocity.estimators import outer_band, squared_lags
+
+        xp, grid, d = self.xp, self.grid, self.d
+        if not hasattr(self, "_band"):
+            #: the outermost shell and the lags beyond 2S, put on the device once
+            self._band = xp.asarray(outer_band(grid).astype(float))
+            self._lags_beyond = xp.asarray(
+                (squared_lags(grid) > (2.0 * grid.support_radius) ** 2).astype(float).reshape(-1))
+        axes = tuple(range(1, d + 1))
+        cells = f.shape[0]
+        spectrum = backend.rfftn(f, axes=axes)
+        modulus = xp.abs(spectrum).reshape(cells, -1)
+        band = self._band.reshape(-1)
+        zero = modulus[:, 0]
+        tail = (modulus * band).max(axis=1) / zero
+        padded = backend.rfftn(xp.pad(xp.abs(f), [(0, 0)] + [(0, grid.n_modes)] * d),
+                               axes=axes)
+        correlation = backend.irfftn(padded * xp.conj(padded), (2 * grid.n_modes,) * d,
+                                     axes=axes).reshape(cells, -1)
+        pairs = (correlation @ self._lags_beyond) / correlation.sum(axis=1)
+        flat = f.reshape(cells, -1)
+        negative = xp.maximum(-flat, 0.0).sum(axis=1) / xp.abs(flat).sum(axis=1)
+        shell = backend.irfftn(spectrum * self._band, tuple(grid.shape), axes=axes)
+        rho, u, temperature, _ = self.primitives(f)
+        heat = self._heat_flux(self.raw(shell), u)
+        with numpy.errstate(divide="ignore", invalid="ignore"):
+            scale = rho * xp.abs(temperature) ** 1.5
+            share = xp.where((rho > 0.0) & (temperature > 0.0),
+                             xp.sqrt((heat * heat).sum(axis=1)) / scale, xp.nan)
+        return xp.stack([tail, pairs, negative, share], axis=1)
+
+    def _heat_flux(self, raw, velocity):
+        """q_i = (M3_i - 2 u_j M_ij - u_i tr M + 2 rho u_i |u|^2) / 2 of the raw moments
+        ``raw`` (cells, m) about ``velocity`` (cells, d), on the device."""
+        d, xp = self.d, self.xp
+        second = [[None] * d for _ in range(d)]
+        for k, (i, j) in enumerate(self.pairs):
+            second[i][j] = second[j][i] = raw[:, 1 + d + k]
+        trace = raw[:, self._diagonal].sum(axis=1)
+        third = raw[:, 1 + d + len(self.pairs):-1]
+        speed = (velocity * velocity).sum(axis=1)
+        contracted = xp.stack([sum(velocity[:, j] * second[i][j] for j in range(d))
+                               for i in range(d)], axis=1)
+        return 0.5 * (third - 2.0 * contracted - velocity * trace[:, None]
+                      + 2.0 * raw[:, :1] * velocity * speed[:, None])

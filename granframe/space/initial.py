@@ -30,6 +30,15 @@ from granframe.model.initial import check_real, resolve_callable
 #: Gauss-Legendre points per cell of the averages
 CELL_POINTS = 6
 
+#: Range of the densities, temperatures and |velocities| of the states: the Maxwellian's
+#: peak rho (2 pi T)^(-d/2), its square (in Q(f, f)) and its fourth moments stay finite
+#: in float64.
+STATE_RANGE = (1e-50, 1e50)
+
+#: Range of the largest value of f0 in each cell: Q(f, f), quadratic in f, and the fourth
+#: moments of f0 stay finite in float64.
+PEAK_RANGE = (1e-100, 1e100)
+
 
 def _finite(value) -> bool:
     """A finite real number (not bool), an integer beyond float range excluded."""
@@ -39,13 +48,19 @@ def _finite(value) -> bool:
         return False
 
 
+def _speed(value) -> bool:
+    """A finite real number of magnitude at most the upper end of :data:`STATE_RANGE`."""
+    return _finite(value) and abs(float(value)) <= STATE_RANGE[1]
+
+
 def _velocity(value, owner, name):
     """A velocity given as u_1 (a number) or all d components, as a tuple."""
-    if _finite(value):
+    if _speed(value):
         return (float(value),)
-    if isinstance(value, (list, tuple)) and 1 <= len(value) <= 3 and all(map(_finite, value)):
+    if isinstance(value, (list, tuple)) and 1 <= len(value) <= 3 and all(map(_speed, value)):
         return tuple(float(v) for v in value)
-    check.reject(owner, name, value, "must be u_1 (a finite number) or the d components of u")
+    check.reject(owner, name, value, "must be u_1 (a finite number) or the d components of u, "
+                 f"each of magnitude <= {STATE_RANGE[1]:g}")
 
 
 def _full(velocity, grid, owner, name):
@@ -56,7 +71,8 @@ def _full(velocity, grid, owner, name):
 
 
 def _state(value, owner, name):
-    """A hydrodynamic state {density, velocity, temperature} with rho, T > 0."""
+    """A hydrodynamic state {density, velocity, temperature}, rho and T in
+    :data:`STATE_RANGE`."""
     if not isinstance(value, dict):
         check.reject(owner, name, value, "must be a table {density, velocity, temperature}",
                      error=TypeError)
@@ -67,8 +83,10 @@ def _state(value, owner, name):
     state = {"density": value.get("density", 1.0), "velocity": value.get("velocity", 0.0),
              "temperature": value.get("temperature", 1.0)}
     for key in ("density", "temperature"):
-        if not (_finite(state[key]) and float(state[key]) > 0.0):
-            check.reject(owner, f"{name}.{key}", state[key], "must be a finite number > 0")
+        if not (_finite(state[key])
+                and STATE_RANGE[0] <= float(state[key]) <= STATE_RANGE[1]):
+            check.reject(owner, f"{name}.{key}", state[key], f"must be a finite number in "
+                         f"[{STATE_RANGE[0]:g}, {STATE_RANGE[1]:g}]")
         state[key] = float(state[key])
     state["velocity"] = list(_velocity(state["velocity"], owner, f"{name}.velocity"))
     return state
@@ -143,7 +161,8 @@ class SinusoidalMode(SpaceCondition):
     Parameters
     ----------
     density, velocity, temperature : float
-        The uniform state (velocity: u_1, along x).
+        The uniform state (velocity: u_1, along x); rho, T and |u_1| in
+        :data:`STATE_RANGE`.
     field : str
         The perturbed field: 'density', 'velocity' or 'temperature'.
     amplitude : float
@@ -153,14 +172,14 @@ class SinusoidalMode(SpaceCondition):
     """
 
     density: float = attrs.field(default=1.0, converter=check.to_float,
-                                 validator=check.real(0.0, math.inf, lower_open=True))
+                                 validator=check.real(*STATE_RANGE))
     velocity: float = attrs.field(default=0.0, converter=check.to_float,
-                                  validator=check.real(-math.inf, math.inf))
+                                  validator=check.real(-STATE_RANGE[1], STATE_RANGE[1]))
     temperature: float = attrs.field(default=1.0, converter=check.to_float,
-                                     validator=check.real(0.0, math.inf, lower_open=True))
+                                     validator=check.real(*STATE_RANGE))
     field: str = attrs.field(default="density", validator=check.one_of(_FIELDS))
     amplitude: float = attrs.field(default=0.1, converter=check.to_float,
-                                   validator=check.real(-math.inf, math.inf))
+                                   validator=check.real(-STATE_RANGE[1], STATE_RANGE[1]))
     mode: int = attrs.field(default=1, converter=check.to_int, validator=check.integer(1))
 
     @amplitude.validator
@@ -252,13 +271,65 @@ def cell_edges(space):
 def initial_cells(description):
     """f0 of a space run as cell averages (cells, *grid.shape), and the intended mass of each
     cell (None where unknown): a :class:`SpaceCondition`'s :meth:`~SpaceCondition.sample_cells`,
-    or a space-homogeneous condition repeated in every cell."""
+    or a space-homogeneous condition repeated in every cell, refused by
+    :func:`check_cells` when its moments leave floating-point range."""
     grid, space = description.grid, description.space
     initial = description.build("initial")
-    if isinstance(initial, SpaceCondition):
-        f, masses = initial.sample_cells(grid, cell_edges(space))
-    else:
-        cell = initial.sample(grid)
-        f = numpy.broadcast_to(cell, (space.cells,) + cell.shape)
-        masses = [initial.intended_mass] * space.cells
+    owner = f"initial condition {type(initial).__name__}"
+    try:
+        if isinstance(initial, SpaceCondition):
+            f, masses = initial.sample_cells(grid, cell_edges(space))
+        else:
+            cell = initial.sample(grid)
+            f = numpy.broadcast_to(cell, (space.cells,) + cell.shape)
+            masses = [initial.intended_mass] * space.cells
+    except (OverflowError, ZeroDivisionError) as exc:
+        check.reject(owner, "initial", description.initial.name, f"gives f0 beyond "
+                     f"floating-point range on this grid ({exc}); bring its parameters "
+                     "nearer to the grid's scales (support_radius, spacing h = "
+                     f"{grid.spacing:.4g})")
+    check_cells(grid, f, owner, description.initial.name)
     return f, [None] * len(f) if masses is None else list(masses)
+
+
+def check_cells(grid, f, owner: str, name: str) -> None:
+    """Refuse cell averages ``f`` (cells, *grid.shape) whose arithmetic would leave
+    floating-point range: in every cell max |f0| must lie in :data:`PEAK_RANGE` and the
+    mass, the second and fourth central moments and the kurtosis must be finite and > 0
+    (a cell too narrow for the grid spacing has no second moment). Messages name the
+    initial condition ``name`` and the first such cell. Data with non-finite or negative
+    values is left to the run's checks of f0, which refuse it naming the cell
+    (:func:`~granframe.model.initial.check_fits`)."""
+    if not numpy.all(numpy.isfinite(f)) or numpy.min(f) < 0:
+        return
+    if f.strides[0] == 0:       # one cell repeated (a space-homogeneous condition)
+        f = f[:1]
+    mesh = [numpy.broadcast_to(c, grid.shape).ravel() for c in grid.mesh()]
+    with numpy.errstate(all="ignore"):
+        for start in range(0, len(f), 256):     # 256 cells at a time bound the temporaries
+            block = numpy.asarray(f[start:start + 256]).reshape(-1, mesh[0].size)
+            peak = block.max(axis=1)
+            bad = ~((peak >= PEAK_RANGE[0]) & (peak <= PEAK_RANGE[1]))
+            if bad.any():
+                cell = start + int(numpy.argmax(bad))
+                check.reject(owner, f"max |f0| in cell {cell}", float(peak[cell - start]),
+                             f"must lie in [{PEAK_RANGE[0]:g}, {PEAK_RANGE[1]:g}] so that "
+                             f"Q(f, f) and the moments stay finite: the data of initial "
+                             f"condition '{name}' is too large, too small, or too narrow for "
+                             f"the grid spacing h = {grid.spacing:.4g} to be seen on the nodes")
+            mass = grid.cell_volume * block.sum(axis=1)
+            mean = [block @ c / (mass / grid.cell_volume) for c in mesh]
+            r2 = sum((c[None, :] - u[:, None]) ** 2 for c, u in zip(mesh, mean))
+            m2 = grid.cell_volume * (block * r2).sum(axis=1)
+            m4 = grid.cell_volume * (block * r2 * r2).sum(axis=1)
+            kurtosis = mass * m4 / m2 ** 2
+            good = ((mass > 0.0) & (m2 > 0.0) & numpy.isfinite(mass) & numpy.isfinite(m4)
+                    & numpy.isfinite(kurtosis) & (kurtosis > 0.0))
+            if not good.all():
+                cell = start + int(numpy.argmin(good))
+                check.reject(owner, f"moments of f0 in cell {cell}",
+                             {"mass": float(mass[cell - start]), "m2": float(m2[cell - start]),
+                              "m4": float(m4[cell - start])},
+                             f"must be finite and > 0 (with a finite kurtosis): the data of "
+                             f"initial condition '{name}' is too narrow for the grid spacing "
+                             f"h = {grid.spacing:.4g}, or too large for float64")

@@ -56,6 +56,26 @@ def upwind_speeds(grid, xp=numpy):
     return xp.asarray(positive.reshape(shape)), xp.asarray(negative.reshape(shape))
 
 
+def wall_weights(grid):
+    r"""The weights w (d + 2, *grid.shape) of the wall totals sum_v w F Delta v of a face
+    flux F = c^+ f^- + c^- f^+: 1 (mass), v_1 .. v_d (momentum) and |v|^2/2 (energy),
+    times Delta v = h^d.
+
+    The node -L counts as in the recorded fields (:mod:`granframe.space.fields`): v_1 = 0
+    in the momentum along x (its content moves half each way and carries no net v_1) and
+    v_1^2 = L^2 in the energy. With these weights the fluxes through the faces are those of
+    the cells' mass, momentum and energy, so the change of the totals over a step equals
+    what the walls let in, to round-off, wherever nothing else acts. Through a wall at
+    rest, sum_v v_1 F Delta v = int v_1^2 f dv is the normal momentum flux (the pressure
+    P_11 + rho u_1^2 on the face) and sum_v v_t F Delta v = int v_1 v_t f dv the
+    tangential one (P_1t + rho u_1 u_t).
+    """
+    mesh = [numpy.broadcast_to(m, grid.shape) for m in grid.mesh()]
+    normal = numpy.where(mesh[0] == -grid.half_width, 0.0, mesh[0])
+    return numpy.stack([numpy.ones(grid.shape), normal, *mesh[1:],
+                        0.5 * grid.speed_squared()]) * grid.cell_volume
+
+
 class Transport:
     """The transport sub-step on the blocks of a :class:`~granframe.space.domain.Domain`
     (see the module notes).
@@ -75,12 +95,10 @@ class Transport:
         grid, xp = domain.grid, domain.xp
         self.grid, self.xp = grid, xp
         self.positive, self.negative = upwind_speeds(grid, xp)
-        # moments of a face flux: mass and energy int F dv, int F |v|^2/2 dv
-        self._weights = xp.asarray(numpy.stack([numpy.ones(grid.shape),
-                                                0.5 * grid.speed_squared()]) * grid.cell_volume)
-        #: the mass and energy that entered through each wall since the last
-        #: :meth:`take_wall_totals`, (wall, [mass, energy]) on the device
-        self.wall_totals = xp.zeros((2, 2))
+        self._weights = xp.asarray(wall_weights(grid))
+        #: the mass, momentum (d components) and energy that entered through each wall since
+        #: the last :meth:`take_wall_totals`, (wall, [mass, p_1 .. p_d, energy]) on the device
+        self.wall_totals = xp.zeros((2, grid.dimension + 2))
 
     @property
     def max_speed(self) -> float:
@@ -94,7 +112,8 @@ class Transport:
     def rate(self, array, t: float):
         """-(F_{j+1/2} - F_{j-1/2}) / dx on the owned cells after filling the ghosts of
         ``array``, and the fluxes into the domain through the walls it touches
-        ((wall, [mass, energy]) on the device; zero where it touches none), at time t."""
+        ((wall, [mass, p_1 .. p_d, energy]) on the device, :func:`wall_weights`; zero where
+        it touches none), at time t."""
         domain, xp, d = self.domain, self.xp, self.grid.dimension
         domain.exchange(array, self.left, self.right, t)
         minus, plus = self.reconstruction.faces(xp.swapaxes(array, 0, 1), xp)
@@ -105,20 +124,21 @@ class Transport:
             flux[0, 0] = self.positive * out + self.negative * plus[0, 0]
             walls.append(self._moments(flux[0, 0]))
         else:
-            walls.append(xp.zeros(2))
+            walls.append(xp.zeros(d + 2))
         if domain.touches_right and not self.right.periodic:
             out = reflect(self.right.emit(reflect(minus[-1, -1], d, xp), self.grid, xp, t=t,
                                           side="right"), d, xp)
             flux[-1, -1] = self.positive * minus[-1, -1] + self.negative * out
             walls.append(-self._moments(flux[-1, -1]))
         else:
-            walls.append(xp.zeros(2))
+            walls.append(xp.zeros(d + 2))
         rate = (flux[:-1] - flux[1:]) * (1.0 / self.dx)
         return xp.swapaxes(rate, 0, 1), xp.stack(walls)
 
     def _moments(self, face):
-        """(int F dv, int F |v|^2/2 dv) of a face flux, on the device."""
-        return (self._weights * face).reshape(2, -1).sum(axis=1)
+        """The mass, momentum and energy fluxes sum_v w F dv of a face flux F
+        (:func:`wall_weights`), on the device."""
+        return (self._weights * face).reshape(self._weights.shape[0], -1).sum(axis=1)
 
     def advance(self, array, tau: float, t: float = 0.0) -> None:
         """Transport the owned cells of ``array`` from time t over a time tau, in place
@@ -136,7 +156,7 @@ class Transport:
         self.wall_totals += (tau / 6.0) * (w1 + w2 + 4.0 * w3)
 
     def take_wall_totals(self):
-        """The (wall, [mass, energy]) entered since the last call, on the device, and reset
-        them."""
-        totals, self.wall_totals = self.wall_totals, self.xp.zeros((2, 2))
+        """The (wall, [mass, p_1 .. p_d, energy]) entered since the last call, on the
+        device, and reset them."""
+        totals, self.wall_totals = self.wall_totals, self.xp.zeros(self.wall_totals.shape)
         return totals

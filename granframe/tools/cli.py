@@ -31,9 +31,11 @@ sweep SWEEP.toml --out STORE [--scheduler ADDRESS] [--workers N] [--overwrite]
 advise SCENE.toml [--out DESCRIPTION.toml] [--json]
     Propose the cheapest configuration predicted to meet the scene's tolerance
     (docs/advise.md); --out writes it as a run description for ``granframe run``.
-limits SOURCE [--quick] [--set KEY=VALUE ...] [--json]
+limits SOURCE [--quick] [--set KEY=VALUE ...] [--json] [--no-cost]
     The explicit time-step limit of each run of a description, and the rates behind it,
-    without building the operator; exit status 3 when a fixed time step is above it.
+    without building the operator; then the run's estimated cost (its operator built and
+    one step timed; --no-cost leaves it out). Exit status 3 when a fixed time step is above
+    a limit (the table is printed all the same).
 """
 
 from __future__ import annotations
@@ -178,13 +180,13 @@ def _bench(args) -> int:
 def _run(args) -> int:
     from granframe.registry import did_you_mean
     from granframe.run import storage
-    from granframe.run.runner import check_run_modes, load_study
+    from granframe.run.runner import check_run_modes
 
     check_run_modes(args.resume, args.overwrite)   # before the study is loaded
     if args.rollback and not args.resume:
         raise ValueError("run: --rollback applies to --resume (it continues from the last "
                          "intact commit of a damaged store)")
-    study = load_study(args.source, quick=args.quick)
+    study = _load_study(args.source, args.quick)
     if args.only and list(study.runs) != [""]:
         unknown = [n for n in args.only.split(",") if n not in study.runs]
         if unknown:
@@ -265,6 +267,34 @@ def _report_failed(exc, source, out) -> ValueError:
                       "with --resume)")
 
 
+def _read_text(path: pathlib.Path, command: str, parameter: str) -> str:
+    """The text of the file ``path``; a file that is not UTF-8 text refused naming it."""
+    try:
+        return path.read_text()
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{command}: parameter '{parameter}' = '{path}' is invalid; it is not "
+                         f"UTF-8 text ({exc.reason} at byte {exc.start}): a TOML file is "
+                         "expected") from None
+
+
+def _load_study(source, quick: bool):
+    """:func:`~granframe.run.runner.load_study`, a source that is not text and a study
+    that exits (``sys.exit`` while it is imported or makes its runs) refused naming it."""
+    from granframe.run.runner import load_study
+
+    try:
+        return load_study(source, quick=quick)
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"run: parameter 'source' = '{source}' is invalid; it is not UTF-8 "
+                         f"text ({exc.reason} at byte {exc.start}): a .toml description or a "
+                         ".py study module is expected") from None
+    except SystemExit as exc:
+        raise ValueError(f"run: study '{source}' is invalid; it called sys.exit({exc.code!r}) "
+                         "while granframe loaded it or made its runs, so it gives no run: a "
+                         "study module defines description(quick) or runs(quick) and does "
+                         "not exit") from None
+
+
 def _with_settings(description, settings: list[str]):
     """``description`` with each ``KEY=VALUE`` of ``run --set`` applied, in order.
 
@@ -312,12 +342,14 @@ def _with_settings(description, settings: list[str]):
 
 def _settable_keys(data: dict) -> list[str]:
     """The dotted keys a description table ``data`` can have: every key it has, every
-    field of RunDescription and of its grid, output and health tables, and for each
-    component (and each quadrature among the operator's options) ``name`` and the
-    parameters of the implementation it names."""
+    field of RunDescription and of its grid, output, health and space tables, and for each
+    component (and each quadrature among the operator's options, and the reconstruction
+    and walls of the space table) ``name`` and the parameters of the implementation it
+    names."""
     from granframe.backends import resolve_backend
     from granframe.registry import default_registries
-    from granframe.run.description import COMPONENT_FAMILIES, Health, Output, RunDescription
+    from granframe.run.description import (COMPONENT_FAMILIES, Health, Output,
+                                           RunDescription, Space)
     from granframe.velocity.grid import VelocityGrid
 
     def present(table, prefix=""):
@@ -339,7 +371,7 @@ def _settable_keys(data: dict) -> list[str]:
         yield from (prefix + p.name for p in entry.parameters() or ())
 
     keys = set(present(data))
-    tables = {"grid": VelocityGrid, "output": Output, "health": Health}
+    tables = {"grid": VelocityGrid, "output": Output, "health": Health, "space": Space}
     for field in attrs.fields(RunDescription):
         if field.init:
             keys.add(field.alias or field.name)
@@ -351,6 +383,11 @@ def _settable_keys(data: dict) -> list[str]:
     for option, value in (operator.items() if isinstance(operator, dict) else ()):
         if isinstance(value, dict):
             keys.update(parameters("quadratures", value, f"operator.{option}."))
+    space = data.get("space") if isinstance(data.get("space"), dict) else {}
+    for field in ("reconstruction", "left", "right"):
+        keys.update(parameters("reconstructions" if field == "reconstruction" else "boundaries",
+                               space.get(field, "muscl" if field == "reconstruction"
+                                         else "periodic"), f"space.{field}."))
     return sorted(keys)
 
 
@@ -364,6 +401,7 @@ def _where(exc: BaseException, source) -> str:
 
 def _run_one(description, out, args) -> int:
     from granframe.model.initial import projection_note
+    from granframe.run.monitors import cooling_hint
     from granframe.run.runner import HealthError, Simulation
     from granframe.run.storage import RunStore, check_replaceable, store_kind
 
@@ -387,6 +425,11 @@ def _run_one(description, out, args) -> int:
         note = projection_note(simulation.projection) if simulation.projection else None
         if note:
             print(f"granframe: {note}", file=sys.stderr)
+        hint = cooling_hint(description)
+        if hint:
+            print(f"granframe: hint: {hint}", file=sys.stderr)
+        print(f"granframe: {_cost(simulation.problem, out if args.resume else None)}",
+              flush=True)
         result = simulation.run(out, resume=args.resume, overwrite=args.overwrite,
                                 progress=args.progress, rollback=args.rollback,
                                 protect=[args.source])
@@ -399,12 +442,32 @@ def _run_one(description, out, args) -> int:
         return 130
     print(f"{out}: finished, {result.steps} steps to t = {result.time:g} in "
           f"{result.wall_seconds:.1f} s, {result.snapshots} snapshots")
+    if args.rollback:
+        from granframe.run.storage import dropped_note
+
+        note = dropped_note(RunStore.open(out, complete=False).metadata)
+        if note:
+            print(f"granframe: the rollback {note}", file=sys.stderr)
     for warning in result.warnings:
         print(f"granframe: warning: f at t = {result.time:g} is under-resolved: {warning}",
               file=sys.stderr)
     for warning in result.accuracy_warnings:
         print(f"granframe: warning: at t = {result.time:g}: {warning}", file=sys.stderr)
     return 0
+
+
+def _cost(problem, resumed=None) -> str:
+    """The run's estimated cost in one line (:func:`~granframe.run.problems.run_cost`);
+    ``resumed``: the store a resumed run continues, whose steps done are left out."""
+    from granframe.run.problems import run_cost
+    from granframe.run.storage import RunStore, store_kind
+
+    cost = run_cost(problem)
+    if resumed is not None and cost.steps is not None and store_kind(resumed) == "run":
+        done = int(RunStore.open(resumed, complete=False).progress.get("step", 0))
+        cost = attrs.evolve(cost, steps=max(cost.steps - done, 0))
+        return cost.text() + f" (the {done} steps done are not counted)"
+    return cost.text()
 
 
 def _interrupted(out) -> str:
@@ -417,9 +480,11 @@ def _interrupted(out) -> str:
         status = RunStore.open(out, complete=False).progress.get("status")
     except StoreError as exc:
         return f"the store '{out}' cannot be read: {exc}"
-    if status == "interrupted":
-        return (f"the store '{out}' holds every complete snapshot: continue with "
-                "--resume")
+    if status in ("interrupted", "running"):   # running: cut before the run could mark it
+        return (f"the store '{out}' holds every complete snapshot (status {status}): "
+                "continue with --resume")
+    if status == "finished":
+        return f"the store '{out}' holds the finished run"
     return f"the store '{out}' is as it was before this run (status {status})"
 
 
@@ -511,7 +576,7 @@ def _sweep(args) -> int:
     if not path.is_file():
         raise ValueError(f"sweep: parameter 'sweep' = '{args.sweep}' is invalid; no such file")
     try:
-        result = run_sweep(Sweep.from_toml(path.read_text()), args.out,
+        result = run_sweep(Sweep.from_toml(_read_text(path, "sweep", "sweep")), args.out,
                            scheduler=args.scheduler, workers=args.workers,
                            progress=args.progress, overwrite=args.overwrite,
                            retry_failed=args.retry_failed, protect=(path,))
@@ -527,15 +592,43 @@ def _sweep(args) -> int:
     return 3 if result.failed else 0
 
 
-def _limits(args) -> int:
-    from granframe.registry import default_registries
-    from granframe.run.runner import load_study
-    from granframe.run.problems import time_step_limit
-    from granframe.stepping.stability import PART_NAMES
+def _limit_runs(args) -> tuple[dict, bool]:
+    """The runs ``limits`` reports: each description as given (``--set`` applied) but with
+    ``health.step_limit = false``, so that one whose step is above the transport's CFL
+    limit is built and reported rather than refused; and whether ``granframe run`` would
+    check the step limits (the ``health.step_limit`` the description asks for)."""
+    import tomllib
 
-    runs = load_study(args.source, quick=args.quick).runs
-    if args.set:
-        runs = {name: _with_settings(d, args.set) for name, d in runs.items()}
+    from granframe.run.description import RunDescription
+
+    path = pathlib.Path(args.source)
+    unchecked = ["health.step_limit=false"]
+    if path.suffix == ".toml" and path.is_file() and not args.quick:
+        try:
+            table = tomllib.loads(_read_text(path, "limits", "source"))
+        except tomllib.TOMLDecodeError as exc:
+            raise ValueError(f"limits: the TOML text of '{path}' is invalid: {exc}") from None
+        health = table.get("health")
+        checked = health.get("step_limit", True) if isinstance(health, dict) else True
+        table["health"] = {**(health if isinstance(health, dict) else {}), "step_limit": False}
+        runs = {"": RunDescription.from_dict(table)}
+    else:
+        runs = _load_study(args.source, args.quick).runs
+        checked = all(d.health.step_limit for d in runs.values())
+    for setting in args.set:
+        key, _, value = setting.partition("=")
+        if key.strip() == "health.step_limit":
+            checked = value.strip() != "false"
+    return ({name: _with_settings(d, args.set + unchecked) for name, d in runs.items()},
+            checked)
+
+
+def _limits(args) -> int:
+    from granframe.run.problems import time_step_limit
+
+    runs, checked = _limit_runs(args)
+    refused = ("granframe run refuses it" if checked else
+               "health.step_limit = false: granframe run does not check it")
     status, document = 0, {}
     for name, d in runs.items():
         limit = time_step_limit(d)
@@ -553,46 +646,69 @@ def _limits(args) -> int:
             "within": None if limit is None or adaptive else not above,
             **({} if transport is None else {"transport_limit": transport,
                                              "within_transport_limit": not above_cfl})}
+        cost = None if args.no_cost else _limit_cost(d)
+        document[name]["cost"] = None if cost is None or isinstance(cost, str) else (
+            cost.to_dict())
         if args.json:
             continue
         head = (f"[{name}] " if name else "") + f"'{d.integrator.name}': "
         if transport is not None:
             print((f"[{name}] " if name else "") + f"transport ('{d.space.reconstruction.name}',"
                   f" SSP RK3 half steps): dt <= {transport:.4g}; time_step = "
-                  f"{d.time_step:g} is " + ("ABOVE it" if above_cfl else
+                  f"{d.time_step:g} is " + (f"ABOVE it ({refused})" if above_cfl else
                                             f"within it ({d.time_step / transport:.3g} of it)"))
-        if limit is None:
-            print(head + "no explicit step limit (the scheme treats none of the equation's "
-                  "stiff parts explicitly)")
-            continue
-        radii = ", ".join(f"{PART_NAMES.get(part, part)} = {rate:.4g}" for part, rate in
-                          sorted(limit.rates.items(), key=lambda x: -x[1]))
-        if limit.interval == 0.0:
-            registry = default_registries()
-            stable = sorted(n for n in registry.names("time_integrators") if getattr(
-                registry.get("time_integrators", n).factory, "imaginary_interval", 0.0) > 0.0)
-            print(head + f"unstable at any step: {PART_NAMES['drift']} has an imaginary "
-                  f"spectrum (radii: {radii}) and the scheme is not stable on the imaginary "
-                  f"axis; use one that is: {', '.join(stable)}")
-            continue
-        if adaptive:
-            print(head + f"adaptive: its error control keeps the steps stable (spectral "
-                  f"radii: {radii})")
-            continue
-        print(head + f"dt <= {limit.limit:.4g}, set by {PART_NAMES.get(limit.dominant)} "
-              f"(spectral radii: {radii}; stable for dt * (sum of radii) <= "
-              f"{limit.interval:g})")
-        if above:
-            print(f"  time_step = {d.time_step:g}: ABOVE the limit ("
-                  + ("granframe run refuses it)" if d.health.step_limit else
-                     "health.step_limit = false: granframe run does not check it)"))
-        else:
-            print(f"  time_step = {d.time_step:g}: within it ({d.time_step / limit.limit:.3g} "
-                  "of the limit)")
+        _limit_table(head, d, limit, adaptive, above, refused)
+        if cost is not None:
+            print((f"[{name}] " if name else "") + (cost if isinstance(cost, str)
+                                                    else cost.text()))
     if args.json:
         json.dump({"schema": "granframe.limits/1", "runs": document}, sys.stdout, indent=2)
         sys.stdout.write("\n")
     return status
+
+
+def _limit_cost(description):
+    """The run's :class:`~granframe.run.problems.RunCost` (its problem built and one step
+    timed), or why it could not be estimated."""
+    from granframe.run.problems import make_problem, run_cost
+
+    try:
+        return run_cost(make_problem(description))
+    except (ValueError, MemoryError, FloatingPointError) as exc:
+        return f"estimated cost: not estimated ({type(exc).__name__}: {exc})"
+
+
+def _limit_table(head, d, limit, adaptive, above, refused) -> None:
+    """The lines of ``granframe limits`` on the collisions' explicit step limit of ``d``."""
+    from granframe.registry import default_registries
+    from granframe.stepping.stability import PART_NAMES
+
+    if limit is None:
+        print(head + "no explicit step limit (the scheme treats none of the equation's "
+              "stiff parts explicitly)")
+        return
+    radii = ", ".join(f"{PART_NAMES.get(part, part)} = {rate:.4g}" for part, rate in
+                      sorted(limit.rates.items(), key=lambda x: -x[1]))
+    if limit.interval == 0.0:
+        registry = default_registries()
+        stable = sorted(n for n in registry.names("time_integrators") if getattr(
+            registry.get("time_integrators", n).factory, "imaginary_interval", 0.0) > 0.0)
+        print(head + f"unstable at any step: {PART_NAMES['drift']} has an imaginary "
+              f"spectrum (radii: {radii}) and the scheme is not stable on the imaginary "
+              f"axis; use one that is: {', '.join(stable)}")
+        return
+    if adaptive:
+        print(head + f"adaptive: its error control keeps the steps stable (spectral "
+              f"radii: {radii})")
+        return
+    print(head + f"dt <= {limit.limit:.4g}, set by {PART_NAMES.get(limit.dominant)} "
+          f"(spectral radii: {radii}; stable for dt * (sum of radii) <= "
+          f"{limit.interval:g})")
+    if above:
+        print(f"  time_step = {d.time_step:g}: ABOVE the limit ({refused})")
+    else:
+        print(f"  time_step = {d.time_step:g}: within it ({d.time_step / limit.limit:.3g} "
+              "of the limit)")
 
 
 def _advise(args) -> int:
@@ -604,7 +720,7 @@ def _advise(args) -> int:
     if not path.is_file():
         raise ValueError(f"advise: parameter 'scene' = '{args.scene}' is invalid; no such file")
     try:
-        scene = Scene.from_dict(tomllib.loads(path.read_text()))
+        scene = Scene.from_dict(tomllib.loads(_read_text(path, "advise", "scene")))
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"advise: the TOML text of '{path}' is invalid: {exc}") from None
     advice = advise(scene)
@@ -707,8 +823,9 @@ time and floor per distribution.""",
 Run a description (a .toml file, or a study module defining description(quick) or
 runs(quick)) into a zarr store. A study with several runs writes STORE/<name>.zarr for each,
 then its report to STORE/report from the runs that have ended (also after --only). --set
-overrides a key of the description (repeatable; the value is read as TOML). Exit status 3
-when a health check stopped a run, 130 when interrupted.""",
+overrides a key of the description (repeatable; the value is read as TOML). Before the
+first step it prints the run's estimated cost: one step timed on this machine, times the
+number of steps. Exit status 3 when a health check stopped a run, 130 when interrupted.""",
             """\
   granframe run studies/heated_maxwell.py --out runs/h.zarr
   granframe run studies/heated_maxwell.py --out runs/h.zarr --resume
@@ -757,10 +874,14 @@ Report the explicit time-step limit of each run of a description (a .toml file o
 module) and the spectral radii behind it (heat bath, collisions, energy dissipation, and the
 drift of a rescaled run), from the description alone: the operator is not built, so it
 takes a fraction of a second where building it takes seconds to minutes. It is the limit
-granframe run checks before the first step (docs/runner.md, docs/stability.md). Exit status
-3 when the description's fixed time step is above it.""",
+granframe run checks before the first step (docs/runner.md, docs/stability.md). A space
+run's transport (CFL) limit comes first. Then the run's cost on this machine: its operator
+is built and one step timed, times the number of steps (--no-cost leaves it out, and the
+command takes a fraction of a second). Exit status 3 when the description's fixed time step
+is above a limit; the table is printed all the same.""",
                """\
   granframe limits studies/heated_maxwell.py
+  granframe limits studies/space.py --quick --no-cost
   granframe limits desc.toml --set time_step=0.05 --set grid.n_modes=64
   granframe limits desc.toml --json"""),
 }
@@ -867,8 +988,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="write the proposed run description")
     advise.add_argument("--json", action="store_true", help="machine-readable output")
     advise.set_defaults(handler=_advise)
-    limits = commands.add_parser("limits", help="the explicit time-step limit of a run, "
-                                 "without building the operator")
+    limits = commands.add_parser("limits", help="the explicit time-step limit of a run "
+                                 "and its estimated cost")
     limits.add_argument("source", metavar="STUDY_OR_TOML",
                         help="a .toml description or a study module (.py)")
     limits.add_argument("--quick", action="store_true",
@@ -876,6 +997,9 @@ def build_parser() -> argparse.ArgumentParser:
     limits.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="override a key of the description, as for run (repeatable)")
     limits.add_argument("--json", action="store_true", help="machine-readable output")
+    limits.add_argument("--no-cost", action="store_true",
+                        help="leave out the cost estimate (which builds the operator and "
+                             "times one step)")
     limits.set_defaults(handler=_limits)
     for name, command in commands.choices.items():
         command.description, examples = COMMAND_HELP[name]
@@ -920,19 +1044,30 @@ def entry() -> None:
     the run has already marked and released its store): CPython would otherwise end it by
     SIGINT whenever the KeyboardInterrupt passed through code run by ``PyRun_*``, such as
     the initialisation of a compiled module being imported, even though :func:`main`
-    handled it.
+    handled it. A Ctrl-C while the process exits after the command (the libraries'
+    ``atexit`` callbacks: Dask, thread pools) ends it at once with the command's status,
+    instead of an "Exception ignored in atexit callback" traceback.
     """
+    import os
     import signal
 
-    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:   # not ignored
+    interruptible = signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    if interruptible:   # not ignored
         signal.signal(signal.SIGINT, _interrupt)
     code = main()
-    if code == 130:
-        import os
 
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(130)
+    def leave(signum=None, frame=None):
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except (OSError, ValueError):   # a closed pipe or stream
+                pass
+        os._exit(code)
+
+    if code == 130:
+        leave()
+    if interruptible:
+        signal.signal(signal.SIGINT, leave)
     sys.exit(code)
 
 

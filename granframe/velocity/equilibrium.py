@@ -37,7 +37,7 @@ ITERATIONS = 12
 #: collapsed onto one node solvable without changing a converged step
 _REGULAR = 1e-14
 #: the step lengths of the line search: 1, 1/2, ..., 2^-20
-_LENGTHS = 0.5 ** numpy.arange(21.0)
+_SEARCH = 21
 #: the largest relative residual of the moments accepted as converged
 RESIDUAL_TOLERANCE = 1e-10
 
@@ -141,7 +141,7 @@ def discrete_maxwellians(grid, density, momentum, second, xp=numpy, points=None)
         target = xp.concatenate([u, ((u * u).sum(axis=1) + d * t)[:, None]], axis=1)
         beta = xp.concatenate([u / t[:, None], (-0.5 / t)[:, None]], axis=1)
         identity = xp.eye(d + 1)[None]
-        lengths = xp.asarray(_LENGTHS)
+        lengths = 0.5 ** xp.arange(float(_SEARCH))
         for _ in range(ITERATIONS):
             _, mean = _axis_moments(w, beta[:, :d], beta[:, d], xp)
             phi, covariance = _moments(mean, xp)

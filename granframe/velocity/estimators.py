@@ -41,15 +41,21 @@ def spectral_tail(grid, f, shell: int = 1, xp=numpy) -> float:
         check.reject("spectral_tail", "shell", shell, f"must be an integer in [1, {n // 2 - 1}]")
     grid.check_shape(f)
     spectrum = xp.abs(xp.fft.rfftn(f, axes=tuple(range(grid.dimension))))
+    zero = float(spectrum[(0,) * grid.dimension])
+    if not zero > 0.0:
+        check.reject("spectral_tail", "f", "f", "must have a positive mass (hat f_0 > 0)")
+    return float(xp.max(spectrum[xp.asarray(outer_band(grid, int(shell)))])) / zero
+
+
+def outer_band(grid, shell: int = 1) -> numpy.ndarray:
+    """The rfft-layout mask (NumPy, ``grid.half_shape``) of the outermost ``shell`` evolved
+    shells, N/2 - shell <= max_i |k_i| <= N/2 - 1 (:func:`spectral_tail`)."""
+    n = grid.n_modes
     largest = numpy.zeros(grid.half_shape, dtype=int)
     for axis, k in enumerate(grid.half_wavenumbers()):
         shape = [-1 if j == axis else 1 for j in range(grid.dimension)]
         largest = numpy.maximum(largest, numpy.abs(k).astype(int).reshape(shape))
-    band = (largest >= n // 2 - int(shell)) & (largest <= n // 2 - 1)
-    zero = float(spectrum[(0,) * grid.dimension])
-    if not zero > 0.0:
-        check.reject("spectral_tail", "f", "f", "must have a positive mass (hat f_0 > 0)")
-    return float(xp.max(spectrum[xp.asarray(band)])) / zero
+    return (largest >= n // 2 - shell) & (largest <= n // 2 - 1)
 
 
 def mass_beyond(grid, f, radius: float, xp=numpy) -> float:
@@ -83,17 +89,24 @@ def pair_share_beyond(grid, f, radius: float, power: float = 0.0, xp=numpy) -> f
     if not check.is_real(radius) or not float(radius) > 0.0:
         check.reject("pair_share_beyond", "radius", radius, "must be a positive real number")
     grid.check_shape(f)
-    d, n, h = grid.dimension, grid.n_modes, grid.spacing
+    d, n = grid.dimension, grid.n_modes
     axes = tuple(range(d))
     spectrum = xp.fft.rfftn(xp.abs(f), s=(2 * n,) * d, axes=axes)
     correlation = xp.fft.irfftn(spectrum * xp.conj(spectrum), s=(2 * n,) * d, axes=axes)
-    lag = numpy.fft.fftfreq(2 * n, 1.0 / (2 * n)) * h
-    distance = sum(numpy.reshape(lag, [-1 if i == j else 1 for j in range(d)]) ** 2
-                   for i in range(d))
+    distance = squared_lags(grid)
     weight = xp.asarray(distance ** (float(power) / 2))
     beyond = xp.asarray(distance > float(radius) ** 2)
     weighted = correlation * weight
     return float(xp.sum(weighted * beyond)) / float(xp.sum(weighted))
+
+
+def squared_lags(grid) -> numpy.ndarray:
+    """|v - v_*|^2 of the lags of the autocorrelation of f on the grid padded to 2N per
+    axis (NumPy, (2N,) * d; :func:`pair_share_beyond`)."""
+    d, n = grid.dimension, grid.n_modes
+    lag = numpy.fft.fftfreq(2 * n, 1.0 / (2 * n)) * grid.spacing
+    return sum(numpy.reshape(lag, [-1 if i == j else 1 for j in range(d)]) ** 2
+               for i in range(d))
 
 
 #: Estimated error per unit of spectral tail: in studies/free_cooling.py a temperature error
@@ -114,8 +127,16 @@ def resolution_report(grid, f, negative_share: float, tolerance: float, xp=numpy
     |f| over the whole box through its oscillations, so the pairs beyond 2S then also
     point at N first.
     """
-    tail = spectral_tail(grid, f, xp=xp)
-    beyond = pair_share_beyond(grid, f, 2.0 * grid.support_radius, xp=xp)
+    return resolution_entry(grid, spectral_tail(grid, f, xp=xp),
+                            pair_share_beyond(grid, f, 2.0 * grid.support_radius, xp=xp),
+                            negative_share, tolerance)
+
+
+def resolution_entry(grid, tail: float, beyond: float, negative_share: float,
+                     tolerance: float) -> dict:
+    """The report of :func:`resolution_report` from its three measured indicators (the
+    spectral tail, the share of pairs beyond 2S, the negative mass share): the tail error
+    and the warnings added."""
     error = TAIL_ERROR_FACTOR * tail
     warnings = []
     if error > tolerance:

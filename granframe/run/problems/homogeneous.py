@@ -57,7 +57,7 @@ class HomogeneousProblem(Problem):
         self.f0 = grid.project(sampled)
         self.projection = None if outline else check_projection(
             grid, sampled, self.f0, initial, d.health.projection_tolerance,
-            d.health.projection_kurtosis_tolerance)
+            d.health.projection_kurtosis_tolerance, d.health.positivity_tolerance)
         if d.rescaled:
             dissipation = (float(ConservativeCorrection(self.operator).dissipation(self.f0))
                            if outline else None)

@@ -7,13 +7,16 @@
   cells, each block with its ghost cells), stepped by
   :class:`~granframe.space.collisions.SplitStep` (Strang: transport, collisions on all
   cells in one batched call per stage, transport);
-- after every step the fields of every cell, the totals, and the mass and energy that
-  entered through each wall over the step are recorded (:func:`space_layout`), all from
+- after every step the fields of every cell, the totals, and the mass, momentum and
+  energy that entered through each wall over the step are recorded (:func:`space_layout`), all from
   one device vector (:class:`~granframe.space.fields.FieldMoments`) and one transfer;
 - a snapshot is f(x, v) of every cell, chunked by block;
-- at each output point the accuracy monitors are the shares of mass and energy beyond the
-  edge radius in the worst cell (:class:`~granframe.run.monitors.CellEdgeMonitors`),
-  computed for every cell at once on the backend.
+- at each output point the resolution indicators of every cell (those of a homogeneous
+  run and the heat flux of the outermost shell of modes) and the accuracy monitors (the
+  shares of mass and energy beyond the edge radius), computed for every cell at once on
+  the backend; the worst cells are reported and kept with the commit
+  (:func:`~granframe.run.monitors.cell_resolution_report`,
+  :class:`~granframe.run.monitors.CellEdgeMonitors`).
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ from granframe.abc import Problem
 from granframe.backends import NumpyBackend, to_host
 from granframe.memory import check_run_memory
 from granframe.model.initial import check_fits, check_projection
-from granframe.run.monitors import CellEdgeMonitors
+from granframe.run.monitors import CELL_INDICATORS, CellEdgeMonitors, cell_resolution_report
 from granframe.run.problems.parts import build_operator, check_step
 from granframe.run.storage import STEP_RECORDS, Layout, RecordArray
 from granframe.space.collisions import CellCollisions, SplitStep
@@ -35,15 +38,16 @@ from granframe.space.transport import Transport
 from granframe.stepping.stability import OperatorOutline, step_limit
 from granframe.validators import reject
 
-#: what entered the interval through each wall over each step (mass, energy)
-WALL_RECORDS = ("wall_mass", "wall_energy")
+#: what entered the interval through each wall over each step: mass, energy, and the d
+#: components of momentum (normal v1, tangential v2 .. vd)
+WALL_RECORDS = ("wall_mass", "wall_energy", "wall_momentum")
 
 
 def space_layout(grid, domain: Domain) -> Layout:
     """The store of a space run: f (time, x, v1, ..., vd) chunked by snapshot and block,
     the coordinates v1 ... vd and x (the cell centres), and after every step the totals,
     the fields (step_time, x, ...) chunked by block along x, and the wall records
-    (step_time, wall)."""
+    (step_time, wall; ``wall_momentum`` (step_time, wall, axis))."""
     d = grid.dimension
     axes = tuple(f"v{i + 1}" for i in range(d))
     cells, block = domain.cells, domain.block_cells
@@ -51,7 +55,9 @@ def space_layout(grid, domain: Domain) -> Layout:
     fields = tuple(RecordArray(name, (cells,) + tuple(d if c == "d" else c for c in shape),
                                ("x",) + dims, chunk=chunk, cells_chunk=block)
                    for name, (shape, dims) in FIELDS.items())
-    walls = tuple(RecordArray(name, (2,), ("wall",)) for name in WALL_RECORDS)
+    walls = tuple(RecordArray(name, (2, d) if name == "wall_momentum" else (2,),
+                              ("wall", "axis") if name == "wall_momentum" else ("wall",))
+                  for name in WALL_RECORDS)
     points = grid.points()
     return Layout(tuple((name, points, (name,)) for name in axes)
                   + (("x", domain.centres(), ("x",)),),
@@ -139,7 +145,31 @@ class SpaceProblem(Problem):
             change = max(abs(m["after"] / m["before"] - 1.0) for m in moments.values())
             if change > worst:
                 worst, self.projection = change, moments
-        return numpy.stack(projected)
+        projected = numpy.stack(projected)
+        self._check_positivity(projected, edges)
+        return projected
+
+    def _check_positivity(self, f0, edges) -> None:
+        """Refuse f0 whose negative mass share over all cells, sum max(-f, 0) / sum |f| (what
+        the health check takes after every step), is above ``health.positivity_tolerance``,
+        naming the cell where it is largest."""
+        d, grid = self.description, self.grid
+        flat = f0.reshape(len(f0), -1)
+        negative = numpy.maximum(-flat, 0.0).sum(axis=1)
+        absolute = numpy.abs(flat).sum(axis=1)
+        share = float(negative.sum() / absolute.sum())
+        if share <= d.health.positivity_tolerance:
+            return
+        worst = int(numpy.argmax(negative / absolute))
+        reject(f"initial condition {type(d.build('initial')).__name__}",
+               "negative mass share of f0 after the Nyquist projection", share,
+               f"must be <= health.positivity_tolerance = {d.health.positivity_tolerance:g}, "
+               f"which the run checks after every step (largest in cell {worst} of "
+               f"{d.space.cells}, x = {0.5 * (edges[worst] + edges[worst + 1]):.6g}: "
+               f"{negative[worst] / absolute[worst]:.3g}): N = {grid.n_modes} modes (spacing "
+               f"h = {grid.spacing:.4g}) do not resolve f0, whose projection rings below zero; "
+               "use a larger grid.n_modes, or a smaller grid.support_radius if f0 is "
+               "negligible well inside the faces of the box (h = 2L/N falls with it)")
 
     rescaling = None
 
@@ -162,22 +192,36 @@ class SpaceProblem(Problem):
         cells = self.domain.to_cells(state)
         walls = self.transport.take_wall_totals()
         record = self.fields.unpack(to_host(self.fields.packed(cells, walls)), len(cells))
-        extra = record.pop("extra").reshape(2, 2)
-        record["wall_mass"], record["wall_energy"] = extra[:, 0], extra[:, 1]
+        extra = record.pop("extra").reshape(2, -1)
+        record["wall_mass"], record["wall_energy"] = extra[:, 0], extra[:, -1]
+        record["wall_momentum"] = extra[:, 1:-1]
         return record
 
     def monitors(self, store) -> CellEdgeMonitors:
         return CellEdgeMonitors(self.description, store.progress.get("accuracy"))
 
     def report(self, state, record, monitors):
-        """The edge shares of every cell about its own velocity (one pass over f on the
-        backend, one transfer), the largest into the monitors; no resolution report."""
-        shares = None
+        """The resolution indicators of every cell
+        (:meth:`~granframe.space.fields.FieldMoments.resolution`) and the edge shares of
+        every cell about its own velocity, computed on the backend and taken to the host in
+        one transfer; the report names the worst cells
+        (:func:`~granframe.run.monitors.cell_resolution_report`), the largest values go into
+        the monitors."""
+        xp = self.backend.xp
+        cells = self.domain.to_cells(state.f)
+        count = cells.shape[0]
+        parts = [self.fields.resolution(cells, self.backend).reshape(-1)]
         if monitors.radius > 0.0:
-            cells = self.domain.to_cells(state.f)
             velocity = self.fields.primitives(cells)[1]
-            shares = to_host(self.fields.edge_shares(cells, velocity, monitors.radius))
-        return None, monitors.update(monitors.shape(shares), state.step, state.t)
+            parts.append(self.fields.edge_shares(cells, velocity, monitors.radius).reshape(-1))
+        values = to_host(xp.concatenate(parts))
+        indicators = values[:count * len(CELL_INDICATORS)].reshape(count, -1)
+        shares = (values[count * len(CELL_INDICATORS):].reshape(count, 2)
+                  if monitors.radius > 0.0 else None)
+        resolution = cell_resolution_report(self.grid, indicators, self.domain.centres(),
+                                            self.description.health.resolution_tolerance)
+        return resolution, monitors.update(monitors.shape(shares, resolution), state.step,
+                                           state.t)
 
     def progress_text(self, record, mass0) -> str:
         t = record["temperature"]

@@ -1,0 +1,147 @@
+"""Space runs report the resolution indicators of every cell, name the worst cells and keep
+them with each commit; the heat flux of the outermost shell of modes tells a velocity grid
+that resolves f from one that also resolves its heat flux."""
+
+import collections
+import math
+
+import numpy
+import pytest
+
+import granframe as gf
+from granframe.backends import NumpyBackend
+from granframe.run.description import RunDescription
+from granframe.run.problems import make_problem
+from granframe.run.runner import RunState, Simulation
+from granframe.run.storage import RunStore, describe
+from granframe.space.fields import FieldMoments
+from granframe.testing.transfers import CountingBackend
+from granframe.velocity.estimators import pair_share_beyond, spectral_tail
+
+
+def _heat_conduction(n_modes, temperatures=(0.9, 1.0, 1.1), a=0.01):
+    """Maxwellians at rest plus the Chapman-Enskog heat-flux perturbation,
+    f = M_T (1 + a (|v|^2 / 2T - 5/2) v_1 / sqrt(T)), q_1 = 5/2 a T^(3/2), on the 3D grid
+    of S = 3 (cells, N, N, N)."""
+    grid = gf.VelocityGrid(3, n_modes, 3.0)
+    v1, v2, v3 = grid.mesh()
+    cells = []
+    for t in temperatures:
+        c2 = (v1 * v1 + v2 * v2 + v3 * v3) / t
+        maxwellian = (2 * math.pi * t) ** -1.5 * numpy.exp(-c2 / 2)
+        cells.append(grid.project(maxwellian * (1 + a * (c2 / 2 - 2.5) * v1 / math.sqrt(t))))
+    return grid, numpy.stack(cells)
+
+
+def test_the_heat_flux_indicator_tells_n20_from_n24():
+    # measured: N = 20: 7.0e-3, 2.4e-3, 8.3e-4 at T = 0.9, 1, 1.1; N = 24: 1.0e-4, 2.2e-5,
+    # 4.9e-6 (q_1 = 0.021 .. 0.029 rho T^(3/2): the shell carries 3 to 30 % of it on N = 20)
+    coarse = FieldMoments(*_heat_conduction(20)[:1], 1.0)
+    fine = FieldMoments(*_heat_conduction(24)[:1], 1.0)
+    shell_20 = coarse.resolution(_heat_conduction(20)[1], NumpyBackend())[:, 3]
+    shell_24 = fine.resolution(_heat_conduction(24)[1], NumpyBackend())[:, 3]
+    assert shell_20[0] > 5e-3 and shell_20.max() > 1e-3
+    assert shell_24.max() < 2e-4
+    assert numpy.all(numpy.diff(shell_20) < 0)      # a colder cell is resolved less well
+    # the heat flux on the grid itself is right to 1e-4 on both: the indicator estimates
+    # the error a wrong last shell makes, as the spectral tail does for f
+    for n in (20, 24):
+        grid, f = _heat_conduction(n)
+        q = FieldMoments(grid, 1.0)(f)["heat_flux"][:, 0]
+        exact = 2.5 * 0.01 * numpy.array([0.9, 1.0, 1.1]) ** 1.5
+        assert numpy.allclose(q, exact, rtol=1e-4)
+
+
+def test_the_cell_indicators_are_the_homogeneous_ones_and_a_maxwellian_carries_no_shell_flux():
+    grid = gf.VelocityGrid(2, 24, 3.5)
+    cells = numpy.stack([grid.maxwellian(temperature=t, velocity=(u, 0.0))
+                         for t, u in ((0.6, 0.3), (1.0, 0.2), (1.4, 0.0))])
+    cells[1, 3, 5] = -1e-4                              # a negative node in one cell
+    values = FieldMoments(grid, 0.1).resolution(cells, NumpyBackend())
+    for c, f in enumerate(cells):
+        assert values[c, 0] == pytest.approx(spectral_tail(grid, f), rel=1e-12)
+        assert values[c, 1] == pytest.approx(pair_share_beyond(grid, f, 7.0), rel=1e-10)
+        assert values[c, 2] == pytest.approx(numpy.maximum(-f, 0).sum() / numpy.abs(f).sum(),
+                                              rel=1e-12)
+    assert values[0, 2] == 0.0 and values[1, 2] > 0.0
+    # the shell part of a Maxwellian carries a heat flux only through the nodes without a
+    # mirror (v_2 = -L) and the shift of u: measured 1.0e-5 (T = 1.4 at rest), 7.2e-4
+    # (T = 1, u = 0.2), 0.11 (T = 0.6, u = 0.3, which N = 24 does not resolve)
+    assert values[2, 3] < 2e-5 < values[1, 3] < 1e-3 < 0.1 < values[0, 3]
+
+
+def _description(n_modes=24, support=3.5, hot=1.0, cold=0.6):
+    """2D Maxwell molecules between diffuse walls at ``hot`` (x = 0) and ``cold``, f0 the
+    Maxwellians of these temperatures left and right of x = 1/2 (T = 0.6 is not resolved by
+    N = 24 on S = 3.5)."""
+    return RunDescription(
+        title="space resolution",
+        grid={"dimension": 2, "n_modes": n_modes, "support_radius": support},
+        kernel="maxwell", restitution={"name": "constant", "value": 1.0},
+        initial={"name": "riemann", "left": {"density": 1.0, "temperature": hot},
+                 "right": {"density": 1.0, "temperature": cold}},
+        operator={"name": "fast_spectral", "radial_points": 8,
+                  "sphere": {"name": "circle_trapezoid", "n_points": 8}},
+        backend={"name": "numpy", "threads": 1}, integrator="ssp_rk2", knudsen=0.1,
+        time_step=0.01, final_time=0.02, output={"snapshot_interval": 0.01},
+        space={"cells": 6, "left": {"name": "diffuse", "temperature": hot},
+               "right": {"name": "diffuse", "temperature": cold}})
+
+
+def test_a_space_run_names_its_worst_cells_and_keeps_them_with_each_commit(tmp_path):
+    path = tmp_path / "cold.zarr"
+    result = Simulation(_description()).run(path, progress=False)
+    report = RunStore.open(path).progress["resolution"]
+    assert report["warnings"] == list(result.warnings)
+    # the cold cells (x > 1/2) are the worst in f and in its heat flux
+    assert report["cells"]["spectral_tail"] >= 3 and report["cells"]["heat_flux_shell"] >= 3
+    assert report["x"]["spectral_tail"] == pytest.approx(
+        (report["cells"]["spectral_tail"] + 0.5) / 6)
+    assert report["tail_error"] > 1e-3 and report["heat_flux_shell"] > 1e-3
+    tail, heat = result.warnings[0], result.warnings[-1]
+    assert tail.startswith("velocity resolution: spectral tail ")
+    assert tail.endswith(f"raise grid.n_modes (N = 24) (in cell "
+                         f"{report['cells']['spectral_tail']}, x = "
+                         f"{report['x']['spectral_tail']:.4g})")
+    assert heat.startswith("heat-flux resolution: the outermost shell of modes carries a "
+                           "heat flux ")
+    assert "raise grid.n_modes (N = 24) (in cell " in heat
+    text = describe(path)
+    assert "resolution  at t = 0.02 (the last commit): spectral tail " in text
+    assert (f"  worst cells spectral_tail {report['spectral_tail']:.3g} in cell "
+            f"{report['cells']['spectral_tail']}") in text
+    assert f"  warning: {heat}" in text
+    # the tail was warned of by the report, not again by the accuracy monitors
+    assert not any("spectral tail" in w for w in result.accuracy_warnings)
+
+
+def test_a_resolved_space_run_has_no_resolution_warning():
+    # a gas at the walls' temperature: no jump at v_1 = 0 where the walls and the
+    # transport join half ranges of different Maxwellians (a wall at T_w != T, or the
+    # step of a Riemann problem, makes one, which the tail then reports)
+    result = Simulation(_description(n_modes=32, support=4.0, hot=1.0, cold=1.0)).run(
+        None, progress=False)
+    assert result.warnings == ()
+
+
+def test_the_report_takes_one_device_to_host_copy_and_uploads_nothing():
+    description = _description()
+    backend = CountingBackend()
+    original = RunDescription.build
+
+    def build(self, field, **extra):
+        return backend if field == "backend" else original(self, field, **extra)
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(RunDescription, "build", build)
+        problem = make_problem(description)
+    state = RunState(problem.state(problem.f0), 0.0, 0, 1.0, None, [], [])
+    monitors = problem.monitors(type("Store", (), {"progress": {}})())
+    problem.report(state, None, monitors)                   # the constants go up once
+    backend.reset()
+    resolution, _ = problem.report(state, None, monitors)
+    assert backend.counts()["to_host"] == 1, collections.Counter(backend.log)
+    uploads = [entry for entry in backend.log if entry[0] == "to_device"]
+    assert not uploads, uploads
+    assert set(resolution["cells"]) == {"spectral_tail", "pairs_beyond_support",
+                                        "negative_mass_fraction", "heat_flux_shell"}
