@@ -11,7 +11,6 @@ import contextlib
 import copy
 import io
 import math
-import signal
 import time
 
 import pytest
@@ -20,6 +19,8 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from conftest import mutated
+from test_cli_fuzz import time_limit
+from test_space_bad_input import BASE as SOD
 from granframe.run.description import RunDescription
 from granframe.run.runner import HealthError, Simulation
 from granframe.run.storage import RunStore
@@ -31,18 +32,7 @@ LIMIT = 30
 BUDGET = 256 * 2 ** 20
 
 #: the Sod tube between a specular and a diffuse wall, 10 cells, two steps
-BASE = {
-    "final_time": 0.006, "time_step": 0.003,
-    "grid": {"dimension": 2, "n_modes": 16, "support_radius": 3.2},
-    "kernel": "maxwell", "restitution": {"name": "constant", "value": 1.0},
-    "initial": {"name": "riemann", "left": {"density": 1.0, "temperature": 1.0},
-                "right": {"density": 0.125, "temperature": 0.8}},
-    "operator": {"name": "fast_spectral", "radial_points": 8,
-                 "sphere": {"name": "circle_trapezoid", "n_points": 8}},
-    "backend": {"name": "numpy", "threads": 1},
-    "space": {"cells": 10, "left": "specular",
-              "right": {"name": "diffuse", "temperature": 1.2, "accommodation": 1.0}},
-}
+BASE = {**SOD, "space": {**SOD["space"], "cells": 10}}
 
 EXTREME = [0, -1, 1, 2.5, 1e-300, 5e-324, 1e300, 1.7e308, 9.2e18, 1e30, -1e300, math.nan,
            math.inf, -math.inf, 10 ** 20, "x", "", True, [], [1.0, 2.0], {"name": "x"}]
@@ -88,17 +78,6 @@ changes = st.lists(st.sampled_from(list(KEYS)).flatmap(lambda key: st.tuples(
 COUNTS = collections.Counter()
 
 
-@contextlib.contextmanager
-def time_limit(seconds):
-    def expire(signum, frame):
-        raise TimeoutError(f"the case took more than {seconds} s")
-    previous = signal.signal(signal.SIGALRM, expire)
-    signal.alarm(seconds)
-    try:
-        yield
-    finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, previous)
 
 
 def settings_of(change) -> tuple[dict, list[str]]:

@@ -25,9 +25,9 @@ from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 
 
-def _study():
-    path = pathlib.Path(__file__).parent.parent / "studies" / "space.py"
-    spec = importlib.util.spec_from_file_location("space_study", path)
+def _study(name="space"):
+    path = pathlib.Path(__file__).parent.parent / "studies" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"{name}_study", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -157,14 +157,6 @@ def test_uniform_heated_granular_gas_follows_the_heated_law_in_every_cell():
     assert error == pytest.approx(numpy.abs(T_h / law(t, T_h[0], 1.0) - 1).max(), rel=1e-6)
 
 
-def _euler_limit_study():
-    path = pathlib.Path(__file__).parent.parent / "studies" / "euler_limit.py"
-    spec = importlib.util.spec_from_file_location("euler_limit_study", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def test_sod_tube_at_eps_1e_8_with_the_cfl_step():
     """20 cells, t = 0.1, dt = the transport's CFL limit = 6.7e5 eps: the penalised ARS(2,2,2)
     step with the discrete-Maxwellian penalisation runs to the end with mass and energy
@@ -173,7 +165,7 @@ def test_sod_tube_at_eps_1e_8_with_the_cfl_step():
     solution 1.97e-2, 4.28e-2, 5.43e-2 (rho, u, T) and distances to the eps -> 0 limit of the
     same transport (f set to its discrete Maxwellian in every cell) 7.2e-4, 2.7e-3, 3.4e-3.
     The bounds are 1.5 times these."""
-    study = _euler_limit_study()
+    study = _study("euler_limit")
     run = study.sod_run(20, 1e-8, final=0.1)
     assert run["dt"] / 1e-8 > 6e5 and run["steps"] == 15
     assert run["energy_drift"] < 1e-13 and run["mass_drift"] < 1e-13, run
