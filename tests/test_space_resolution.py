@@ -7,15 +7,14 @@ import math
 
 import numpy
 import pytest
+from test_space_transfers import counting_problem
 
 import granframe as gf
 from granframe.backends import NumpyBackend
 from granframe.run.description import RunDescription
-from granframe.run.problems import make_problem
 from granframe.run.runner import RunState, Simulation
 from granframe.run.storage import RunStore, describe
 from granframe.space.fields import FieldMoments
-from granframe.testing.transfers import CountingBackend
 from granframe.velocity.estimators import pair_share_beyond, spectral_tail
 
 
@@ -125,16 +124,7 @@ def test_a_resolved_space_run_has_no_resolution_warning():
 
 
 def test_the_report_takes_one_device_to_host_copy_and_uploads_nothing():
-    description = _description()
-    backend = CountingBackend()
-    original = RunDescription.build
-
-    def build(self, field, **extra):
-        return backend if field == "backend" else original(self, field, **extra)
-
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(RunDescription, "build", build)
-        problem = make_problem(description)
+    problem, backend = counting_problem(_description())
     state = RunState(problem.state(problem.f0), 0.0, 0, 1.0, None, [], [])
     monitors = problem.monitors(type("Store", (), {"progress": {}})())
     problem.report(state, None, monitors)                   # the constants go up once

@@ -22,11 +22,8 @@ TOML = SPACE_TOML.replace('right = "specular"', 'right = {name = "diffuse", temp
 STEPS = 3
 
 
-@pytest.fixture(scope="module")
-def counted():
-    """A problem on the counting backend after one warm-up step, and the crossings of
-    STEPS steps, each a step and its record."""
-    description = RunDescription.from_toml(TOML)
+def counting_problem(description):
+    """The description's problem built on a :class:`CountingBackend`, and that backend."""
     backend = CountingBackend()
     original = RunDescription.build
 
@@ -35,7 +32,15 @@ def counted():
 
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(RunDescription, "build", build)
-        problem = make_problem(description)
+        return make_problem(description), backend
+
+
+@pytest.fixture(scope="module")
+def counted():
+    """A problem on the counting backend after one warm-up step, and the crossings of
+    STEPS steps, each a step and its record."""
+    description = RunDescription.from_toml(TOML)
+    problem, backend = counting_problem(description)
     state = problem.state(problem.f0)
     state = problem.step(0.0, state, description.time_step)      # caches fill here
     problem.record(state)

@@ -112,3 +112,9 @@ class Threshold(RestitutionLaw):
 
     def _evaluate(self, speed):
         return numpy.where(speed < self.threshold, 1.0, self.value)
+
+
+def is_elastic(restitution, grid) -> bool:
+    """e = 1 at every relative speed the operators see (|g| <= R, 65 speeds)."""
+    speeds = numpy.linspace(0.0, grid.truncation_radius, 65)
+    return bool(numpy.all(restitution(speeds) == 1.0))

@@ -45,6 +45,7 @@ import math
 import numpy
 
 from granframe import validators as check
+from granframe.model.restitution import is_elastic
 from granframe.velocity.estimators import resolution_entry
 
 #: The monitors, in the order they are reported.
@@ -117,12 +118,6 @@ class TemperatureLaw:
         return self._law(time, initial_temperature, density)
 
 
-def _is_elastic(restitution, grid) -> bool:
-    """e = 1 at every relative speed the operators see (|g| <= R)."""
-    speeds = numpy.linspace(0.0, grid.truncation_radius, 65)
-    return bool(numpy.all(restitution(speeds) == 1.0))
-
-
 def temperature_law(description) -> TemperatureLaw | None:
     r"""The exact temperature law of a run in its own formulation, or None.
 
@@ -153,7 +148,7 @@ def temperature_law(description) -> TemperatureLaw | None:
     if law is not None:
         return TemperatureLaw("the exact Maxwell-molecule law (granframe.model.exact."
                               "heated_maxwell_temperature)", law)
-    if _is_elastic(restitution, description.grid):
+    if is_elastic(restitution, description.grid):
         tau = description.heat_bath
         return TemperatureLaw("T = T0 + 2 tau t (elastic collisions conserve energy)",
                               lambda t, T0, rho0: T0 + 2.0 * tau * numpy.asarray(t, dtype=float))
@@ -176,7 +171,7 @@ def cooling_hint(description) -> str | None:
     if description.rescaled or description.heat_bath or description.space is not None:
         return None
     restitution = description.build("restitution")
-    if _is_elastic(restitution, description.grid):
+    if is_elastic(restitution, description.grid):
         return None
     try:
         check_rescalable(description.build("kernel"), restitution, 0.0, "cooling_hint")
@@ -364,7 +359,8 @@ def cell_resolution_report(grid, indicators, centres, tolerance: float) -> dict:
     (:func:`~granframe.velocity.estimators.resolution_entry`) is made from the largest
     value of each indicator over the cells, and each warning names the cell it comes from.
     Added to it: ``heat_flux_shell``, the largest heat flux of the outermost shell of modes
-    in units of ho T^{3/2} (the estimated error of the heat flux on the grid), which warns
+    in units of 
+ho T^{3/2} (the estimated error of the heat flux on the grid), which warns
     above ``tolerance`` and names ``grid.n_modes``; ``cells``, the index of the worst cell
     of each indicator; ``x``, its centre. Cells where an indicator is NaN (no mass) are
     left out of its largest value.

@@ -22,6 +22,7 @@ import numpy
 from granframe.backends import to_host
 from granframe.equations.conservative import ConservativeCorrection
 from granframe.equations.homogeneous import HomogeneousBoltzmann
+from granframe.model.restitution import is_elastic
 from granframe.space.fields import FieldMoments
 from granframe.velocity.equilibrium import discrete_maxwellians
 
@@ -40,14 +41,13 @@ class CellCollisions(HomogeneousBoltzmann):
         super().__init__(operator, heat_bath, knudsen, penalty)
         grid = operator.grid
         self.moments = FieldMoments(grid, 1.0, operator.backend.xp)
-        speeds = numpy.linspace(0.0, grid.truncation_radius, 65)
-        elastic = bool(numpy.all(operator.restitution(speeds) == 1.0))
         #: what the collision step conserves exactly in every cell, which :meth:`restore`
         #: keeps against round-off: with the conservative correction the mass, and without
         #: a heat bath (whose periodic Laplacian moves momentum by the grid's edge terms)
         #: the momentum and, for an elastic gas, the energy; nothing without the correction
         self.invariants = ()
         if isinstance(operator, ConservativeCorrection):
+            elastic = is_elastic(operator.restitution, grid)
             self.invariants = (("mass",) if self.heat.tau else
                                ("mass", "momentum") + (("energy",) if elastic else ()))
 
