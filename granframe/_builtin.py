@@ -6,7 +6,7 @@ plugin manager registers it under the name ``builtin``.
 
 import numpy
 
-from granframe import backends
+from granframe import backends, parallel
 from granframe.model import initial, kernels, restitution
 from granframe.space import boundaries, reconstruction
 from granframe.space import initial as space_initial
@@ -143,3 +143,9 @@ def granframe_register_boundaries(registry):
                              "place (small amplitude): temperature, amplitude, frequency",
                  examples=[{"amplitude": 0.1, "frequency": 5.0},
                            {"temperature": 0.2, "amplitude": 0.02, "frequency": 20.0}])
+
+
+@hookimpl
+def granframe_register_communicators(registry):
+    registry.add("serial", parallel.SerialCommunicator,
+                 description="one process: the collectives return its own values")

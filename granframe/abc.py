@@ -120,6 +120,12 @@ class ArrayBackend:
         """Bytes of device memory the backend holds; None for host backends."""
         return None
 
+    def for_process(self, local_rank: int) -> "ArrayBackend":
+        """The backend of the process ``local_rank`` among the processes of a run on this
+        host (:attr:`Communicator.local_rank`): a device backend gives each process its own
+        device (local rank modulo the devices); a host backend is shared as it is."""
+        return self
+
     def separable_product(self, out, spectrum, head, tail):
         r"""Batch of spectra times separable factors, into ``out``.
 
@@ -692,16 +698,20 @@ class Boundary(abc.ABC):
 
 # -- Problems: what a run steps --------------------------------------------------------------
 
-_DEFERRED = contextvars.ContextVar("granframe_deferred_checks", default=False)
+_DEFERRED = contextvars.ContextVar("granframe_deferred_checks", default=None)
 
 
 @contextlib.contextmanager
-def deferred_checks():
+def deferred_checks(everywhere: bool = False):
     """Within it, a check of an operand that would copy a device array to the host (the
     operators' finiteness check of f) is not made on a backend whose arrays live on a
     device (:attr:`ArrayBackend.on_device`): a run steps inside it, and its health check
-    of each step's record (one transfer) finds a non-finite f instead."""
-    token = _DEFERRED.set(True)
+    of each step's record (one transfer) finds a non-finite f instead.
+
+    ``everywhere``: on every backend. A run spread over processes steps so: a check that
+    raised in one process only would leave the others waiting for its messages, where the
+    health check of the record, reduced over all processes, stops them all at one step."""
+    token = _DEFERRED.set("everywhere" if everywhere else "device")
     try:
         yield
     finally:
@@ -711,7 +721,71 @@ def deferred_checks():
 def checks_deferred(backend) -> bool:
     """Whether a host-copying check of an operand on ``backend`` is left out here
     (:func:`deferred_checks`)."""
-    return bool(getattr(backend, "on_device", False)) and _DEFERRED.get()
+    mode = _DEFERRED.get()
+    return mode == "everywhere" or (mode == "device"
+                                    and bool(getattr(backend, "on_device", False)))
+
+
+# -- Processes: a run spread over several ------------------------------------------------------
+
+
+class Pending(abc.ABC):
+    """Messages posted by :meth:`Communicator.start`, in flight until :meth:`wait`."""
+
+    @abc.abstractmethod
+    def wait(self) -> None:
+        """Return once every message is complete: the receive buffers hold the data and
+        the send buffers may be written again."""
+
+
+class Communicator(abc.ABC):
+    """The processes that run one problem together, and the messages between them.
+
+    A space run owns a contiguous range of cells in each process
+    (:class:`granframe.space.domain.Domain`); the processes exchange the ghost cells of
+    the ends of their ranges point to point (:meth:`start`) and reduce the totals of
+    each step in one collective call (:meth:`allgather`). A serial run is the case of one
+    process (:class:`granframe.parallel.SerialCommunicator`); the plugin ``mpi`` gives
+    MPI's (docs/scaling.md). Every call except :meth:`start` and :meth:`abort` is
+    collective: all processes make it, in the same order.
+
+    Attributes
+    ----------
+    rank, size : int
+        This process's number, 0 <= rank < size, and the number of processes.
+    local_rank : int
+        Its number among the processes on the same host (which device it takes).
+    """
+
+    rank: int = 0
+    size: int = 1
+    local_rank: int = 0
+
+    @abc.abstractmethod
+    def start(self, sends, receives) -> Pending:
+        """Post non-blocking messages and return at once.
+
+        ``sends`` and ``receives`` are lists of ``(peer, tag, array)``: a contiguous array
+        of the run's backend (device memory included) sent to, or received in place from,
+        process ``peer``; a receive matches the send of the same tag from that peer."""
+
+    @abc.abstractmethod
+    def allgather(self, vector) -> numpy.ndarray:
+        """The host vectors of every process, stacked in rank order: shape (size, n)
+        for a float64 vector of length n (the same n everywhere)."""
+
+    @abc.abstractmethod
+    def allgather_object(self, value) -> list:
+        """A picklable value of every process, as a list in rank order."""
+
+    @abc.abstractmethod
+    def bcast(self, value, root: int = 0):
+        """Process ``root``'s picklable value, in every process."""
+
+    def abort(self, code: int) -> None:
+        """End every process of the run with exit status ``code`` (after an error in one
+        process that the others, waiting for its messages, would never learn of)."""
+        raise SystemExit(code)
 
 
 class Problem(abc.ABC):

@@ -26,6 +26,7 @@ CONTRACTS = {
     "array_backends": contracts.ArrayBackend,
     "reconstructions": contracts.Reconstruction,
     "boundaries": contracts.Boundary,
+    "communicators": contracts.Communicator,
 }
 
 #: Relative speeds a restitution law and a kernel's speed part are sampled at: zero,

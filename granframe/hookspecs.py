@@ -72,3 +72,11 @@ def granframe_register_reconstructions(registry):
 def granframe_register_boundaries(registry):
     """Add boundaries of the space interval (walls, periodic links); factories return
     :class:`granframe.abc.Boundary` instances."""
+
+
+@hookspec
+def granframe_register_communicators(registry):
+    """Add communicators of processes that run one space problem together; factories
+    take no required parameter and return a :class:`granframe.abc.Communicator` of the
+    processes this one was launched with (:func:`granframe.parallel.world` creates the one
+    named ``mpi`` when a launcher started several)."""

@@ -45,6 +45,7 @@ FAMILIES = {
     "array_backends": "granframe_register_array_backends",
     "reconstructions": "granframe_register_reconstructions",
     "boundaries": "granframe_register_boundaries",
+    "communicators": "granframe_register_communicators",
 }
 
 _NAME = re.compile(r"^[a-z][a-z0-9_]*$")

@@ -44,12 +44,16 @@ class Neighbours:
                     values.append(array[block, domain.ghost + offset])
         return numpy.stack(values)
 
-    def fill(self, domain, array, side):
+    def start(self, domain, array, sides):
         g = domain.ghost
-        if side == "left":
+        if "left" in sides:
             array[0, :g] = self.cells(domain.start - g, domain.start)
-        else:
+        if "right" in sides:
             array[-1, -g:] = self.cells(domain.stop, domain.stop + g)
+        return self
+
+    def wait(self):
+        """Filled at start."""
 
 
 def _split_step(left, right, tau, t=0.0, parts=3):
@@ -114,8 +118,12 @@ def test_a_domain_applies_a_wall_only_where_its_range_touches_it():
     class Recorder:
         sides = []
 
-        def fill(self, domain, array, side):
-            self.sides.append(side)
+        def start(self, domain, array, sides):
+            self.sides.extend(sides)
+            return self
+
+        def wait(self):
+            """Nothing in flight."""
 
     for domain in (middle, first):
         domain.neighbours = Recorder()
@@ -130,9 +138,8 @@ def test_a_range_inside_the_interval_without_neighbours_is_refused_clearly():
         domain.exchange(domain.from_cells(_f()[8:16]), Diffuse(), Diffuse(), 0.0)
 
 
-@pytest.mark.parametrize("owned, message", [((3, 8), "multiples of block_cells = 4"),
-                                            ((8, 8), "start < stop"),
-                                            ((0, 28), "stop <= 24")])
-def test_an_owned_range_of_partial_blocks_is_refused(owned, message):
-    with pytest.raises(ValueError, match="owned"):
+@pytest.mark.parametrize("owned, parameter", [((3, 8), "block_cells"), ((8, 8), "owned"),
+                                              ((0, 28), "owned")])
+def test_an_owned_range_of_partial_blocks_is_refused(owned, parameter):
+    with pytest.raises(ValueError, match=f"parameter '{parameter}'"):
         Domain(CELLS, 1.0, BLOCK, 3, GRID, owned=owned)

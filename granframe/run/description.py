@@ -322,9 +322,10 @@ class Space:
     length : float
         ell, in the velocity grid's scale range (1e-50 to 1e50).
     block_cells : int or None
-        Cells per block (:class:`~granframe.space.domain.Domain`); a divisor of
-        ``cells``, at least the reconstruction's ghost width. The store's f is chunked by
-        block. None: the largest such divisor up to 64 (one block if there is none).
+        The width along x of the store's chunks of f and of the fields; a divisor of
+        ``cells``, at least the reconstruction's ghost width. A run on several processes
+        gives each whole chunks, so it runs on at most cells / block_cells of them. None:
+        :meth:`blocks` (about 16 chunks or more, at most 64 cells each).
     reconstruction : Component
         Registered reconstruction of the cell averages (``muscl``, ``weno5``, ``upwind``).
     left, right : Component
@@ -363,13 +364,17 @@ class Space:
         return default_registries().create(family, component.name, **component.params)
 
     def blocks(self, ghost: int) -> int:
-        """The cells per block: ``block_cells``, or the largest divisor of ``cells`` from
-        ``ghost`` to 64 (all cells when there is none)."""
+        """The store's chunk width along x: ``block_cells``, or by default the largest
+        divisor of ``cells`` from ``ghost`` to min(64, cells / 16), so that the interval
+        has about 16 chunks or more to share among processes (each writes whole chunks:
+        :func:`granframe.parallel.partition`), and otherwise the smallest divisor from
+        ``ghost`` (all cells when there is none)."""
         if self.block_cells is not None:
             return self.block_cells
-        divisors = [b for b in range(max(ghost, 1), min(self.cells, 64) + 1)
-                    if self.cells % b == 0]
-        return divisors[-1] if divisors else self.cells
+        ghost = max(ghost, 1)
+        divisors = [b for b in range(ghost, self.cells + 1) if self.cells % b == 0]
+        small = [b for b in divisors if b <= min(64, max(ghost, self.cells // 16))]
+        return small[-1] if small else divisors[0]
 
     def check(self, grid, time_step, step_limit: bool) -> dict:
         """Build and check the reconstruction and the boundaries against the cells, the

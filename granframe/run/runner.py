@@ -32,10 +32,11 @@ import zarr
 from granframe._version import __version__
 from granframe.backends import available_cpus
 from granframe.errors import NonFiniteError
+from granframe.parallel import SerialCommunicator
 from granframe.registry import default_registries
 from granframe.run.description import COMPONENT_FAMILIES, RunDescription, fixed_steps
 from granframe.run.problems import make_problem, moments
-from granframe.run.storage import RECORDED_MOMENTS, RunStore, StoreExistsError
+from granframe.run.storage import RECORDED_MOMENTS, RunStore, StoreExistsError, collective
 from granframe.stepping.integrators import StepController, StepSizeError
 from granframe.validators import distinct, reject
 
@@ -482,12 +483,14 @@ class StorageObserver(Observer):
     Ctrl-C); :meth:`close` closes the store.
     """
 
-    def __init__(self, store: RunStore, records: "Records", snapshot):
+    def __init__(self, store: RunStore, records: "Records", snapshot, problem=None):
         self.store, self.records, self.snapshot = store, records, snapshot
+        #: a space run's problem: its processes commit together (:func:`_commit`)
+        self.problem = problem
 
     def at_output(self, state, final):
-        self.store.commit([(state.t, self.snapshot(state.f))], self.records.take(),
-                          state.progress("finished" if final else "running"))
+        _commit(self.store, self.problem, [(state.t, self.snapshot(state.f))],
+                self.records.take(), state.progress("finished" if final else "running"))
 
     def fail(self, state: RunState, stop: Stopped):
         """Write the moments up to the failing step, mark the store failed, raise HealthError.
@@ -495,7 +498,8 @@ class StorageObserver(Observer):
         The snapshots stay the last healthy states; the moments show how it failed.
         """
         message = str(stop)
-        self.store.commit([], self.records.take(), state.progress("failed", message=message))
+        _commit(self.store, self.problem, [], self.records.take(),
+                state.progress("failed", message=message))
         error = HealthError(message)
         if self.store.path is None:
             error.dataset = _dataset(self.store)
@@ -503,12 +507,25 @@ class StorageObserver(Observer):
 
     def interrupt(self):
         """After a Ctrl-C: the last commit stays what a resume continues from; only its
-        status changes (a commit that already said finished or failed stays so)."""
+        status changes (a commit that already said finished or failed stays so); the
+        process that holds the writer lock marks it."""
+        if self.store.lock is None and self.store.path is not None:
+            return
         if self.store.progress.get("status") == "running":
             self.store.mark("interrupted")
 
     def close(self):
         self.store.close()
+
+
+def _commit(store: RunStore, problem, snapshots, records: dict, progress: dict) -> None:
+    """A commit of ``snapshots`` and ``records``: by all the processes of a space run
+    together (:meth:`RunStore.commit_together`, each its owned cells), in one call for a
+    space-homogeneous run (``problem`` None)."""
+    if problem is None:
+        store.commit(snapshots, records, progress)
+    else:
+        store.commit_together(problem.communicator, problem.owned, snapshots, records, progress)
 
 
 class Simulation:
@@ -520,15 +537,27 @@ class Simulation:
     public members (``grid``, ``backend``, ``operator``, ``f0``, ``equation``,
     ``integrator``, ``projection``, ...) are read through the simulation. A fixed time
     step above the explicit stability limit at f0 is refused here.
+
+    A space run launched on several processes (``mpiexec -n 4 granframe run ...``) is
+    spread over them (docs/scaling.md): each steps and writes the cells it owns, and they
+    write one store together. ``communicator`` (:class:`granframe.abc.Communicator`):
+    the processes, by default those of :func:`granframe.parallel.world`; ``partition``:
+    the cells of each process (:func:`granframe.parallel.partition`), by default even.
     """
 
-    def __init__(self, description: RunDescription):
+    def __init__(self, description: RunDescription, communicator=None, partition=None):
         if not isinstance(description, RunDescription):
             raise TypeError(f"Simulation: parameter 'description' = {description!r} is invalid; "
                             "must be a RunDescription")
         self.description = description
-        self.problem = make_problem(description)
+        self.problem = make_problem(description, communicator=communicator,
+                                    partition=partition)
         self.problem.check_step()
+
+    @property
+    def communicator(self):
+        """The processes of the run (one for a space-homogeneous run)."""
+        return getattr(self.problem, "communicator", None) or SerialCommunicator()
 
     def __getattr__(self, name):
         if name.startswith("_") or "problem" not in self.__dict__:
@@ -585,6 +614,11 @@ class Simulation:
         if out is None and resume:
             reject("Simulation.run", "resume", resume, "needs a store on disk to continue "
                    "(out = None holds a run in memory, from t = 0)")
+        communicator = self.communicator
+        if out is None and communicator.size > 1:
+            reject("Simulation.run", "out", out, f"must be a path on disk for a run on "
+                   f"{communicator.size} processes (they write one store together; a store "
+                   "in memory is one process's)")
         check_run_modes(resume, overwrite)
         started = time.perf_counter()
         store, state = self._open(out, resume, overwrite, rollback, protect, started)
@@ -615,21 +649,28 @@ class Simulation:
         finally:
             for observer in observers:
                 observer.close()
+        final = communicator.bcast(store.progress)      # process 0's, which wrote it
         return RunResult("memory" if out is None else str(out), "finished", state.step,
-                         state.t, store.snapshot_count, store.progress["wall_seconds"],
-                         tuple(store.progress.get("resolution", {}).get("warnings", ())),
+                         state.t, int(final["snapshots"]), final["wall_seconds"],
+                         tuple(final.get("resolution", {}).get("warnings", ())),
                          dataset=_dataset(store) if out is None else None,
                          accuracy_warnings=tuple(
-                             store.progress.get("accuracy", {}).get("warnings", ())))
+                             final.get("accuracy", {}).get("warnings", ())))
 
     def _observers(self, store, state, progress) -> list:
         """What the run does besides stepping, in order; the :class:`StorageObserver` last."""
         d, problem = self.description, self.problem
         records = Records(problem.record_names)
+        if self.communicator.rank != 0:     # one progress bar: process 0's
+            progress = False
         return [RecordObserver(problem, records), HealthObserver(d.health),
                 ProgressObserver(state, d.final_time, progress, problem.progress_text),
                 AccuracyObserver(problem, problem.monitors(store)),
-                StorageObserver(store, records, problem.snapshot)]
+                StorageObserver(store, records, problem.snapshot, self._space())]
+
+    def _space(self):
+        """The problem of a space run (its processes commit together), else None."""
+        return self.problem if hasattr(self.problem, "owned") else None
 
     def run_in_memory(self, *, progress: bool | None = None):
         """Run to ``final_time`` in memory and return the run as an :class:`xarray.Dataset`.
@@ -654,38 +695,73 @@ class Simulation:
     def _open(self, out, resume, overwrite, rollback, protect, started):
         """The store of the run and the state it starts from: a new store with the moments
         of f0 committed, or the store being resumed and its last snapshot. The state is
-        None when the resumed run is already finished."""
+        None when the resumed run is already finished.
+
+        Process 0 creates or resumes the store and holds its writer lock; the others open
+        it once it is ready (what process 0 met, a refusal included, is raised in all)."""
         d = self.description
         description = d.to_dict()
-        store = None
-        problem = self.problem
-        if not (resume and RunStore.exists(out)):
-            rescaling = problem.rescaling
+        problem, communicator = self.problem, self.communicator
+        first = communicator.rank == 0
+        opened = []
+
+        def create():
             try:
-                store = RunStore.create(
+                opened.append(RunStore.create(
                     out, description, d.to_toml(), d.grid, self.provenance(),
                     overwrite=overwrite, protect=protect, projection=problem.projection,
-                    rescaling=None if rescaling is None else rescaling.to_dict(),
-                    layout=problem.layout())
+                    rescaling=None if problem.rescaling is None else problem.rescaling.to_dict(),
+                    layout=problem.layout()))
             except StoreExistsError:
                 if not resume:
                     raise         # else: another writer made it meanwhile; continue it
-            else:
-                return store, self._first_commit(store, started)
-        store = RunStore.resume(out, description, rollback=rollback)
-        entry = store.progress
+                return None
+            return opened[0].path
+
+        if not (resume and collective(communicator, lambda: RunStore.exists(out))):
+            path = collective(communicator, create)
+            if path is not None:
+                store = opened[0] if first else RunStore.open(path, "r+", complete=False)
+                return self._first_commit(store, started)
+
+        def resume_store():
+            self._check_chunks(out)
+            opened.append(RunStore.resume(out, description, rollback=rollback))
+            return opened[0].progress
+
+        entry = collective(communicator, resume_store)
+        store = opened[0] if first else RunStore.open(out, "r+", complete=False)
         if entry["status"] == "finished":
             return store, None
-        f_host, t = store.last_snapshot()
+        f_host, t = store.last_snapshot(cells=getattr(problem, "owned", None))
         return store, RunState(problem.state(f_host), t, int(entry["step"]),
                                float(entry["mass0"]), entry.get("dt_next"),
                                entry.get("resumes", []) + [int(entry["step"])],
                                entry.get("rollbacks", []),
                                float(entry.get("wall_seconds", 0.0)), started)
 
-    def _first_commit(self, store, started) -> RunState:
-        """Commit f0 and its moments to a new store and publish it; the state at t = 0."""
-        d, problem = self.description, self.problem
+    def _check_chunks(self, out) -> None:
+        """Refuse to resume a space run whose store's chunks along x do not fall on the
+        boundaries of the processes' cells (a store made with another ``block_cells``),
+        before anything is written."""
+        ranges = getattr(self.problem, "ranges", None)
+        if ranges is None or not RunStore.exists(out):
+            return
+        space = RunStore.open(out, complete=False).metadata.get("space") or {}
+        chunk = int(space.get("block_cells", 1))
+        if any(start % chunk for start, _ in ranges):
+            reject("run", "processes", self.communicator.size, f"cannot share the store "
+                   f"'{out}' among themselves: it is chunked by {chunk} cells along x, and "
+                   f"the cells of the processes start at {[a for a, _ in ranges]}; each must "
+                   f"start at a multiple of {chunk} (run on a number of processes that "
+                   f"divides {space.get('cells', '?')} // {chunk} chunks, or give the "
+                   "partition)")
+
+    def _first_commit(self, store, started):
+        """Commit f0 and its moments to a new store and publish it: the store (opened at its
+        final path) and the state at t = 0. Every process commits its cells."""
+        d, problem, communicator = self.description, self.problem, self.communicator
+        space = self._space()
         try:
             f = problem.state(problem.f0)
             record = problem.record(f)
@@ -694,11 +770,15 @@ class Simulation:
                              [], [], 0.0, started)
             first = Records(problem.record_names)
             first.add(0, 0.0, 0.0, record)
-            store.commit([(0.0, problem.f0)], first.columns,
-                         {"status": "running", "step": 0, "time": 0.0, "mass0": state.mass0,
-                          "dt_next": state.dt_next, "resumes": state.resumes})
-            store.publish()
+            f0 = problem.f0 if space is None else problem.f0[problem.owned]
+            _commit(store, space, [(0.0, f0)], first.columns,
+                    {"status": "running", "step": 0, "time": 0.0, "mass0": state.mass0,
+                     "dt_next": state.dt_next, "resumes": state.resumes})
+            path = collective(communicator, lambda: (store.publish(), store.path)[1])
         except BaseException:
-            store.discard()      # never in place: the path holds what it held before
+            if communicator.rank == 0:
+                store.discard()      # never in place: the path holds what it held before
             raise
-        return state
+        if communicator.rank != 0:
+            store = RunStore.open(path, "r+", complete=False)
+        return store, state

@@ -953,12 +953,15 @@ class RunStore:
     def snapshot_count(self) -> int:
         return int(self.progress["snapshots"])
 
-    def last_snapshot(self):
-        """(f, t) of the last committed snapshot, f as a NumPy array."""
+    def last_snapshot(self, cells: slice | None = None):
+        """(f, t) of the last committed snapshot, f as a NumPy array; ``cells``: only those
+        cells of a space run's f (the range a process owns), read from their chunks."""
         k = self.snapshot_count
         if k == 0:
             raise StoreError(f"store '{self.path}' has no complete snapshot to resume from")
-        return self.group["f"][k - 1], float(self.group["time"][k - 1])
+        f = self.group["f"]
+        return (f[k - 1] if cells is None else f[(k - 1, cells)],
+                float(self.group["time"][k - 1]))
 
     def _extent(self, name: str) -> int:
         """Committed entries of an array along its first axis."""
@@ -1348,6 +1351,59 @@ class RunStore:
                                                  numpy.asarray(values), shape)))
         return writes
 
+    def commit_together(self, communicator, cells: slice, snapshots, records: dict,
+                        progress: dict) -> None:
+        """One commit of a space run written by all its processes
+        (:class:`granframe.abc.Communicator`; a serial run is the case of one): the four
+        phases of the class notes, collective.
+
+        Process 0, the holder of the writer lock, begins the commit and sends the plan;
+        every process writes its ``cells`` (whole chunks: the range it owns) of the new
+        snapshots of f and of the field records (:meth:`write_block`); once all have
+        written, process 0 writes the shared records and ends the commit. A write that
+        fails in any process fails the commit in all of them, before it is made visible
+        (:class:`StoreError` naming the process), so the store keeps its last commit.
+
+        Parameters
+        ----------
+        communicator : granframe.abc.Communicator
+        cells : slice
+            The cells this process owns.
+        snapshots : list of (float, array_like)
+            The new snapshots (t, f of ``cells``), the same times in every process.
+        records : dict
+            name -> new records: those of the cells axis for ``cells``, the others (the
+            same in every process) for the whole interval.
+        progress : dict
+            As for :meth:`end_commit` (process 0's counts).
+        """
+        first = communicator.rank == 0
+        count = len(records["step_time"]) if records else 0
+        layout, split = self.record_arrays, self.cell_arrays
+        given = {name: values for name, values in records.items() if name in layout} \
+            if count else {}
+        plan = collective(communicator, lambda: self.begin_commit(len(snapshots), count))
+        try:
+            if not first:       # the arrays were resized by process 0
+                self.group = zarr.open_group(str(self.path), mode="r+", use_consolidated=False)
+            self.write_block(plan, cells, f=[f for _, f in snapshots],
+                             records={n: v for n, v in given.items() if n in split})
+            failure = None
+        except Exception as exc:      # reported to every process below
+            failure = f"process {communicator.rank}: {type(exc).__name__}: {exc}"
+        failures = [f for f in communicator.allgather_object(failure) if f]
+        if failures:
+            raise StoreError(f"store '{self.path}': the commit was not made, the store keeps "
+                             f"its last one ({'; '.join(failures)})")
+
+        def end():
+            self.write_shared(plan, times=[t for t, _ in snapshots], step=progress.get("step"),
+                              dt_next=progress.get("dt_next"),
+                              records={n: v for n, v in given.items() if n not in split})
+            self.end_commit(plan, progress)
+
+        collective(communicator, end)
+
     def mark(self, status: str, **extra) -> None:
         """Set the status of the last commit (e.g. 'interrupted'), adding no data."""
         self._write_progress(dict(self.progress, status=status, **extra))
@@ -1358,6 +1414,22 @@ class RunStore:
         meta["updated"] = _now()
         self.group.attrs["granframe"] = meta
         consolidate(self.location)
+
+
+def collective(communicator, function):
+    """``function()`` run by process 0 alone, its value or its exception broadcast to every
+    process, where it is returned or raised: so that a store operation made by process 0
+    (which holds the writer lock) stops every process at the same point when it fails."""
+    outcome = None
+    if communicator.rank == 0:
+        try:
+            outcome = ("value", function())
+        except Exception as exc:      # raised in every process below
+            outcome = ("error", exc)
+    kind, value = communicator.bcast(outcome)
+    if kind == "error":
+        raise value
+    return value
 
 
 def _check_creatable(path: pathlib.Path, overwrite: bool, protect) -> None:

@@ -2,7 +2,7 @@ r"""The cells of [0, ell], the part of them this process owns, and their ghost c
 
 A :class:`Domain` is to the space discretisation what PETSc's DMDA is to a structured grid
 (S. Balay et al., PETSc users manual, "DMDA"): it knows the global cells and their edges,
-the range of cells this process owns (``start`` to ``stop``, whole blocks), the ghost width
+the range of cells this process owns (``start`` to ``stop``), the ghost width
 of the reconstruction and which global boundaries the owned range touches. Numerics see
 blocks of owned cells with their ghosts and never ask who their neighbours are.
 
@@ -41,14 +41,17 @@ class Domain:
     length : float
         ell, the length of the interval; cell j is [j dx, (j + 1) dx], dx = ell / cells.
     block_cells : int
-        Cells per block (a divisor of ``cells``); the unit of ownership and of storage.
+        Cells per block, a divisor of the owned cells (the unit of the batched transport;
+        the store's chunks along x are ``space.block_cells``, which a process's range
+        holds whole).
     ghost : int
         Ghost cells on each side of a block (the reconstruction's stencil half-width).
     grid : VelocityGrid
     xp : module
         The array namespace of the blocks.
     owned : tuple of int, optional
-        ``(start, stop)``: the cells this process owns, whole blocks; all cells by default.
+        ``(start, stop)``: the cells this process owns
+        (:func:`granframe.parallel.partition`); all cells by default.
 
     Attributes
     ----------
@@ -57,21 +60,21 @@ class Domain:
     touches_left, touches_right : bool
         Whether the owned range contains the first (x = 0) or the last (x = ell) cell.
     neighbours : object or None
-        Fills the ghost cells of an end of the owned range that another process holds:
-        ``neighbours.fill(domain, array, side)`` with ``side`` "left" or "right". None
-        for a domain that owns every cell.
+        Exchanges the ghost cells of the ends of the owned range that other processes
+        hold: ``neighbours.start(domain, array, sides)`` posts the messages of ``sides``
+        ("left", "right") and returns what to ``wait()`` for
+        (:class:`granframe.parallel.Halo`). None for a domain that owns every cell.
     """
 
     def __init__(self, cells: int, length: float, block_cells: int, ghost: int, grid,
                  xp=numpy, owned: tuple | None = None):
-        if cells % block_cells:
-            check.reject("Domain", "block_cells", block_cells,
-                         f"must divide the number of cells ({cells})")
         start, stop = (0, cells) if owned is None else (int(owned[0]), int(owned[1]))
-        if not (0 <= start < stop <= cells and start % block_cells == 0
-                and stop % block_cells == 0):
+        if not 0 <= start < stop <= cells:
             check.reject("Domain", "owned", owned, f"must be (start, stop) with 0 <= start < "
-                         f"stop <= {cells}, both multiples of block_cells = {block_cells}")
+                         f"stop <= {cells}")
+        if (stop - start) % block_cells:
+            check.reject("Domain", "block_cells", block_cells,
+                         f"must divide the number of owned cells ({stop - start})")
         self.cells, self.length, self.block_cells, self.ghost = cells, float(length), \
             block_cells, ghost
         self.start, self.stop = start, stop
@@ -130,28 +133,34 @@ class Domain:
     # -- ghost cells ------------------------------------------------------------------------
     def exchange(self, array, left, right, t: float = 0.0) -> None:
         """Fill every ghost cell of ``array`` (see the module notes); ``left`` and
-        ``right`` are the boundaries of the interval, acting at time ``t``."""
+        ``right`` are the boundaries of the interval, acting at time ``t``.
+
+        The ghost cells that other processes hold are posted first
+        (:meth:`~granframe.parallel.Halo.start`), the local ones filled while they travel,
+        and the exchange completed last."""
         g, n, d = self.ghost, self.block_cells, self.grid.dimension
         if g == 0:
             return
+        local = left.periodic and self.touches_left and self.touches_right
+        remote = [side for side, touches, wall in (("left", self.touches_left, left),
+                                                   ("right", self.touches_right, right))
+                  if not local and (wall.periodic or not touches)]
+        pending = self._neighbours().start(self, array, remote) if remote else None
         array[1:, :g] = array[:-1, n:n + g]
         array[:-1, g + n:] = array[1:, g:2 * g]
         xp = self.xp
-        if left.periodic and self.touches_left and self.touches_right:
+        if local:
             array[0, :g] = array[-1, n:n + g]
             array[-1, g + n:] = array[0, g:2 * g]
-            return
         if self.touches_left and not left.periodic:
             ghosts = left.ghosts(array[0, g:2 * g], self.grid, xp, t=t, side="left")
             array[0, :g] = xp.flip(ghosts, axis=0)                # from the wall outwards
-        else:
-            self._neighbours().fill(self, array, "left")
         if self.touches_right and not right.periodic:
             inside = reflect(xp.flip(array[-1, n:n + g], axis=0), d, xp)   # as a left wall
             array[-1, g + n:] = reflect(right.ghosts(inside, self.grid, xp, t=t,
                                                      side="right"), d, xp)
-        else:
-            self._neighbours().fill(self, array, "right")
+        if pending is not None:
+            pending.wait()
 
     def _neighbours(self):
         if self.neighbours is None:

@@ -144,6 +144,37 @@ class FieldMoments:
                 "negative_mass_fraction": float(negative / absolute) if absolute > 0 else 0.0,
                 "extra": vector[cells * m + 3:]}
 
+    def partial_totals(self, vector, fields: dict) -> numpy.ndarray:
+        """What the cells of one process add to the totals: the host vector
+        [mass, kinetic energy, min f, int max(-f, 0), int |f|, min T, max T, extra...] from
+        :meth:`packed`'s ``vector`` and its :meth:`unpack` ``fields`` (min and max of T over
+        the cells where it is finite, NaN where it is nowhere); :meth:`combine` reduces the
+        vectors of all processes."""
+        cells, m = len(fields["density"]), self.basis.shape[1]
+        minimum, negative, absolute = vector[cells * m:cells * m + 3]
+        temperature = fields["temperature"]
+        finite = temperature[numpy.isfinite(temperature)]
+        low, high = (finite.min(), finite.max()) if finite.size else (numpy.nan, numpy.nan)
+        return numpy.concatenate([[fields["mass"], fields["kinetic_energy"], minimum,
+                                   negative, absolute, low, high], fields["extra"]])
+
+    @staticmethod
+    def combine(rows) -> dict:
+        """The totals over all cells from the :meth:`partial_totals` of every process
+        (rows in rank order): mass, kinetic_energy, min_f, negative_mass_fraction (sums of
+        int max(-f, 0) over those of int |f|), ``temperature_range`` (min, max) and
+        ``walls``, the sum of the extra values."""
+        rows = numpy.asarray(rows, dtype=float)
+        negative, absolute = rows[:, 3].sum(), rows[:, 4].sum()
+        low, high = rows[:, 5], rows[:, 6]
+        finite = numpy.isfinite(low)
+        return {"mass": float(rows[:, 0].sum()), "kinetic_energy": float(rows[:, 1].sum()),
+                "min_f": float(rows[:, 2].min()),
+                "negative_mass_fraction": float(negative / absolute) if absolute > 0 else 0.0,
+                "temperature_range": ((float(low[finite].min()), float(high[finite].max()))
+                                      if finite.any() else (numpy.nan, numpy.nan)),
+                "walls": rows[:, 7:].sum(axis=0)}
+
     def __call__(self, f) -> dict:
         """Fields (NumPy arrays over cells) and totals of f (cells, *grid.shape), in one
         device->host transfer.

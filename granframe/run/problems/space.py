@@ -21,12 +21,15 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy
 
-from granframe.abc import Problem
+from granframe.abc import Problem, deferred_checks
 from granframe.backends import NumpyBackend, to_host
 from granframe.memory import check_run_memory
 from granframe.model.initial import check_fits, check_projection
+from granframe.parallel import Halo, SerialCommunicator, partition, world
 from granframe.run.monitors import CELL_INDICATORS, CellEdgeMonitors, cell_resolution_report
 from granframe.run.problems.parts import build_operator, check_step
 from granframe.run.storage import STEP_RECORDS, Layout, RecordArray
@@ -43,14 +46,14 @@ from granframe.validators import reject
 WALL_RECORDS = ("wall_mass", "wall_energy", "wall_momentum")
 
 
-def space_layout(grid, domain: Domain) -> Layout:
-    """The store of a space run: f (time, x, v1, ..., vd) chunked by snapshot and block,
-    the coordinates v1 ... vd and x (the cell centres), and after every step the totals,
-    the fields (step_time, x, ...) chunked by block along x, and the wall records
-    (step_time, wall; ``wall_momentum`` (step_time, wall, axis))."""
+def space_layout(grid, domain: Domain, block: int) -> Layout:
+    """The store of a space run: f (time, x, v1, ..., vd) chunked by snapshot and by
+    ``block`` cells along x, the coordinates v1 ... vd and x (the cell centres), and after
+    every step the totals, the fields (step_time, x, ...) chunked by ``block`` along x,
+    and the wall records (step_time, wall; ``wall_momentum`` (step_time, wall, axis))."""
     d = grid.dimension
     axes = tuple(f"v{i + 1}" for i in range(d))
-    cells, block = domain.cells, domain.block_cells
+    cells = domain.cells
     chunk = max(1, 4096 // block)
     fields = tuple(RecordArray(name, (cells,) + tuple(d if c == "d" else c for c in shape),
                                ("x",) + dims, chunk=chunk, cells_chunk=block)
@@ -65,6 +68,18 @@ def space_layout(grid, domain: Domain) -> Layout:
                   ("x",) + axes,
                   STEP_RECORDS + tuple(RecordArray(n) for n in TOTALS) + fields + walls,
                   space={"cells": cells, "length": domain.length, "block_cells": block})
+
+
+def _blocks(space, ghost: int, owned: int) -> int:
+    """The cells per block of a process's :class:`~granframe.space.domain.Domain`:
+    ``space.block_cells`` when given, else the largest divisor of its ``owned`` cells from
+    ``ghost`` to 64 (all of them when there is none). The blocks only batch the
+    transport: the ghost cells between blocks are copies, so the result does not depend
+    on them."""
+    if space.block_cells is not None:
+        return space.block_cells
+    divisors = [b for b in range(max(ghost, 1), min(owned, 64) + 1) if owned % b == 0]
+    return divisors[-1] if divisors else owned
 
 
 def _cell(condition, mass):
@@ -85,7 +100,8 @@ class SpaceProblem(Problem):
     NumPy), which is all that :meth:`step_limit` reads; f0 is then not checked.
     """
 
-    def __init__(self, description, outline: bool = False):
+    def __init__(self, description, outline: bool = False, communicator=None,
+                 partition_cells=None):
         if getattr(description, "space", None) is None:
             reject("SpaceProblem", "description", description, "must have a space section",
                    error=TypeError)
@@ -95,19 +111,30 @@ class SpaceProblem(Problem):
         parts = d.build("space")
         self.reconstruction, self.left, self.right = (parts["reconstruction"], parts["left"],
                                                       parts["right"])
+        ghost = self.reconstruction.ghost
+        self.communicator = comm = (SerialCommunicator() if outline else
+                                    world() if communicator is None else communicator)
+        #: the cells (start, stop) of every process, in rank order, and this one's
+        self.ranges = partition(space.cells, space.blocks(ghost), comm.size, ghost,
+                                partition_cells)
+        start, stop = self.ranges[comm.rank]
         collide = space.collisions
         if outline:
             self.backend = NumpyBackend(threads=1)
             self.operator = OperatorOutline(grid, d.build("kernel"), d.build("restitution"),
                                             self.backend) if collide else None
         else:
-            self.backend = d.build("backend")
+            self.backend = d.build("backend").for_process(comm.local_rank)
             check_run_memory(d, self.backend)
             self.operator = build_operator(d, self.backend) if collide else None
         xp = self.backend.xp
         self.collision_integrator = d.build("integrator") if collide else None
-        ghost = self.reconstruction.ghost
-        self.domain = Domain(space.cells, space.length, space.blocks(ghost), ghost, grid, xp)
+        self.domain = Domain(space.cells, space.length, _blocks(space, ghost, stop - start),
+                             ghost, grid, xp, owned=(start, stop))
+        if comm.size > 1:
+            self.domain.neighbours = Halo.of(comm, self.ranges, self.left.periodic)
+        #: wall seconds of the reductions of the records over the processes
+        self.reduction_seconds = 0.0
         self.transport = Transport(self.domain, self.reconstruction, self.left, self.right)
         self.projection = None
         self.f0 = self._initial(check=not outline)
@@ -174,25 +201,50 @@ class SpaceProblem(Problem):
     rescaling = None
 
     def layout(self):
-        return space_layout(self.grid, self.domain)
+        return space_layout(self.grid, self.domain,
+                            self.description.space.blocks(self.reconstruction.ghost))
+
+    @property
+    def owned(self) -> slice:
+        """The cells this process owns and steps (all of them in a serial run)."""
+        return self.domain.owned
 
     @property
     def record_names(self) -> tuple:
         return TOTALS + tuple(FIELDS) + WALL_RECORDS
 
     def state(self, f_host):
+        """The block array of the owned cells from f on the host: every cell (f0), or the
+        owned ones (a snapshot read by :meth:`owned`)."""
+        f_host = f_host if len(f_host) == self.domain.owned_cells else f_host[self.owned]
         return self.domain.from_cells(self.backend.asarray(f_host))
 
     def snapshot(self, state):
+        """f of the owned cells on the host."""
         return self.backend.to_numpy(self.domain.to_cells(state))
 
+    def step(self, t: float, state, dt: float):
+        """One step; spread over processes, no check inside it raises in one process alone
+        (:func:`~granframe.abc.deferred_checks`): a non-finite f shows in the reduced
+        record, and every process stops at that step."""
+        with deferred_checks(everywhere=self.communicator.size > 1):
+            return self.integrator.step(self.equation, t, state, dt)
+
     def record(self, state) -> dict:
-        """The fields of every cell, the totals and the wall totals since the last record,
-        from one device vector (:meth:`FieldMoments.packed`): one device->host transfer."""
+        """The fields of the owned cells, the totals over all cells and the wall totals
+        since the last record: one device vector (:meth:`FieldMoments.packed`) and one
+        device->host transfer, then one reduction over the processes
+        (:meth:`~granframe.abc.Communicator.allgather` of the partial totals, combined in
+        rank order by :meth:`FieldMoments.combine`, the same in every process)."""
         cells = self.domain.to_cells(state)
         walls = self.transport.take_wall_totals()
-        record = self.fields.unpack(to_host(self.fields.packed(cells, walls)), len(cells))
-        extra = record.pop("extra").reshape(2, -1)
+        vector = to_host(self.fields.packed(cells, walls))
+        record = self.fields.unpack(vector, len(cells))
+        began = time.perf_counter()
+        rows = self.communicator.allgather(self.fields.partial_totals(vector, record))
+        self.reduction_seconds += time.perf_counter() - began
+        record.update(self.fields.combine(rows))
+        extra = record.pop("walls").reshape(2, -1)
         record["wall_mass"], record["wall_energy"] = extra[:, 0], extra[:, -1]
         record["wall_momentum"] = extra[:, 1:-1]
         return record
@@ -218,15 +270,18 @@ class SpaceProblem(Problem):
         indicators = values[:count * len(CELL_INDICATORS)].reshape(count, -1)
         shares = (values[count * len(CELL_INDICATORS):].reshape(count, 2)
                   if monitors.radius > 0.0 else None)
+        if self.communicator.size > 1:     # every cell's, in every process, in cell order
+            gathered = self.communicator.allgather_object((indicators, shares))
+            indicators = numpy.concatenate([part[0] for part in gathered])
+            shares = None if shares is None else numpy.concatenate([p[1] for p in gathered])
         resolution = cell_resolution_report(self.grid, indicators, self.domain.centres(),
                                             self.description.health.resolution_tolerance)
         return resolution, monitors.update(monitors.shape(shares, resolution), state.step,
                                            state.t)
 
     def progress_text(self, record, mass0) -> str:
-        t = record["temperature"]
-        return (f"T in [{numpy.nanmin(t):.4g}, {numpy.nanmax(t):.4g}], mass drift "
-                f"{record['mass'] / mass0 - 1:+.1e}")
+        low, high = record["temperature_range"]
+        return f"T in [{low:.4g}, {high:.4g}], mass drift {record['mass'] / mass0 - 1:+.1e}"
 
     def step_limit(self):
         """The collisions' explicit limit in the stiffest cell (None for a collisionless

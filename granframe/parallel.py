@@ -1,0 +1,237 @@
+r"""A space run spread over processes: who owns which cells, and the ghost cells between them.
+
+A space run on P processes cuts the cells [0, cells) into P contiguous ranges of whole
+store chunks (:func:`partition`); process r owns range r, steps it, and writes its
+chunks of the store. Collisions are local to a cell and the transport reads ``ghost``
+cells beyond each end of a range (the reconstruction's stencil), so the only messages of
+a step are the ghost cells of the ends of each range (:class:`Halo`, before each
+transport stage: six per step) and one reduction of the totals
+(:meth:`~granframe.abc.Communicator.allgather` of a few numbers per process). That is
+domain decomposition with halo exchange (W. Gropp, E. Lusk, A. Skjellum, *Using MPI*,
+3rd ed., MIT Press 2014, ch. 4).
+
+:func:`world` gives the processes this one was launched with: :class:`SerialCommunicator`
+(one process) unless an MPI launcher (``mpiexec``, ``srun``) started several, which it
+tells from the launcher's environment (:func:`launched`) without importing an MPI
+library; then the plugin registered as ``communicators`` ``mpi`` (``pip install
+granframe[mpi]``) gives the MPI communicator. The core never imports mpi4py.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+
+import numpy
+
+from granframe import validators as check
+from granframe.abc import Communicator, Pending
+
+#: environment variables by which launchers tell a process how many were started and its
+#: number: MPICH's Hydra and Intel MPI (PMI), Open MPI, MVAPICH, and Slurm's srun (set in
+#: a job step only, not in the batch script that calls srun)
+LAUNCHER_VARIABLES = (("PMI_SIZE", "PMI_RANK"), ("OMPI_COMM_WORLD_SIZE", "OMPI_COMM_WORLD_RANK"),
+                      ("MV2_COMM_WORLD_SIZE", "MV2_COMM_WORLD_RANK"),
+                      ("SLURM_STEP_NUM_TASKS", "SLURM_PROCID"))
+
+#: the message tags of the ghost cells: sent towards the right neighbour (the receiver's
+#: left ghosts), towards the left one (its right ghosts)
+RIGHTWARD, LEFTWARD = 0, 1
+
+
+def launched(environ=None) -> tuple[int, int, str | None]:
+    """``(size, rank, variable)``: how many processes a launcher started, this one's
+    number and the variable that said so; ``(1, 0, None)`` outside a launcher."""
+    environ = os.environ if environ is None else environ
+    for size_name, rank_name in LAUNCHER_VARIABLES:
+        size = environ.get(size_name, "")
+        if size.strip().isdigit() and int(size) > 1:
+            rank = environ.get(rank_name, "0")
+            return int(size), int(rank) if rank.strip().isdigit() else 0, size_name
+    return 1, 0, None
+
+
+class _Done(Pending):
+    def wait(self) -> None:
+        """Nothing in flight."""
+
+
+class SerialCommunicator(Communicator):
+    """One process: the collectives return its own values, and a message to itself is a
+    copy (posted at :meth:`start`, so the receive buffer holds it at once)."""
+
+    rank, size, local_rank = 0, 1, 0
+
+    def start(self, sends, receives) -> Pending:
+        sent = {tag: array for peer, tag, array in sends if peer == 0}
+        for peer, tag, array in receives:
+            if peer != 0 or tag not in sent:
+                check.reject("SerialCommunicator.start", "receives", (peer, tag),
+                             "must match a send of this process (the only one)")
+            array[...] = sent[tag]
+        return _Done()
+
+    def allgather(self, vector) -> numpy.ndarray:
+        return numpy.asarray(vector, dtype=float).reshape(1, -1)
+
+    def allgather_object(self, value) -> list:
+        return [value]
+
+    def bcast(self, value, root: int = 0):
+        return value
+
+    def __repr__(self) -> str:
+        return "SerialCommunicator()"
+
+
+_WORLD: list = []
+
+
+def world() -> Communicator:
+    """The processes this one runs with (see the module notes), made once per process.
+
+    Raises
+    ------
+    ValueError
+        A launcher started several processes and no ``mpi`` communicator is installed, or
+        MPI sees fewer processes than the launcher started (mpi4py built against another
+        MPI than the launcher's: every process would run the whole problem alone).
+    """
+    if _WORLD:
+        return _WORLD[0]
+    size, rank, variable = launched()
+    if size == 1:
+        communicator = SerialCommunicator()
+    else:
+        from granframe.registry import default_registries
+
+        registries = default_registries()
+        if "mpi" not in registries.names("communicators"):
+            raise ValueError(f"granframe: this process is rank {rank} of {size} ({variable} = "
+                             f"{size}), and no MPI communicator is installed: pip install "
+                             "'granframe[mpi]' (mpi4py with an MPI from the package index)")
+        communicator = registries.create("communicators", "mpi")
+        if communicator.size != size:
+            raise ValueError(f"granframe: the launcher started {size} processes ({variable}) "
+                             f"but MPI sees {communicator.size}: mpiexec and mpi4py belong to "
+                             "different MPI libraries; use the mpiexec of the MPI that mpi4py "
+                             "was built with (with granframe[mpi], the one installed beside it)")
+    _WORLD.append(communicator)
+    return communicator
+
+
+def partition(cells: int, chunk: int, processes: int, ghost: int,
+              counts=None) -> list[tuple[int, int]]:
+    """The cells ``(start, stop)`` of each process: contiguous, whole chunks, in rank order.
+
+    Parameters
+    ----------
+    cells : int
+        The cells of the interval.
+    chunk : int
+        The width along x of the store's chunks (``space.block_cells``): each process
+        writes whole chunks, so each range starts and ends on a chunk boundary.
+    processes : int
+        The number of processes.
+    ghost : int
+        The reconstruction's ghost width: each range must hold at least that many cells,
+        since its ghost cells come from the next range alone.
+    counts : sequence of int, optional
+        The cells of each process, given explicitly; by default the chunks are shared as
+        evenly as possible (the first ``chunks mod processes`` processes one more).
+
+    Raises
+    ------
+    ValueError
+        More processes than cells or than chunks, or ``counts`` that do not cut the
+        cells into ranges of whole chunks of at least ``ghost`` cells, one per process.
+    """
+    owner = "partition"
+    if processes > cells:
+        check.reject(owner, "processes", processes, f"must be at most space.cells = {cells}: "
+                     "each process owns at least one cell")
+    chunks = cells // chunk
+    if processes > chunks:
+        check.reject(owner, "processes", processes, f"must be at most the {chunks} chunks of "
+                     f"space.block_cells = {chunk} cells that the store is cut into along x "
+                     f"(each process writes whole chunks): set space.block_cells to a divisor "
+                     f"of {cells} of at most {cells // processes}, or run on fewer processes")
+    if counts is None:
+        base, extra = divmod(chunks, processes)
+        counts = [chunk * (base + (r < extra)) for r in range(processes)]
+    else:
+        counts = [int(c) if check.is_integer(c) else c for c in counts]
+        if (len(counts) != processes or not all(check.is_integer(c) and c > 0 for c in counts)
+                or sum(counts) != cells or any(c % chunk for c in counts)):
+            check.reject(owner, "partition", list(counts), f"must give the cells of each of "
+                         f"the {processes} processes, multiples of space.block_cells = "
+                         f"{chunk} adding up to space.cells = {cells}")
+    if min(counts) < ghost:
+        check.reject(owner, "partition", list(counts), f"must give every process at least "
+                     f"{ghost} cells, the reconstruction's ghost width (a range's ghost cells "
+                     "come from the next range alone)")
+    stops = numpy.cumsum(counts).tolist()
+    return [(stop - count, stop) for count, stop in zip(counts, stops)]
+
+
+class Halo:
+    """The ghost cells of the ends of an owned range that other processes own: the
+    ``neighbours`` of a :class:`~granframe.space.domain.Domain`.
+
+    Parameters
+    ----------
+    communicator : Communicator
+    left, right : int or None
+        The ranks that own the cells left of ``start`` and right of ``stop`` (the last and
+        the first for a periodic interval), None at a wall.
+
+    Attributes
+    ----------
+    seconds : float
+        Wall time spent posting and completing the exchanges (the part not hidden
+        behind the local ghost fills), summed over the exchanges.
+    exchanges : int
+        The exchanges made.
+    """
+
+    def __init__(self, communicator: Communicator, left: int | None, right: int | None):
+        self.communicator, self.left, self.right = communicator, left, right
+        self.seconds, self.exchanges = 0.0, 0
+
+    @classmethod
+    def of(cls, communicator: Communicator, ranges, periodic: bool) -> "Halo":
+        """The halo of this process for the ranges of :func:`partition`."""
+        rank, size = communicator.rank, communicator.size
+        left = rank - 1 if rank > 0 else (size - 1 if periodic else None)
+        right = rank + 1 if rank < size - 1 else (0 if periodic else None)
+        return cls(communicator, left, right)
+
+    def start(self, domain, array, sides) -> Pending:
+        """Post the exchange of the ghost cells of ``sides`` ("left", "right") of the block
+        array ``array``: this range's first (last) ``ghost`` cells go to the left (right)
+        neighbour, whose last (first) ones fill the ghost cells."""
+        began = time.perf_counter()
+        g, n = domain.ghost, domain.block_cells
+        sends, receives = [], []
+        if "left" in sides:
+            sends.append((self.left, LEFTWARD, array[0, g:2 * g]))
+            receives.append((self.left, RIGHTWARD, array[0, :g]))
+        if "right" in sides:
+            sends.append((self.right, RIGHTWARD, array[-1, n:n + g]))
+            receives.append((self.right, LEFTWARD, array[-1, g + n:]))
+        pending = self.communicator.start(sends, receives)
+        self.seconds += time.perf_counter() - began
+        self.exchanges += 1
+        return _Timed(pending, self)
+
+
+class _Timed(Pending):
+    """A pending exchange whose wait counts in its halo's seconds."""
+
+    def __init__(self, pending: Pending, halo: Halo):
+        self.pending, self.halo = pending, halo
+
+    def wait(self) -> None:
+        began = time.perf_counter()
+        self.pending.wait()
+        self.halo.seconds += time.perf_counter() - began
