@@ -41,6 +41,7 @@ limits SOURCE [--quick] [--set KEY=VALUE ...] [--json] [--no-cost]
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import pathlib
 import re
@@ -415,12 +416,13 @@ def _run_one(description, out, args) -> int:
                   "not resumed", file=sys.stderr)
             return 3
         if progress.get("status") == "finished":
-            RunStore.resume(out, description.to_dict()).close()   # refuses another description
+            if _processes()[1] == 0:   # the lock is one process's
+                RunStore.resume(out, description.to_dict()).close()   # refuses another description
             print(f"{out}: the run is already finished (t = {progress['time']:g}, "
                   f"{progress['step']} steps, {progress.get('wall_seconds', 0.0):.1f} s)")
             return 0
     try:
-        simulation = Simulation(description)
+        simulation = Simulation(description, partition=args.partition)
         # a space run keeps no projection record (None): nothing to note
         note = projection_note(simulation.projection) if simulation.projection else None
         if note:
@@ -428,11 +430,12 @@ def _run_one(description, out, args) -> int:
         hint = cooling_hint(description)
         if hint:
             print(f"granframe: hint: {hint}", file=sys.stderr)
-        print(f"granframe: {_cost(simulation.problem, out if args.resume else None)}",
-              flush=True)
-        result = simulation.run(out, resume=args.resume, overwrite=args.overwrite,
-                                progress=args.progress, rollback=args.rollback,
-                                protect=[args.source])
+        with _together(simulation.communicator):
+            print(f"granframe: {_cost(simulation.problem, out if args.resume else None)}",
+                  flush=True)
+            result = simulation.run(out, resume=args.resume, overwrite=args.overwrite,
+                                    progress=args.progress, rollback=args.rollback,
+                                    protect=[args.source])
     except HealthError as exc:
         print(f"granframe: run stopped: {exc}\nThe store '{out}' keeps every snapshot "
               "before it and the moments up to it.", file=sys.stderr)
@@ -454,6 +457,27 @@ def _run_one(description, out, args) -> int:
     for warning in result.accuracy_warnings:
         print(f"granframe: warning: at t = {result.time:g}: {warning}", file=sys.stderr)
     return 0
+
+
+@contextlib.contextmanager
+def _together(communicator):
+    """Around the part of a run that its processes make together (the cost estimate's step
+    and the run): an error in one process is printed with its number and ends them all
+    (:meth:`~granframe.abc.Communicator.abort`, status 2 for granframe's refusals, 1 for
+    anything else), since the others would wait for it for ever. A health stop and a
+    Ctrl-C reach every process at the same step and pass through."""
+    from granframe.run.runner import HealthError
+
+    try:
+        yield
+    except (HealthError, KeyboardInterrupt):
+        raise
+    except BaseException as exc:
+        if communicator.size == 1:
+            raise
+        print(f"granframe: error in process {communicator.rank} of {communicator.size}: "
+              f"{type(exc).__name__}: {exc}", file=sys.__stderr__, flush=True)
+        communicator.abort(2 if isinstance(exc, (ValueError, TypeError, OSError)) else 1)
 
 
 def _cost(problem, resumed=None) -> str:
@@ -945,6 +969,10 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                      help="override a key of the description (repeatable), e.g. "
                           "grid.n_modes=64; VALUE is read as TOML")
+    run.add_argument("--partition", type=_partition, default=None, metavar="C1,C2,...",
+                     help="under mpiexec: the cells of each process, in rank order, whole "
+                          "chunks of space.block_cells (default: as even as the chunks "
+                          "allow)")
     run.set_defaults(handler=_run)
     plot = commands.add_parser("plot", help="draw the figures of a run store (PNG, PDF or SVG)")
     plot.add_argument("store", metavar="STORE")
@@ -1008,8 +1036,39 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _partition(text: str) -> list[int]:
+    """--partition: whole numbers separated by commas."""
+    try:
+        counts = [int(part) for part in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a list of cell counts such as "
+                                         "24,40") from None
+    return counts
+
+
+def _processes():
+    """(size, rank) of the processes a launcher started (:func:`granframe.parallel.launched`,
+    read from the environment: nothing is imported)."""
+    from granframe.parallel import launched
+
+    size, rank, _ = launched()
+    return size, rank
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    size, rank = _processes()
+    if size > 1 and args.command != "run":
+        if rank == 0:
+            print(f"granframe: error: granframe {args.command} runs in one process; under "
+                  f"mpiexec ({size} processes) only granframe run is spread over them",
+                  file=sys.stderr)
+        return 2
+    if size > 1 and rank != 0:      # one voice: process 0's; the others speak on errors
+        import os
+
+        sys.stdout = open(os.devnull, "w")
+        sys.stderr = open(os.devnull, "w")
     try:
         return args.handler(args)
     except BrokenPipeError:  # output piped into e.g. `head`, which stopped reading
