@@ -753,13 +753,15 @@ class Communicator(abc.ABC):
     ----------
     rank, size : int
         This process's number, 0 <= rank < size, and the number of processes.
-    local_rank : int
-        Its number among the processes on the same host (which device it takes).
+    local_rank, local_size : int
+        Its number among the processes on the same host (which device it takes), and
+        their number (who share the host's memory).
     """
 
     rank: int = 0
     size: int = 1
     local_rank: int = 0
+    local_size: int = 1
 
     @abc.abstractmethod
     def start(self, sends, receives) -> Pending:

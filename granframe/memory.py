@@ -71,11 +71,12 @@ RUN_COPIES = 2 + 3 + 1 + 3
 TRANSPORT_COPIES = 1 + 4 + 3 + 10
 
 
-def run_memory(description, backend=None) -> dict:
+def run_memory(description, backend=None, cells: int | None = None) -> dict:
     """Estimated bytes of a run of ``description``, found without allocating anything large.
 
     ``backend`` is the run's array backend when it is built already (else the estimate
-    builds the description's, for the operator's estimate only).
+    builds the description's, for the operator's estimate only); ``cells``: the cells one
+    process of a space run owns (all of them by default).
 
     Returns ``f`` (bytes of one float64 copy of f; of every cell's f in a space run),
     ``copies`` (:func:`integrator_copies` + :data:`RUN_COPIES`, + :data:`TRANSPORT_COPIES`
@@ -92,7 +93,8 @@ def run_memory(description, backend=None) -> dict:
 
     d = description
     space = getattr(d, "space", None)
-    need = {"f": 8 * d.grid.n_modes ** d.grid.dimension * (1 if space is None else space.cells),
+    cells = None if space is None else (space.cells if cells is None else cells)
+    need = {"f": 8 * d.grid.n_modes ** d.grid.dimension * (1 if space is None else cells),
             "copies": integrator_copies(d.build("integrator")) + RUN_COPIES
             + (0 if space is None else TRANSPORT_COPIES), "operator": 0}
     need["total"] = need["f"] * need["copies"]
@@ -102,7 +104,7 @@ def run_memory(description, backend=None) -> dict:
         if estimate is not None:
             options = d.operator_options()
             if space is not None and "distributions" in inspect.signature(estimate).parameters:
-                options["distributions"] = space.cells
+                options["distributions"] = cells
             need["operator"] = estimate(d.grid, d.build("kernel"), d.build("restitution"),
                                         d.build("backend") if backend is None else backend,
                                         **options) or 0
@@ -110,18 +112,23 @@ def run_memory(description, backend=None) -> dict:
     return need
 
 
-def check_run_memory(description, backend=None) -> None:
+def check_run_memory(description, backend=None, cells: int | None = None,
+                     share: int = 1) -> None:
     """Refuse a run whose :func:`run_memory` exceeds :func:`budget`, with the estimate
-    (``backend``: as in :func:`run_memory`)."""
-    need, limit = run_memory(description, backend), budget()
+    (``backend``, ``cells``: as in :func:`run_memory`); ``share``: the processes of the run
+    on this host, which divide the budget among themselves."""
+    need, limit = run_memory(description, backend, cells), budget() // share
     if need["total"] > limit:
         grid = description.grid
         operator = (f"operator {gib(need['operator'])} GiB + " if need["operator"] else "")
         space = getattr(description, "space", None)
         if space is not None:
+            process = (f" (the {cells} cells of one of the {share} processes on this host, "
+                       "which share the budget)" if share > 1 or cells not in (None, space.cells)
+                       else "")
             check.reject("Simulation", "space.cells", space.cells,
                          f"with grid.n_modes = {grid.n_modes} (d = {grid.dimension}) needs "
-                         f"about {gib(need['total'])} GiB for this run ({operator}"
+                         f"about {gib(need['total'])} GiB for this run{process} ({operator}"
                          f"{need['copies']} copies of every cell's f at {gib(need['f'])} GiB), "
                          f"more than the memory budget of {gib(limit)} GiB; use fewer cells "
                          f"or a smaller n_modes, or set {ENVIRONMENT_VARIABLE} (bytes) to "

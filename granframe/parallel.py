@@ -60,7 +60,7 @@ class SerialCommunicator(Communicator):
     """One process: the collectives return its own values, and a message to itself is a
     copy (posted at :meth:`start`, so the receive buffer holds it at once)."""
 
-    rank, size, local_rank = 0, 1, 0
+    rank, size, local_rank, local_size = 0, 1, 0, 1
 
     def start(self, sends, receives) -> Pending:
         sent = {tag: array for peer, tag, array in sends if peer == 0}

@@ -574,7 +574,17 @@ class Simulation:
             plugins[field] = f"{name} ({registries.get(family, name).source})"
         return {"granframe": __version__, "backend_config": repr(self.backend), **plugins,
                 "python": sys.version.split()[0], "numpy": numpy.__version__,
-                "zarr": zarr.__version__, "host": platform.node(), "cpus": available_cpus()}
+                "zarr": zarr.__version__, "host": platform.node(), "cpus": available_cpus(),
+                **self._processes()}
+
+    def _processes(self) -> dict:
+        """The processes of a space run and the cells (start, stop) of each, for the
+        provenance (a resumed run may use others); nothing for one process."""
+        ranges = getattr(self.problem, "ranges", None)
+        if ranges is None or len(ranges) == 1:
+            return {}
+        return {"processes": len(ranges), "ranges": [list(r) for r in ranges],
+                "communicator": repr(self.communicator)}
 
     # -- schedule ---------------------------------------------------------------------
     def output_points(self):
@@ -715,12 +725,12 @@ class Simulation:
             except StoreExistsError:
                 if not resume:
                     raise         # else: another writer made it meanwhile; continue it
-                return None
-            return opened[0].path
+                return False, None
+            return True, opened[0].path       # staged beside out; None in memory
 
         if not (resume and collective(communicator, lambda: RunStore.exists(out))):
-            path = collective(communicator, create)
-            if path is not None:
+            created, path = collective(communicator, create)
+            if created:
                 store = opened[0] if first else RunStore.open(path, "r+", complete=False)
                 return self._first_commit(store, started)
 

@@ -125,7 +125,7 @@ class SpaceProblem(Problem):
                                             self.backend) if collide else None
         else:
             self.backend = d.build("backend").for_process(comm.local_rank)
-            check_run_memory(d, self.backend)
+            check_run_memory(d, self.backend, cells=stop - start, share=comm.local_size)
             self.operator = build_operator(d, self.backend) if collide else None
         xp = self.backend.xp
         self.collision_integrator = d.build("integrator") if collide else None
