@@ -69,7 +69,7 @@ def description(dimension: int, n_modes: int, cells: int, steps: int = 2,
     dt = 0.002
     return RunDescription.from_dict({
         "final_time": steps * dt, "time_step": dt,
-        "grid": {"dimension": dimension, "n_modes": n_modes, "support_radius": 4.0},
+        "grid": {"dimension": dimension, "n_modes": n_modes, "support_radius": 3.2},
         "kernel": "hard_spheres", "restitution": {"name": "constant", "value": 0.9},
         "initial": {"name": "sinusoidal_mode", "field": "density", "amplitude": 0.2},
         "operator": "fast_spectral", "integrator": "ssp_rk2",

@@ -84,7 +84,8 @@ def test_registered_implementation_conforms(family, name, params):
      "time_integrators": kit.check_integrator_order,
      "initial_conditions": kit.check_initial_condition,
      "reconstructions": kit.check_reconstruction,
-     "boundaries": kit.check_boundary}[family](product)
+     "boundaries": kit.check_boundary,
+     "communicators": kit.check_communicator}[family](product)
 
 
 def test_implementation_without_examples_fails_the_suite():

@@ -5,17 +5,26 @@ A GPU backend pays for every copy between host and device memory: a device->host
 :class:`CountingBackend` runs granframe's code with NumPy, but keeps "device" arrays
 (:class:`DeviceArray`) apart from host ones, with CuPy's rules of when data crosses:
 
-- device -> host: :meth:`DeviceArray.get`, ``float``/``int``/``bool``/``complex`` of a
-  device array, ``.item()`` and ``.tolist()``;
-- host -> device: ``xp.asarray``/``xp.array``/``xp.ascontiguousarray`` of host data, and a
-  host array (not a Python scalar) used as an operand of a device operation (CuPy refuses
-  that; here it is counted as the copy it would need).
+- device -> host: :meth:`DeviceArray.get` (into a new array, or into a host buffer with
+  ``out=``), ``float``/``int``/``bool``/``complex`` of a device array, ``.item()`` and
+  ``.tolist()``;
+- host -> device: ``xp.asarray``/``xp.array``/``xp.ascontiguousarray`` of host data,
+  :meth:`DeviceArray.set` (a host array copied into a device one), and a host array (not a
+  Python scalar) used as an operand of a device operation (CuPy refuses that; here it is
+  counted as the copy it would need).
 
 Every crossing is recorded in :attr:`CountingBackend.log` with its direction, shape and a
 fingerprint of the data, so a test can tell a copy of a constant array made in every step
 from one made once. Operators, transports and reductions run unchanged on it: the
 namespace ``xp`` is NumPy with the array-creating functions returning device arrays, and the
 transforms are SciPy's on device arrays.
+
+With ``CountingBackend(cuda_interface=True)`` the device arrays are :class:`CudaLikeArray`:
+they also expose ``__cuda_array_interface__``, which is how code that hands arrays to other
+libraries (the MPI plugin's ghost-cell messages, plugins/granframe_mpi) tells a CuPy array
+from a host one. They stand for CuPy arrays there: through the host-staged path
+(``get(out=buffer)`` before a send, ``set(buffer)`` after a receive, both counted), or
+handed to MPI as they are (a CUDA-aware MPI), which works since they are host memory.
 
 Examples
 --------
@@ -86,9 +95,41 @@ class DeviceArray(numpy.ndarray):
             self.counter._record("to_host", self)
         return self.view(numpy.ndarray)
 
-    def get(self) -> numpy.ndarray:
-        """A host copy (one device -> host copy)."""
-        return self._download().copy()
+    def get(self, stream=None, order="C", out=None, blocking=True) -> numpy.ndarray:
+        """A host copy (one device -> host copy); with ``out``, into that host array of
+        this array's shape and dtype, which is returned (CuPy's ``ndarray.get``, whose
+        checks of ``out`` it makes)."""
+        if out is None:
+            return numpy.array(self._download(), order=order)
+        if isinstance(out, DeviceArray) or not isinstance(out, numpy.ndarray):
+            raise TypeError(f"DeviceArray.get: out must be a host numpy.ndarray, not "
+                            f"{type(out).__name__}")
+        if out.dtype != self.dtype:
+            raise TypeError(f"DeviceArray.get: out has dtype {out.dtype}, the array {self.dtype}")
+        if out.shape != self.shape:
+            raise ValueError(f"DeviceArray.get: out has shape {out.shape}, the array "
+                             f"{self.shape}")
+        if not (out.flags.c_contiguous or out.flags.f_contiguous):
+            raise RuntimeError("DeviceArray.get: out must be contiguous")
+        out[...] = self._download()
+        return out
+
+    def set(self, arr, stream=None) -> None:
+        """Copy the host array ``arr`` of this array's shape and dtype into it (one host ->
+        device copy; CuPy's ``ndarray.set``, whose checks it makes: ``self`` contiguous)."""
+        if isinstance(arr, DeviceArray) or not isinstance(arr, numpy.ndarray):
+            raise TypeError(f"DeviceArray.set: arr must be a host numpy.ndarray, not "
+                            f"{type(arr).__name__}")
+        if arr.dtype != self.dtype:
+            raise TypeError(f"DeviceArray.set: arr has dtype {arr.dtype}, the array {self.dtype}")
+        if arr.shape != self.shape:
+            raise ValueError(f"DeviceArray.set: arr has shape {arr.shape}, the array "
+                             f"{self.shape}")
+        if not (self.flags.c_contiguous or self.flags.f_contiguous):
+            raise RuntimeError("DeviceArray.set: cannot set a non-contiguous array")
+        if self.counter is not None:
+            self.counter._record("to_device", arr)
+        self.view(numpy.ndarray)[...] = arr
 
     def __float__(self):
         return float(self._download())
@@ -112,13 +153,29 @@ class DeviceArray(numpy.ndarray):
         return self._download().tolist()
 
 
+class CudaLikeArray(DeviceArray):
+    """A :class:`DeviceArray` that exposes ``__cuda_array_interface__``, so that code which
+    detects device arrays by it takes this one for a CuPy array (see the module notes).
+    The interface describes the array's host memory truthfully (version 3), so a library
+    that reads it rather than the buffer protocol gets the right bytes."""
+
+    @property
+    def __cuda_array_interface__(self) -> dict:
+        contiguous = self.flags.c_contiguous
+        return {"shape": self.shape, "typestr": self.dtype.str, "version": 3,
+                "data": (self.__array_interface__["data"][0], not self.flags.writeable),
+                "strides": None if contiguous else self.strides}
+
+
 def _wrap(value, counter, scalars: bool = False):
-    """Device arrays from NumPy results: arrays as :class:`DeviceArray`, and with
-    ``scalars`` also NumPy scalars (an element of a device array stays on the device)."""
+    """Device arrays from NumPy results: arrays as the counter's device arrays
+    (:class:`DeviceArray`, or :class:`CudaLikeArray`), and with ``scalars`` also NumPy
+    scalars (an element of a device array stays on the device)."""
     if isinstance(value, tuple):
         return tuple(_wrap(v, counter, scalars) for v in value)
     if isinstance(value, numpy.ndarray) or (scalars and isinstance(value, numpy.generic)):
-        array = numpy.asarray(value).view(DeviceArray)
+        kind = DeviceArray if counter is None else counter.array_type
+        array = numpy.asarray(value).view(kind)
         array.counter = counter
         return array
     return value
@@ -175,19 +232,29 @@ class _FFTModule(ModuleType):
 class CountingBackend(SciPyFFTBackend):
     """NumPy and SciPy's transforms, with every host/device crossing counted.
 
+    Parameters
+    ----------
+    cuda_interface : bool
+        Make the device arrays :class:`CudaLikeArray` (with ``__cuda_array_interface__``,
+        standing for CuPy arrays where arrays leave the backend) rather than plain
+        :class:`DeviceArray`.
+
     Attributes
     ----------
     log : list
         ``(direction, shape, fingerprint)`` of each crossing, ``direction`` "to_host" or
         "to_device", in order.
+    array_type : type
+        The class of the device arrays.
     """
 
     name = "counting"
     concurrency = 1
     on_device = True
 
-    def __init__(self):
+    def __init__(self, cuda_interface: bool = False):
         self.log = []
+        self.array_type = CudaLikeArray if cuda_interface else DeviceArray
         self.xp = _Namespace(self)
         self._fft = _FFTModule(self)
 

@@ -478,6 +478,7 @@ def _together(communicator):
         print(f"granframe: error in process {communicator.rank} of {communicator.size}: "
               f"{type(exc).__name__}: {exc}", file=sys.__stderr__, flush=True)
         communicator.abort(2 if isinstance(exc, (ValueError, TypeError, OSError)) else 1)
+        raise         # an abort that returned: the process must not go on either
 
 
 def _cost(problem, resumed=None) -> str:

@@ -63,6 +63,31 @@ _CUDA_TYPES = {"complex64": "complex<float>", "complex128": "complex<double>"}
 _KERNELS = ("separable_product", "lowrank_accumulate")
 
 
+def device_for(local_rank: int, count: int, first: int = 0) -> int:
+    """The CUDA device of the process of local rank ``local_rank`` on a host with
+    ``count`` devices, the first process on ``first``: ``(first + local_rank) mod count``.
+
+    The processes of a run on one host take the devices in turn from ``first``, one each
+    while there are as many devices as processes; beyond that they share them, in turn.
+    A launcher that shows each process its own device alone (Slurm's ``--gpus-per-task``,
+    ``CUDA_VISIBLE_DEVICES`` per process) makes ``count`` 1: every process its device 0.
+
+    Raises
+    ------
+    ValueError
+        ``count`` below 1, ``local_rank`` negative, or ``first`` not a device (0 <= first
+        < count).
+    """
+    if not (check.is_integer(count) and count >= 1):
+        check.reject("device_for", "count", count, "must be an integer >= 1 (CUDA devices)")
+    if not (check.is_integer(local_rank) and local_rank >= 0):
+        check.reject("device_for", "local_rank", local_rank, "must be an integer >= 0")
+    if not (check.is_integer(first) and 0 <= first < count):
+        check.reject("device_for", "first", first,
+                     f"must be a device number below the {count} devices here")
+    return (int(first) + int(local_rank)) % int(count)
+
+
 @functools.cache
 def _module(device: int):
     """The fused kernels compiled for ``device`` (by CuPy's NVRTC, cached on disk by CuPy)."""
@@ -80,7 +105,9 @@ class CuPyBackend(SciPyFFTBackend):
     Parameters
     ----------
     device : int
-        CUDA device number.
+        CUDA device number: of a run in one process, and of the first process on a host
+        in a run over several (:meth:`for_process`: the others take the next devices in
+        turn, so the default 0 spreads them over all the host's devices).
     memory_limit : int or None
         Largest size in bytes of CuPy's device memory pool, or None for no limit.
     module : str
@@ -126,7 +153,11 @@ class CuPyBackend(SciPyFFTBackend):
                 check.reject("CuPyBackend", "device", self.device,
                              f"must be below the number of CUDA devices here, {count}",
                              error=BackendUnavailableError)
-            xp.cuda.Device(self.device).use()
+            if xp.cuda.runtime.getDevice() != self.device:
+                # selecting a device makes its context (hundreds of MiB): not when it is
+                # current already, so a backend that for_process moves to another device
+                # leaves none behind on device 0
+                xp.cuda.Device(self.device).use()
             if self.memory_limit is not None:
                 xp.get_default_memory_pool().set_limit(size=self.memory_limit)
         object.__setattr__(self, "xp", xp)
@@ -135,6 +166,21 @@ class CuPyBackend(SciPyFFTBackend):
     @property
     def on_device(self) -> bool:
         return self.module == "cupy"
+
+    def for_process(self, local_rank: int) -> "CuPyBackend":
+        """This backend for the process of local rank ``local_rank`` among a run's processes
+        on this host (:meth:`granframe.abc.ArrayBackend.for_process`): on device
+        :func:`device_for` ``(local_rank, devices here, self.device)``, i.e. process r
+        on ``(device + r) mod devices``. The given ``device`` is the first process's
+        (of a run in one process, the device), not one that all processes share: with the
+        default 0 and as many devices as processes each takes its own, with fewer they
+        share them in turn. Itself for local rank 0 and on the host (``module =
+        "numpy"``); otherwise a copy (:func:`attrs.evolve`) made on the new device, with
+        the same memory limit there."""
+        if not self.on_device:
+            return self
+        device = device_for(local_rank, self.xp.cuda.runtime.getDeviceCount(), self.device)
+        return self if device == self.device else attrs.evolve(self, device=device)
 
     def to_numpy(self, a) -> numpy.ndarray:
         return self.xp.asnumpy(a) if self.on_device else numpy.asarray(a)

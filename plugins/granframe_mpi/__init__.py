@@ -9,9 +9,14 @@ neither.
 
 Ghost cells on a device (CuPy arrays) travel as they are through an MPI built with CUDA
 support, when ``GRANFRAME_CUDA_AWARE_MPI=1`` says so (or MPICH's ``MPIR_CVAR_ENABLE_GPU=1``
-is set); otherwise through page-locked host buffers, one per message, made once and
-reused: the device array is copied into one before it is sent and out of one after it is
-received (docs/scaling.md).
+is set); otherwise through host buffers, one per message, made once and reused: the device
+array is copied into one before it is sent (``array.get(out=buffer)``) and out of one after
+it is received (``array.set(buffer)``), one device->host and one host->device copy per
+message (docs/scaling.md). The buffers of a CuPy array are page-locked
+(``cupyx.empty_pinned``: the copies run at full speed); any other device array with
+CuPy's ``get(out=)`` and ``set`` (the counting backend's stand-ins,
+:class:`granframe.testing.transfers.CudaLikeArray`) gets plain ``numpy.empty`` buffers, as
+does every array where ``cupyx`` cannot be imported.
 """
 
 from __future__ import annotations
@@ -42,6 +47,34 @@ def on_device(array) -> bool:
     return hasattr(array, "__cuda_array_interface__")
 
 
+def _is_cupy(array) -> bool:
+    """Whether ``array`` is CuPy's (by its type's module: importing nothing)."""
+    return type(array).__module__.split(".")[0] == "cupy"
+
+
+def host_buffer(array) -> numpy.ndarray:
+    """A host array of ``array``'s shape and dtype to stage it through: page-locked for a
+    CuPy array (``cupyx.empty_pinned``), ``numpy.empty`` for any other, or when ``cupyx``
+    cannot be imported (pinned memory only matters for the copies of a real GPU)."""
+    if _is_cupy(array):
+        try:
+            import cupyx
+        except ImportError:
+            pass
+        else:
+            return cupyx.empty_pinned(array.shape, array.dtype)
+    return numpy.empty(array.shape, array.dtype)
+
+
+def _synchronize(array) -> None:
+    """Wait for the queued work on ``array``'s device before MPI reads its memory outside
+    CuPy's stream (CuPy's current stream; nothing for a device array that is not CuPy's)."""
+    if _is_cupy(array):
+        import cupy
+
+        cupy.cuda.get_current_stream().synchronize()
+
+
 class _Requests(Pending):
     """MPI requests in flight, and the received host buffers to copy onto the device."""
 
@@ -70,22 +103,32 @@ class MPICommunicator(Communicator):
         self.comm = MPI.COMM_WORLD
         self.rank, self.size = self.comm.Get_rank(), self.comm.Get_size()
         node = self.comm.Split_type(MPI.COMM_TYPE_SHARED)
-        self.local_rank = node.Get_rank()
+        self.local_rank, self.local_size = node.Get_rank(), node.Get_size()
         node.Free()
         self.device_aware = cuda_aware() if device_aware is None else bool(device_aware)
         self._buffers = {}
 
     def _buffer(self, key, array):
-        """A page-locked host buffer for the device array ``array`` (made once per key)."""
+        """The host buffer (:func:`host_buffer`) of the device array ``array``, made once
+        per key and remade when the array's shape or dtype changes."""
         buffer = self._buffers.get(key)
         if buffer is None or buffer.shape != array.shape or buffer.dtype != array.dtype:
-            import cupyx
-
-            buffer = self._buffers[key] = cupyx.empty_pinned(array.shape, array.dtype)
+            buffer = self._buffers[key] = host_buffer(array)
         return buffer
 
     def start(self, sends, receives) -> Pending:
-        comm, requests, staged, synchronized = self.comm, [], [], False
+        """Post the receives, then the sends (see :meth:`Communicator.start`). Device
+        arrays go to MPI as they are when :attr:`device_aware`, after one wait for the
+        device's queued work (MPI reads and writes their memory outside CuPy's stream:
+        the sends' data must be there, and no queued kernel may still use a receive's
+        memory); otherwise each is staged through its host buffer, the sends copied into
+        theirs here, the receives copied out of theirs by ``wait``."""
+        comm, requests, staged = self.comm, [], []
+        if self.device_aware:
+            device = next((a for _, _, a in list(receives) + list(sends) if on_device(a)),
+                          None)
+            if device is not None:
+                _synchronize(device)
         for peer, tag, array in receives:
             if on_device(array) and not self.device_aware:
                 buffer = self._buffer(("in", peer, tag), array)
@@ -96,11 +139,6 @@ class MPICommunicator(Communicator):
         for peer, tag, array in sends:
             if on_device(array):
                 if self.device_aware:
-                    if not synchronized:      # MPI reads the memory outside CuPy's stream
-                        import cupy
-
-                        cupy.cuda.get_current_stream().synchronize()
-                        synchronized = True
                     requests.append(comm.Isend(array, dest=peer, tag=tag))
                     continue
                 array = array.get(out=self._buffer(("out", peer, tag), array))
@@ -120,7 +158,10 @@ class MPICommunicator(Communicator):
         return self.comm.bcast(value, root=root)
 
     def abort(self, code: int) -> None:
+        """``MPI_Abort``, then leave at once: under MPICH's Hydra the call may return before
+        the launcher ends the process, which must not go on."""
         self.comm.Abort(code)
+        os._exit(code)
 
     def __repr__(self) -> str:
         return f"MPICommunicator(rank={self.rank}, size={self.size})"
