@@ -62,9 +62,9 @@ SINGLE_THREAD = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS
 
 
 def description(dimension: int, n_modes: int, cells: int, steps: int = 2,
-                block_cells: int | None = None):
+                block_cells: int | None = None, backend: str = "numpy"):
     """The timed space run (see the module notes): ``steps`` steps of dt = 0.002, one
-    snapshot per step."""
+    snapshot per step, on ``backend`` (one thread on the CPU)."""
     from granframe.run.description import RunDescription
 
     dt = 0.002
@@ -74,7 +74,7 @@ def description(dimension: int, n_modes: int, cells: int, steps: int = 2,
         "kernel": "hard_spheres", "restitution": {"name": "constant", "value": 0.9},
         "initial": {"name": "sinusoidal_mode", "field": "density", "amplitude": 0.2},
         "operator": "fast_spectral", "integrator": "ssp_rk2",
-        "backend": {"name": "numpy", "threads": 1},
+        "backend": {"name": backend, "threads": 1} if backend != "cupy" else "cupy",
         "space": {"cells": cells, "left": "periodic", "right": "periodic",
                   **({} if block_cells is None else {"block_cells": block_cells})},
         "output": {"snapshot_interval": dt},
@@ -107,7 +107,8 @@ def worker(config: dict) -> None:
     from granframe.run.runner import Simulation
 
     communicator = world()
-    d = description(config["dimension"], config["n_modes"], config["cells"])
+    d = description(config["dimension"], config["n_modes"], config["cells"],
+                    backend=config.get("backend", "numpy"))
     simulation = Simulation(d, communicator=communicator)
     problem = simulation.problem
     dt = d.time_step
@@ -126,6 +127,14 @@ def worker(config: dict) -> None:
         times.append(time.perf_counter() - began)
     halo_seconds = (halo.seconds if halo is not None else 0.0) / steps
     reduction_seconds = problem.reduction_seconds / steps
+    exchange_seconds = None
+    if halo is not None:        # the exchange alone: no compute between, so no waiting
+        transport, repeats = problem.transport, 50
+        communicator.allgather_object(None)
+        began = time.perf_counter()
+        for _ in range(repeats):
+            problem.domain.exchange(state, transport.left, transport.right, 0.0)
+        exchange_seconds = (time.perf_counter() - began) / repeats
     commits = []
     original = storage.RunStore.commit_together
 
@@ -144,7 +153,7 @@ def worker(config: dict) -> None:
         nbytes = problem.reconstruction.ghost * d.grid.n_modes ** d.grid.dimension * 8
         latency = ping_pong(communicator, 8, 200)
         bandwidth = nbytes / max(ping_pong(communicator, nbytes, 50) - latency, 1e-9)
-    parts = communicator.allgather_object((halo_seconds, reduction_seconds))
+    parts = communicator.allgather_object((halo_seconds, reduction_seconds, exchange_seconds))
     if communicator.rank == 0:
         shutil.rmtree(folder, ignore_errors=True)
         print(json.dumps({
@@ -153,6 +162,7 @@ def worker(config: dict) -> None:
             "step_times": times,
             "halo_seconds": max(p[0] for p in parts),
             "reduction_seconds": max(p[1] for p in parts),
+            "exchange_seconds": None if exchange_seconds is None else max(p[2] for p in parts),
             "commit_seconds": statistics.median(commits[1:]) if len(commits) > 1
             else commits[0],
             "ghost_bytes": problem.reconstruction.ghost * d.grid.n_modes ** d.grid.dimension * 8,
@@ -244,6 +254,8 @@ def main() -> None:
     parser.add_argument("--out", type=pathlib.Path)
     parser.add_argument("--steps", type=int, default=5)
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--backend", default="numpy", help="array backend of the runs "
+                        "(cupy: one GPU per process)")
     parser.add_argument("--worker", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.worker:
@@ -253,7 +265,8 @@ def main() -> None:
     runs = {"strong": [], "weak": []}
     for _ in range(args.repeats):          # interleaved: 1 then 2 processes, each time
         for processes in (1, 2):
-            base = {"dimension": dimension, "n_modes": n_modes, "steps": args.steps}
+            base = {"dimension": dimension, "n_modes": n_modes, "steps": args.steps,
+                    "backend": args.backend}
             runs["strong"].append(launch({**base, "cells": cells}, processes))
             runs["weak"].append(launch({**base, "cells": WEAK_CELLS * processes}, processes))
     rows = []
@@ -264,6 +277,11 @@ def main() -> None:
             for key in ("step_seconds", "halo_seconds", "reduction_seconds", "commit_seconds"):
                 row[key] = statistics.median(m[key] for m in of)
             row["best_step"] = min(min(m["step_times"]) for m in of)
+            row["exchange_seconds"] = (None if processes == 1 else
+                                       statistics.median(m["exchange_seconds"] for m in of))
+            row["messages_share"] = (None if processes == 1 else
+                                     (6 * row["exchange_seconds"] + row["reduction_seconds"])
+                                     / row["step_seconds"])
             row["halo_share"] = (row["halo_seconds"] + row["reduction_seconds"]) \
                 / row["step_seconds"]
             rows.append(row)
@@ -282,7 +300,8 @@ def main() -> None:
     one = next(r for r in rows if r["kind"] == "strong" and r["processes"] == 1)
     measured = {"t_cell": one["step_seconds"] / cells, "latency": latency,
                 "bandwidth": bandwidth, "commit": one["commit_seconds"]}
-    large = launch({"dimension": 3, "n_modes": 32, "steps": 2, "cells": 5}, 1)
+    large = launch({"dimension": 3, "n_modes": 32, "steps": 2, "cells": 5,
+                    "backend": args.backend}, 1)
     t_cell = {16: measured["t_cell"], 32: large["step_seconds"] / large["cells"]}
     measured["t_cell_32"] = t_cell[32]
     predicted = predictions(t_cell, max(r["commit_seconds"] for r in rows))
@@ -303,6 +322,8 @@ def main() -> None:
                          ("halo_seconds", "halo (s/step)", "{:.2e}"),
                          ("reduction_seconds", "reduction (s/step)", "{:.2e}"),
                          ("halo_share", "halo + reduction share", "{:.2%}"),
+                         ("exchange_seconds", "one exchange alone (s)", "{:.2e}"),
+                         ("messages_share", "6 exchanges + reduction share", "{:.3%}"),
                          ("commit_seconds", "commit (s)", "{:.3g}")]),
             "", f"t_cell = {measured['t_cell']:.4g} s per cell and step (3D N = {n_modes}); "
             f"ping-pong latency {latency * 1e6:.3g} us, bandwidth {bandwidth / 1e9:.3g} GB/s "
