@@ -24,6 +24,8 @@ SLOW_FILES = frozenset({
 #: durations of ``pytest -m "not slow" --durations=80`` on this 2-core machine: those of
 #: about 5 s of CPU time or more (runs to an exact law, 3D runs, plots of stores, CLI runs).
 SLOW_TESTS = frozenset({
+    "test_mpi.py::test_a_process_killed_mid_run_ends_the_run_and_the_store_resumes_on_any_count",
+    "test_mpi.py::test_runs_on_two_and_three_processes_equal_the_serial_run",
     "test_advise.py::test_isotropic_3d_temperature_is_not_run_at_full_resolution",
     "test_default_quadrature.py::test_default_3d_n32_heated_maxwell_temperature_law_holds_to_2e5",
     "test_operators.py::test_float32_heated_maxwell_temperature",

@@ -217,7 +217,7 @@ def _run(args) -> int:
         if code == 130:
             return code
         status = max(status, code)
-    if study.report is not None:
+    if study.report is not None and _processes()[1] == 0:   # one process draws the report
         _report(study, out, args.source)
     return status
 
