@@ -101,35 +101,34 @@ class DeviceArray(numpy.ndarray):
         checks of ``out`` it makes)."""
         if out is None:
             return numpy.array(self._download(), order=order)
-        if isinstance(out, DeviceArray) or not isinstance(out, numpy.ndarray):
-            raise TypeError(f"DeviceArray.get: out must be a host numpy.ndarray, not "
-                            f"{type(out).__name__}")
-        if out.dtype != self.dtype:
-            raise TypeError(f"DeviceArray.get: out has dtype {out.dtype}, the array {self.dtype}")
-        if out.shape != self.shape:
-            raise ValueError(f"DeviceArray.get: out has shape {out.shape}, the array "
-                             f"{self.shape}")
-        if not (out.flags.c_contiguous or out.flags.f_contiguous):
-            raise RuntimeError("DeviceArray.get: out must be contiguous")
+        self._check_host("get", "out", out, out)
         out[...] = self._download()
         return out
 
     def set(self, arr, stream=None) -> None:
         """Copy the host array ``arr`` of this array's shape and dtype into it (one host ->
         device copy; CuPy's ``ndarray.set``, whose checks it makes: ``self`` contiguous)."""
-        if isinstance(arr, DeviceArray) or not isinstance(arr, numpy.ndarray):
-            raise TypeError(f"DeviceArray.set: arr must be a host numpy.ndarray, not "
-                            f"{type(arr).__name__}")
-        if arr.dtype != self.dtype:
-            raise TypeError(f"DeviceArray.set: arr has dtype {arr.dtype}, the array {self.dtype}")
-        if arr.shape != self.shape:
-            raise ValueError(f"DeviceArray.set: arr has shape {arr.shape}, the array "
-                             f"{self.shape}")
-        if not (self.flags.c_contiguous or self.flags.f_contiguous):
-            raise RuntimeError("DeviceArray.set: cannot set a non-contiguous array")
+        self._check_host("set", "arr", arr, self)
         if self.counter is not None:
             self.counter._record("to_device", arr)
         self.view(numpy.ndarray)[...] = arr
+
+    def _check_host(self, method: str, name: str, host, contiguous) -> None:
+        """CuPy's checks of the host array ``host`` of a copy (``get(out=)``, ``set``):
+        a host ndarray of this array's dtype and shape, and ``contiguous`` contiguous."""
+        owner = f"DeviceArray.{method}"
+        if isinstance(host, DeviceArray) or not isinstance(host, numpy.ndarray):
+            raise TypeError(f"{owner}: {name} must be a host numpy.ndarray, not "
+                            f"{type(host).__name__}")
+        if host.dtype != self.dtype:
+            raise TypeError(f"{owner}: {name} has dtype {host.dtype}, the array {self.dtype}")
+        if host.shape != self.shape:
+            raise ValueError(f"{owner}: {name} has shape {host.shape}, the array "
+                             f"{self.shape}")
+        if not (contiguous.flags.c_contiguous or contiguous.flags.f_contiguous):
+            what = "out must be contiguous" if method == "get" else \
+                "cannot set a non-contiguous array"
+            raise RuntimeError(f"{owner}: {what}")
 
     def __float__(self):
         return float(self._download())
