@@ -309,6 +309,12 @@ def component_field(**kwargs):
 MAX_CELLS = 10 ** 9
 
 
+def cell_divisors(cells: int, low: int, high: int | None = None) -> list[int]:
+    """The divisors of ``cells`` from ``low`` to ``high`` (``cells`` by default), in
+    increasing order: the block and chunk widths that cut the cells into equal parts."""
+    return [b for b in range(low, (cells if high is None else high) + 1) if cells % b == 0]
+
+
 @attrs.frozen(kw_only=True)
 class Space:
     r"""The space interval of d_t f + v_1 d_x f = Q(f, f)/eps (+ tau Delta_v f) (docs/space.md).
@@ -372,7 +378,7 @@ class Space:
         if self.block_cells is not None:
             return self.block_cells
         ghost = max(ghost, 1)
-        divisors = [b for b in range(ghost, self.cells + 1) if self.cells % b == 0]
+        divisors = cell_divisors(self.cells, ghost)
         small = [b for b in divisors if b <= min(64, max(ghost, self.cells // 16))]
         return small[-1] if small else divisors[0]
 

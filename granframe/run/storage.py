@@ -1112,20 +1112,28 @@ class RunStore:
         ``progress`` (the state a run continues from). It runs the four phases of the
         class notes, all cells in one :meth:`write_block`.
         """
+        count, cells, shared = self._split_records(records)
+        fs = [f for _, f in snapshots]
+        plan = self.begin_commit(len(snapshots), count)
+        split = "f" in self.cell_arrays
+        if split:
+            self.write_block(plan, slice(None), f=fs, records=cells)
+        self.write_shared(plan, times=[t for t, _ in snapshots], step=progress.get("step"),
+                          dt_next=progress.get("dt_next"), records=shared,
+                          f=None if split else fs)
+        self.end_commit(plan, progress)
+
+    def _split_records(self, records: dict) -> tuple[int, dict, dict]:
+        """``(count, cells, shared)`` of a commit's ``records``: how many there are, and
+        those of the store's layout (:attr:`record_arrays`) split into the arrays with a
+        cells axis (:attr:`cell_arrays`, :meth:`write_block`'s) and the others
+        (:meth:`write_shared`'s)."""
         count = len(records["step_time"]) if records else 0
         layout, split = self.record_arrays, self.cell_arrays
         given = {name: values for name, values in records.items() if name in layout} \
             if count else {}
-        fs = [f for _, f in snapshots]
-        plan = self.begin_commit(len(snapshots), count)
-        if "f" in split:
-            self.write_block(plan, slice(None), f=fs,
-                             records={n: v for n, v in given.items() if n in split})
-        self.write_shared(plan, times=[t for t, _ in snapshots], step=progress.get("step"),
-                          dt_next=progress.get("dt_next"),
-                          records={n: v for n, v in given.items() if n not in split},
-                          f=None if "f" in split else fs)
-        self.end_commit(plan, progress)
+        return (count, {n: v for n, v in given.items() if n in split},
+                {n: v for n, v in given.items() if n not in split})
 
     def begin_commit(self, snapshot_count: int, record_count: int) -> CommitPlan:
         """Open a commit (phase 1 of the class notes; one writer).
@@ -1377,17 +1385,12 @@ class RunStore:
         progress : dict
             As for :meth:`end_commit` (process 0's counts).
         """
-        first = communicator.rank == 0
-        count = len(records["step_time"]) if records else 0
-        layout, split = self.record_arrays, self.cell_arrays
-        given = {name: values for name, values in records.items() if name in layout} \
-            if count else {}
+        count, owned, shared = self._split_records(records)
         plan = collective(communicator, lambda: self.begin_commit(len(snapshots), count))
         try:
-            if not first:       # the arrays were resized by process 0
+            if communicator.rank != 0:       # the arrays were resized by process 0
                 self.group = zarr.open_group(str(self.path), mode="r+", use_consolidated=False)
-            self.write_block(plan, cells, f=[f for _, f in snapshots],
-                             records={n: v for n, v in given.items() if n in split})
+            self.write_block(plan, cells, f=[f for _, f in snapshots], records=owned)
             failure = None
         except Exception as exc:      # reported to every process below
             failure = f"process {communicator.rank}: {type(exc).__name__}: {exc}"
@@ -1398,8 +1401,7 @@ class RunStore:
 
         def end():
             self.write_shared(plan, times=[t for t, _ in snapshots], step=progress.get("step"),
-                              dt_next=progress.get("dt_next"),
-                              records={n: v for n, v in given.items() if n not in split})
+                              dt_next=progress.get("dt_next"), records=shared)
             self.end_commit(plan, progress)
 
         collective(communicator, end)

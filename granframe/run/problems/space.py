@@ -30,6 +30,7 @@ from granframe.backends import NumpyBackend, to_host
 from granframe.memory import check_run_memory
 from granframe.model.initial import check_fits, check_projection
 from granframe.parallel import Halo, SerialCommunicator, partition, world
+from granframe.run.description import cell_divisors
 from granframe.run.monitors import CELL_INDICATORS, CellEdgeMonitors, cell_resolution_report
 from granframe.run.problems.parts import build_operator, check_step
 from granframe.run.storage import STEP_RECORDS, Layout, RecordArray
@@ -78,7 +79,7 @@ def _blocks(space, ghost: int, owned: int) -> int:
     on them."""
     if space.block_cells is not None:
         return space.block_cells
-    divisors = [b for b in range(max(ghost, 1), min(owned, 64) + 1) if owned % b == 0]
+    divisors = cell_divisors(owned, max(ghost, 1), min(owned, 64))
     return divisors[-1] if divisors else owned
 
 
