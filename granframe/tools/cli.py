@@ -1058,19 +1058,19 @@ def _processes():
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    size, rank = _processes()
-    if size > 1 and args.command != "run":
-        if rank == 0:
-            print(f"granframe: error: granframe {args.command} runs in one process; under "
-                  f"mpiexec ({size} processes) only granframe run is spread over them",
-                  file=sys.stderr)
-        return 2
-    if size > 1 and rank != 0:      # one voice: process 0's; the others speak on errors
-        import os
+    try:      # the imports made here are inside the handling of a Ctrl-C too
+        size, rank = _processes()
+        if size > 1 and args.command != "run":
+            if rank == 0:
+                print(f"granframe: error: granframe {args.command} runs in one process; "
+                      f"under mpiexec ({size} processes) only granframe run is spread over "
+                      "them", file=sys.stderr)
+            return 2
+        if size > 1 and rank != 0:      # one voice: process 0's; the others speak on errors
+            import os
 
-        sys.stdout = open(os.devnull, "w")
-        sys.stderr = open(os.devnull, "w")
-    try:
+            sys.stdout = open(os.devnull, "w")
+            sys.stderr = open(os.devnull, "w")
         return args.handler(args)
     except BrokenPipeError:  # output piped into e.g. `head`, which stopped reading
         sys.stderr.close()
