@@ -8,7 +8,7 @@ import numpy
 
 from granframe import backends, parallel
 from granframe.model import initial, kernels, restitution
-from granframe.space import boundaries, reconstruction
+from granframe.space import boundaries, hierarchy, reconstruction
 from granframe.space import initial as space_initial
 from granframe.stepping import integrators
 from granframe.velocity import quadratures
@@ -149,3 +149,17 @@ def granframe_register_boundaries(registry):
 def granframe_register_communicators(registry):
     registry.add("serial", parallel.SerialCommunicator,
                  description="one process: the collectives return its own values")
+
+
+@hookimpl
+def granframe_register_collision_models(registry):
+    registry.add("euler", hierarchy.EulerLevel,
+                 description="granular Euler: f set to its cooled local discrete Maxwellian")
+    registry.add("bgk", hierarchy.RelaxationLevel,
+                 description="granular BGK relaxation at the operator's shear relaxation "
+                             "rate, exact in time, with the granular cooling")
+    registry.add("esbgk", hierarchy.EllipsoidalLevel,
+                 description="granular ES-BGK relaxation with the operator's shear and heat "
+                             "relaxation rates (its viscosity and conductivity)")
+    registry.add("boltzmann", hierarchy.BoltzmannLevel,
+                 description="the run's collision operator and time integrator (full)")

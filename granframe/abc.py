@@ -640,6 +640,35 @@ class Reconstruction(abc.ABC):
         """
 
 
+class CollisionModel(abc.ABC):
+    r"""One level of a space run's hierarchy of collision models (docs/space.md, "The
+    hierarchy"): the collision step d_t f = Q(f, f)/eps + tau Delta_v f over dt, in the
+    cells a run gives it.
+
+    A factory is called as ``factory(context, **params)``, ``context`` holding the run's
+    ``equation`` (:class:`~granframe.space.collisions.CellCollisions`: the operator, the
+    Knudsen number, the heat bath), its time ``integrator`` and ``temperature``, the mass
+    weighted mean temperature of f0. The levels of a hierarchy are ordered from the
+    cheapest to the full operator; the last must have ``full`` true.
+
+    :meth:`advance` runs inside a step, on the device with a GPU backend (no transfer to
+    the host), and must keep every cell's mass and momentum to round-off and change its
+    energy only by the collisions' dissipation (and the heat bath's work), so that the
+    interfaces between levels conserve what the transport carries across them.
+    """
+
+    #: the name it is registered under
+    name: ClassVar[str]
+    #: True for the full collision operator (the last level of every hierarchy)
+    full: ClassVar[bool] = False
+
+    @abc.abstractmethod
+    def advance(self, f, t: float, dt: float):
+        """f (cells, *grid.shape) after the collision step from t to t + dt, a new array
+        or ``f`` updated in place. ``converged`` (boolean per cell, on the backend), when
+        the model sets it, names the cells it left as they were (no equilibrium)."""
+
+
 class Boundary(abc.ABC):
     r"""What happens at one end of the interval: a wall, or the link of a periodic interval.
 
@@ -834,6 +863,10 @@ class Problem(abc.ABC):
     @abc.abstractmethod
     def snapshot(self, state) -> numpy.ndarray:
         """f of ``state`` on the host, as the store's snapshot array holds it."""
+
+    def resume(self, store, step: int) -> None:
+        """Take up what the problem keeps besides f (none by default) from ``store``,
+        whose run is resumed at ``step``: :meth:`state` then receives its last snapshot."""
 
     def step(self, t: float, state, dt: float):
         """One step of length ``dt`` from time ``t``; returns the new state. The operators'

@@ -27,6 +27,7 @@ CONTRACTS = {
     "reconstructions": contracts.Reconstruction,
     "boundaries": contracts.Boundary,
     "communicators": contracts.Communicator,
+    "collision_models": contracts.CollisionModel,
 }
 
 #: Relative speeds a restitution law and a kernel's speed part are sampled at: zero,

@@ -80,3 +80,10 @@ def granframe_register_communicators(registry):
     take no required parameter and return a :class:`granframe.abc.Communicator` of the
     processes this one was launched with (:func:`granframe.parallel.world` creates the one
     named ``mpi`` when a launcher started several)."""
+
+
+@hookspec
+def granframe_register_collision_models(registry):
+    """Add levels of a space run's hierarchy of collision models; a factory is called as
+    ``factory(context, **params)`` (:class:`granframe.space.hierarchy.HierarchyContext`)
+    and returns a :class:`granframe.abc.CollisionModel`."""

@@ -46,12 +46,17 @@ FAMILIES = {
     "reconstructions": "granframe_register_reconstructions",
     "boundaries": "granframe_register_boundaries",
     "communicators": "granframe_register_communicators",
+    "collision_models": "granframe_register_collision_models",
 }
 
 _NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 
 #: Leading parameters of a collision operator's factory that the framework passes itself.
 OPERATOR_ARGUMENTS = ("grid", "kernel", "restitution", "backend")
+
+#: What the framework passes to each family's factories besides the users' parameters.
+FRAMEWORK_ARGUMENTS = {"collision_operators": OPERATOR_ARGUMENTS,
+                       "collision_models": ("context",)}
 
 
 def closest(word, choices) -> str | None:
@@ -141,8 +146,8 @@ class Entry:
         """The parameter sets the conformance kit (:mod:`granframe.testing.conformance`)
         builds this implementation with: the ``examples`` given to
         :meth:`FamilyRegistry.add`, else the factory's attribute ``conformance_examples``,
-        else ``({},)`` when every parameter has a default (for collision operators:
-        every one after grid, kernel, restitution and backend); None when none are known.
+        else ``({},)`` when every parameter has a default (but those the framework passes,
+        :data:`FRAMEWORK_ARGUMENTS`); None when none are known.
         """
         if self.examples is not None:
             return self.examples
@@ -153,8 +158,8 @@ class Entry:
             parameters = list(inspect.signature(self.factory).parameters.values())
         except (TypeError, ValueError):
             return None
-        if self.family == "collision_operators":
-            parameters = parameters[4:]
+        passed = FRAMEWORK_ARGUMENTS.get(self.family, ())
+        parameters = [p for p in parameters if p.name not in passed]
         required = [p for p in parameters if p.default is inspect.Parameter.empty
                     and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
         return None if required else ({},)
@@ -167,7 +172,8 @@ class Entry:
     def parameters(self) -> list[Parameter] | None:
         """The parameters users pass to the factory, in order: every keyword of its
         signature but ``*args``/``**kwargs``, private (``_``) names and, for collision
-        operators, the four arguments the framework passes (:data:`OPERATOR_ARGUMENTS`);
+        operators and collision models, the arguments the framework passes
+        (:data:`FRAMEWORK_ARGUMENTS`);
         None when the factory has no signature."""
         try:
             signature = inspect.signature(self.factory)
@@ -179,7 +185,7 @@ class Entry:
         found = []
         for p in signature.parameters.values():
             if (p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD) or p.name.startswith("_")
-                    or (self.family == "collision_operators" and p.name in OPERATOR_ARGUMENTS)):
+                    or p.name in FRAMEWORK_ARGUMENTS.get(self.family, ())):
                 continue
             field = fields.get(p.name)
             kind = field.type if field is not None else None

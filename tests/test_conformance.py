@@ -70,6 +70,9 @@ def test_registered_implementation_conforms(family, name, params):
                       kit.check_operator_refuses_bad_restitution):
             check(entry.factory, params)
         return
+    if family == "collision_models":
+        kit.check_collision_model(entry.factory, params)
+        return
     if family == "array_backends":
         backend = _backend_or_skip(name, params)
         kit.check_backend_transforms(backend)

@@ -315,6 +315,107 @@ def cell_divisors(cells: int, low: int, high: int | None = None) -> list[int]:
     return [b for b in range(low, (cells if high is None else high) + 1) if cells % b == 0]
 
 
+def _levels(value):
+    """The hierarchy's levels as a tuple of :class:`Component` (names or tables)."""
+    if isinstance(value, (str, dict, Component)):
+        value = [value]
+    try:
+        return tuple(coerce_component(v) for v in value)
+    except TypeError:
+        return value
+
+
+def _floats(value):
+    """A tuple of floats from a list (a number alone as one), unchanged when not numbers."""
+    if check.is_real(value):
+        value = [value]
+    try:
+        return tuple(check.to_float(v) for v in value)
+    except TypeError:
+        return value
+
+
+@attrs.frozen(kw_only=True)
+class Hierarchy:
+    r"""Collision models chosen cell by cell (docs/space.md, "The hierarchy";
+    :mod:`granframe.space.hierarchy`).
+
+    Parameters
+    ----------
+    levels : list of Component
+        Registered ``collision_models``, from the cheapest to the full operator (the last
+        must be one, ``boltzmann``; the others must not): by default
+        ``["euler", "esbgk", "boltzmann"]``.
+    realizability : list of float
+        For each level after the first, the Navier-Stokes realizability indicator kappa
+        (the stress and heat flux of the Navier-Stokes closure relative to the pressure)
+        above which a cell needs at least that level; positive, non-decreasing, at most 1.
+    distance : list of float
+        For each level after the first, the relative L1 distance delta of f from its local
+        Maxwellian above which a cell (not at the first level) needs at least that level;
+        positive, non-decreasing, at most 2 (the largest distance of two densities).
+    hysteresis : float
+        In (0, 1]: a cell leaves a level downwards only when its indicators are below this
+        share of the thresholds.
+    buffer : int
+        Cells (0 to 64) each level is widened by on each side.
+    interval : int
+        Steps between choices of the levels (1 to 1000).
+    """
+
+    levels: tuple = attrs.field(default=(Component("euler"), Component("esbgk"),
+                                         Component("boltzmann")), converter=_levels)
+    realizability: tuple = attrs.field(default=(0.01, 0.05), converter=_floats)
+    distance: tuple = attrs.field(default=(0.01, 0.05), converter=_floats)
+    hysteresis: float = attrs.field(default=0.5, converter=check.to_float,
+                                    validator=check.real(0.0, 1.0, lower_open=True))
+    buffer: int = attrs.field(default=2, converter=check.to_int,
+                              validator=check.integer(0, 64))
+    interval: int = attrs.field(default=1, converter=check.to_int,
+                                validator=check.integer(1, 1000))
+
+    def __attrs_post_init__(self):
+        owner = "Space"
+        levels = self.levels
+        if (not isinstance(levels, tuple) or not levels
+                or not all(isinstance(c, Component) for c in levels)):
+            check.reject(owner, "hierarchy.levels", levels, "must be a list of registered "
+                         "collision model names (or tables with a name)", error=TypeError)
+        registries = default_registries()
+        names = registries.names("collision_models")
+        for level in levels:
+            if level.name not in names:
+                check.reject(owner, "hierarchy.levels", level.name,
+                             f"must be one of {names}{check.did_you_mean(level.name, names)}")
+        chosen = [c.name for c in levels]
+        if len(set(chosen)) != len(chosen):
+            check.reject(owner, "hierarchy.levels", chosen, "must not name a level twice")
+        full = [registries.get("collision_models", c.name).factory.full for c in levels]
+        if len(levels) < 2 or not full[-1] or any(full[:-1]):
+            check.reject(owner, "hierarchy.levels", chosen,
+                         "must be at least two levels from the cheapest to the full collision "
+                         f"operator, which comes last and only last (full: "
+                         f"{[c for c, f in zip(chosen, full) if f] or 'none'}); e.g. "
+                         "['euler', 'bgk', 'boltzmann']")
+        for field, top in (("realizability", 1.0), ("distance", 2.0)):
+            values = getattr(self, field)
+            if (not isinstance(values, tuple) or len(values) != len(levels) - 1
+                    or not all(check.is_real(v) for v in values)):
+                check.reject(owner, f"hierarchy.{field}", values,
+                             f"must be a list of {len(levels) - 1} numbers, one for each "
+                             f"level after the first of {chosen}", error=TypeError)
+            if not all(0.0 < v <= top and math.isfinite(v) for v in values) or any(
+                    b < a for a, b in zip(values, values[1:])):
+                check.reject(owner, f"hierarchy.{field}", list(values),
+                             f"must be non-decreasing numbers in (0, {top:g}]")
+
+    def to_dict(self) -> dict:
+        return {"levels": [c.to_dict("space.hierarchy.levels") for c in self.levels],
+                "realizability": list(self.realizability), "distance": list(self.distance),
+                "hysteresis": self.hysteresis, "buffer": self.buffer,
+                "interval": self.interval}
+
+
 @attrs.frozen(kw_only=True)
 class Space:
     r"""The space interval of d_t f + v_1 d_x f = Q(f, f)/eps (+ tau Delta_v f) (docs/space.md).
@@ -342,6 +443,9 @@ class Space:
     collisions : bool
         False: a collisionless gas (free-molecular flow, d_t f + v_1 d_x f = 0); the
         kernel, the restitution law and the operator are then not built.
+    hierarchy : Hierarchy or None
+        Collision models chosen cell by cell (a ``[space.hierarchy]`` table); None: the
+        full operator in every cell.
 
     The Knudsen number eps is the description's ``knudsen``.
     """
@@ -354,6 +458,18 @@ class Space:
     left: Component = component_field(default=Component("periodic"))
     right: Component = component_field(default=Component("periodic"))
     collisions: bool = attrs.field(default=True, validator=check.boolean)
+    hierarchy: Hierarchy | None = attrs.field(default=None, converter=_table(Hierarchy))
+
+    @hierarchy.validator
+    def _check_hierarchy(self, attribute, value):
+        if value is None:
+            return
+        if not isinstance(value, Hierarchy):
+            check.reject("Space", "hierarchy", value, "must be a table (levels, thresholds) "
+                         "or absent", error=TypeError)
+        if not self.collisions:
+            check.reject("Space", "hierarchy", "a table", "needs collisions: a collisionless "
+                         "run (collisions = false) has no collision models to choose")
 
     @block_cells.validator
     def _check_block(self, attribute, value):
@@ -428,6 +544,7 @@ class Space:
     def to_dict(self) -> dict:
         return {"cells": self.cells, "length": self.length, "block_cells": self.block_cells,
                 **({} if self.collisions else {"collisions": False}),
+                **({} if self.hierarchy is None else {"hierarchy": self.hierarchy.to_dict()}),
                 **{field: getattr(self, field).to_dict(f"space.{field}")
                    for field in ("reconstruction", "left", "right")}}
 
@@ -643,6 +760,12 @@ class RunDescription:
         if not self.space.collisions and self.heat_bath:
             check.reject(owner, "heat_bath", self.heat_bath, "must be 0 in a collisionless "
                          "run (space.collisions = false solves free transport only)")
+        if self.space.hierarchy is not None and self.conservative is None:
+            check.reject(owner, "conservative", self.conservative,
+                         "must be set (true, or a weight) with a space.hierarchy: the levels "
+                         "keep every cell's mass and momentum to round-off and its energy to "
+                         "the collisions' dissipation, and only the corrected operator does "
+                         "so in the cells of the full level (docs/conservative.md)")
         self._light["space"] = self.space.check(self.grid, self.time_step,
                                                 self.health.step_limit)
 

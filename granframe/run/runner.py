@@ -744,6 +744,7 @@ class Simulation:
         if entry["status"] == "finished":
             return store, None
         f_host, t = store.last_snapshot(cells=getattr(problem, "owned", None))
+        problem.resume(store, int(entry["step"]))
         return store, RunState(problem.state(f_host), t, int(entry["step"]),
                                float(entry["mass0"]), entry.get("dt_next"),
                                entry.get("resumes", []) + [int(entry["step"])],

@@ -136,18 +136,24 @@ class SplitStep:
 
     The time integrator of a space problem: ``step(equation, t, array, dt)`` with
     ``equation`` the :class:`CellCollisions`. ``integrator`` None: free transport only (a
-    collisionless gas), T(dt/2) T(dt/2). The walls see the time of each transport stage.
+    collisionless gas), T(dt/2) T(dt/2). ``hierarchy``: a
+    :class:`~granframe.space.hierarchy.HybridCollisions` that takes the collision step
+    of every cell at its own level instead. The walls see the time of each transport stage.
     """
 
     adaptive = False
 
-    def __init__(self, integrator, transport):
-        self.integrator, self.transport = integrator, transport
+    def __init__(self, integrator, transport, hierarchy=None):
+        self.integrator, self.transport, self.hierarchy = integrator, transport, hierarchy
 
     def step(self, equation, t, array, dt):
         half = 0.5 * dt
         self.transport.advance(array, half, t)
-        if self.integrator is not None:      # None: a collisionless gas
+        if self.hierarchy is not None:
+            inner = self.transport.domain.interior(array)
+            cells = inner.reshape((-1,) + inner.shape[2:])
+            inner[...] = self.hierarchy.advance(cells, t, dt).reshape(inner.shape)
+        elif self.integrator is not None:      # None: a collisionless gas
             inner = self.transport.domain.interior(array)
             before = equation.conserved(inner) if equation.invariants else None
             inner[...] = equation.restore(self.integrator.step(equation, t, inner, dt), before)

@@ -36,7 +36,9 @@ from granframe.run.problems.parts import build_operator, check_step
 from granframe.run.storage import STEP_RECORDS, Layout, RecordArray
 from granframe.space.collisions import CellCollisions, SplitStep
 from granframe.space.domain import Domain
+from granframe.registry import default_registries
 from granframe.space.fields import FIELDS, TOTALS, FieldMoments
+from granframe.space.hierarchy import HierarchyContext, HybridCollisions
 from granframe.space.initial import initial_cells
 from granframe.space.transport import Transport
 from granframe.stepping.stability import OperatorOutline, step_limit
@@ -46,12 +48,19 @@ from granframe.validators import reject
 #: components of momentum (normal v1, tangential v2 .. vd)
 WALL_RECORDS = ("wall_mass", "wall_energy", "wall_momentum")
 
+#: with a hierarchy of collision models, after every step for every cell: its level (the
+#: index in the hierarchy's levels) and the indicators that chose it, measured after the
+#: collision step (:class:`~granframe.space.hierarchy.HybridCollisions`)
+LEVEL_RECORDS = {"level": "i8", "realizability": "f8", "distance": "f8"}
 
-def space_layout(grid, domain: Domain, block: int) -> Layout:
+
+def space_layout(grid, domain: Domain, block: int, levels: bool = False) -> Layout:
     """The store of a space run: f (time, x, v1, ..., vd) chunked by snapshot and by
     ``block`` cells along x, the coordinates v1 ... vd and x (the cell centres), and after
     every step the totals, the fields (step_time, x, ...) chunked by ``block`` along x,
-    and the wall records (step_time, wall; ``wall_momentum`` (step_time, wall, axis))."""
+    and the wall records (step_time, wall; ``wall_momentum`` (step_time, wall, axis));
+    with ``levels`` (a hierarchy of collision models) the level of every cell,
+    ``level`` (step_time, x), an integer: its index in the hierarchy's levels."""
     d = grid.dimension
     axes = tuple(f"v{i + 1}" for i in range(d))
     cells = domain.cells
@@ -62,6 +71,9 @@ def space_layout(grid, domain: Domain, block: int) -> Layout:
     walls = tuple(RecordArray(name, (2, d) if name == "wall_momentum" else (2,),
                               ("wall", "axis") if name == "wall_momentum" else ("wall",))
                   for name in WALL_RECORDS)
+    if levels:
+        walls += tuple(RecordArray(name, (cells,), ("x",), dtype=dtype, chunk=chunk,
+                                   cells_chunk=block) for name, dtype in LEVEL_RECORDS.items())
     points = grid.points()
     return Layout(tuple((name, points, (name,)) for name in axes)
                   + (("x", domain.centres(), ("x",)),),
@@ -141,8 +153,28 @@ class SpaceProblem(Problem):
         self.f0 = self._initial(check=not outline)
         self.equation = (CellCollisions(self.operator, d.heat_bath, d.knudsen) if collide
                          else None)
-        self.integrator = SplitStep(self.collision_integrator, self.transport)
         self.fields = FieldMoments(grid, self.domain.dx, xp)
+        #: the hierarchy of collision models (None: the full operator in every cell)
+        self.hierarchy = None if outline else self._hierarchy()
+        self.integrator = SplitStep(self.collision_integrator, self.transport, self.hierarchy)
+
+    def _hierarchy(self):
+        """The :class:`~granframe.space.hierarchy.HybridCollisions` of ``space.hierarchy``,
+        its levels built from the registry with the run's equation, integrator and the
+        mass-weighted mean temperature of f0."""
+        settings = self.description.space.hierarchy
+        if settings is None or self.equation is None:
+            return None
+        moments = FieldMoments(self.grid, 1.0)(self.f0)
+        rho, temperature = moments["density"], moments["temperature"]
+        context = HierarchyContext(self.equation, self.collision_integrator,
+                                   float((rho * temperature).sum() / rho.sum()))
+        registries = default_registries()
+        models = [registries.create("collision_models", level.name, context=context,
+                                    **level.params) for level in settings.levels]
+        return HybridCollisions(settings, models, self.equation, self.description.space.cells,
+                                self.domain.owned, self.domain.dx, self.left.periodic,
+                                self.communicator, context.shear_coefficient)
 
     def _initial(self, check: bool):
         """f0 as cell averages (cells, *grid.shape), checked and projected cell by cell.
@@ -203,7 +235,8 @@ class SpaceProblem(Problem):
 
     def layout(self):
         return space_layout(self.grid, self.domain,
-                            self.description.space.blocks(self.reconstruction.ghost))
+                            self.description.space.blocks(self.reconstruction.ghost),
+                            levels=self.description.space.hierarchy is not None)
 
     @property
     def owned(self) -> slice:
@@ -212,7 +245,20 @@ class SpaceProblem(Problem):
 
     @property
     def record_names(self) -> tuple:
-        return TOTALS + tuple(FIELDS) + WALL_RECORDS
+        return (TOTALS + tuple(FIELDS) + WALL_RECORDS
+                + (tuple(LEVEL_RECORDS) if self.description.space.hierarchy is not None
+                   else ()))
+
+    def resume(self, store, step: int) -> None:
+        """Take up the levels of the hierarchy where the store's run left them: the level of
+        every owned cell in ``step`` (its ``level`` record), and the step count that sets
+        when the levels are chosen next, so that a resumed run is the uninterrupted one."""
+        if self.hierarchy is None:
+            return
+        records = int(store.progress["records"])
+        steps = numpy.asarray(store.group["step"][:records])
+        row = int(numpy.flatnonzero(steps == step)[-1])
+        self.hierarchy.take_up(step, *(store.group[name][row] for name in LEVEL_RECORDS))
 
     def state(self, f_host):
         """The block array of the owned cells from f on the host: every cell (f0), or the
@@ -248,6 +294,8 @@ class SpaceProblem(Problem):
         extra = record.pop("walls").reshape(2, -1)
         record["wall_mass"], record["wall_energy"] = extra[:, 0], extra[:, -1]
         record["wall_momentum"] = extra[:, 1:-1]
+        if self.hierarchy is not None:
+            record.update(self.hierarchy.records())
         return record
 
     def monitors(self, store) -> CellEdgeMonitors:
