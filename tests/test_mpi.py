@@ -127,6 +127,11 @@ CASES = {
     "penalised": [("integrator", "penalised_euler"), ("conservative", True),
                   ("knudsen", 1e-4), ("restitution.value", 1.0)],
     "heat_bath": [("heat_bath", 0.5)],
+    # a hierarchy of collision models: the levels chosen from indicators of all cells
+    "hierarchy": [("integrator", "penalised_euler"), ("conservative", True),
+                  ("knudsen", 1e-3), ("restitution.value", 0.95),
+                  ("space.hierarchy", {"realizability": [0.002, 0.01],
+                                       "distance": [0.05, 0.1]})],
 }
 
 
@@ -181,6 +186,8 @@ def assert_same_run(store, reference):
     walls = max(numpy.abs(want[name].values).max() for name in WALL_RECORDS)
     for name in want.data_vars:
         a, b = got[name].values, want[name].values
+        if a.dtype.kind in "iu":             # the levels of a hierarchy: exactly the same
+            numpy.testing.assert_array_equal(a, b, err_msg=name)
         if name == "f" or a.dtype.kind not in "f":
             continue
         scale = walls if name in WALL_RECORDS else numpy.abs(b).max()
@@ -213,6 +220,8 @@ def test_runs_on_two_and_three_processes_equal_the_serial_run(tmp_path, case, mp
     assert numpy.abs(want.f.values[-1] - want.f.values[0]).max() > 1e-3 * want.f.values.max()
     if case != "periodic":
         assert numpy.abs(want.wall_momentum.values[1:]).max() > 0.0
+    if case == "hierarchy":              # and the processes chose mixed levels
+        assert len(numpy.unique(want.level.values[1:])) >= 2
     if case == "diffuse":
         assert numpy.abs(want.wall_energy.values[1:]).max() > 0.0
 

