@@ -114,7 +114,8 @@ def granframe_register_initial_conditions(registry):
                  description="uniform Maxwellian with rho, u_1 or T times 1 + A sin(2 pi k x/ell) "
                              "(space runs)",
                  examples=[{"field": "density", "amplitude": 0.2},
-                           {"field": "temperature", "amplitude": 0.3, "mode": 2}])
+                           {"field": "temperature", "amplitude": 0.3, "mode": 2},
+                           {"field": "velocity", "amplitude": 0.2, "component": 2}])
     registry.add("space_function", space_initial.SpaceFunction,
                  description="f0(x, v) from a function, cell-averaged (space runs)",
                  examples=[{"function": _space_gaussian}])

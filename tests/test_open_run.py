@@ -229,3 +229,49 @@ def test_a_space_run_opens_with_its_fields_on_the_time_axis(tmp_path):
     assert steps.time.attrs == default.step_time.attrs
     with pytest.raises(ValueError, match="'time_axis' = 'records' is invalid"):
         gf.open_run(store, time_axis="records")
+
+
+def hierarchy_description() -> RunDescription:
+    """The Sod tube of ``test_space_store`` (24 cells), 4 steps to t = 0.012, with the default
+    hierarchy of collision models, euler, esbgk and boltzmann (and conservative, which a
+    hierarchy needs)."""
+    from test_space_store import TOML
+
+    text = TOML.replace("final_time = 0.024", "final_time = 0.012")
+    return RunDescription.from_toml("conservative = true\n" + text + "[space.hierarchy]\n")
+
+
+@pytest.fixture(scope="module")
+def hierarchy_store(tmp_path_factory):
+    """A finished space run with a hierarchy: 5 records of 24 cells."""
+    store = tmp_path_factory.mktemp("levels") / "levels.zarr"
+    Simulation(hierarchy_description()).run(store, progress=False)
+    return store
+
+
+def test_the_levels_of_a_hierarchy_are_variables_named_by_their_models(hierarchy_store,
+                                                                        tmp_path):
+    ds = gf.open_run(hierarchy_store)
+    group = zarr.open_group(str(hierarchy_store), mode="r")
+    for name, dtype in (("level", numpy.int64), ("realizability", numpy.float64),
+                        ("distance", numpy.float64)):
+        assert ds[name].dims == ("step_time", "x") and ds[name].dtype == dtype, name
+        assert ds[name].shape == (5, 24)
+        numpy.testing.assert_array_equal(ds[name].values, group[name][:], err_msg=name)
+        assert ds[name].attrs["units"] == "1"
+        assert not ds[name].attrs["long_name"].startswith("velocity component"), name
+    level = ds.level.attrs
+    assert level["levels"] == ["euler", "esbgk", "boltzmann"]
+    assert level["flag_meanings"] == "euler esbgk boltzmann"
+    assert level["flag_values"].dtype == numpy.int64
+    numpy.testing.assert_array_equal(level["flag_values"], [0, 1, 2])
+    assert set(numpy.unique(ds.level.values)) <= {0, 1, 2}
+    # the indicators are measured after the collision step: none at t = 0
+    assert numpy.isnan(ds.realizability.isel(step_time=0)).all()
+    assert numpy.isfinite(ds.distance.isel(step_time=-1)).all()
+    assert gf.open_run(hierarchy_store, time_axis="steps").level.dims == ("time", "x")
+    ds.to_netcdf(tmp_path / "levels.nc")
+    with xarray.open_dataset(tmp_path / "levels.nc") as back:
+        xarray.testing.assert_identical(back.load(), ds.load())
+        assert back.level.dtype == numpy.int64
+        assert list(back.level.attrs["levels"]) == level["levels"]

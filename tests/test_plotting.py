@@ -3,6 +3,7 @@
 import numpy
 import pytest
 import xarray
+from matplotlib.colors import LogNorm
 from matplotlib.contour import QuadContourSet
 from matplotlib.figure import Figure
 
@@ -12,6 +13,7 @@ from granframe.run.runner import Simulation
 from granframe.tools import plotting
 from granframe.tools.cli import main
 
+from test_open_run import hierarchy_description
 from test_runner import heated
 from test_unbuilt_description import _refuse_building_cupy, write_gpu_store
 
@@ -245,3 +247,71 @@ def test_the_caption_of_an_adaptive_run_gives_the_range_of_its_steps(ds):
                                                  '[integrator]\nname = "dopri54"'),
                                  tolerance=("heat_bath = ", "tolerance = 1e-6\nheat_bath = "))
     assert "dt = 0.05..0.05 (adaptive dopri54, tolerance 1e-06)" in plotting.caption(adaptive)
+
+
+@pytest.fixture(scope="module")
+def hierarchy_store(tmp_path_factory):
+    """A Sod tube with the default hierarchy of collision models: 5 records of 24 cells."""
+    path = tmp_path_factory.mktemp("levels") / "levels.zarr"
+    Simulation(hierarchy_description()).run(path, progress=False)
+    return path
+
+
+def _without_hierarchy(ds):
+    """``ds`` as the store of the same run without a hierarchy shows it: no
+    ``space.hierarchy`` in its description and no level records."""
+    table = RunDescription.from_toml(ds.attrs["description_toml"]).to_dict()
+    del table["space"]["hierarchy"]
+    plain = ds.drop_vars(["level", "realizability", "distance"])
+    plain.attrs = {**ds.attrs, "description_toml": RunDescription.from_dict(table).to_toml()}
+    return plain
+
+
+def test_a_hierarchy_is_drawn_as_maps_of_levels_and_indicators_and_the_shares(
+        hierarchy_store):
+    ds = granframe.open_run(hierarchy_store)
+    names = ["euler", "esbgk", "boltzmann"]
+    drawn = plotting.figures(ds)
+    assert set(drawn) == {"maps", "profiles", "totals", "levels"}
+    panels = [ax for ax in drawn["levels"].axes if ax.get_label() != "<colorbar>"]
+    level, shares, kappa, delta = panels
+    # one quad per cell and record, one colour per level, named on the colour bar
+    mesh = level.collections[0]
+    numpy.testing.assert_array_equal(mesh.get_array().reshape(5, 24), ds.level.values)
+    assert mesh.cmap.N == mesh.norm.Ncmap == 3
+    assert [t.get_text() for t in mesh.colorbar.ax.get_yticklabels()] == names
+    assert level.get_title() == "collision model of each cell (t, x)"
+    # the shares are stacked up to one, and their means over the steps are in the title
+    assert [t.get_text() for t in shares.get_legend().get_texts()] == names
+    top = shares.collections[-1].get_paths()[0].vertices[:, 1]
+    assert top.max() == pytest.approx(1.0)
+    steps = ds.level.values[1:]
+    assert ", ".join(f"{name} {(steps == k).mean():.0%}" for k, name in enumerate(names)) \
+        in shares.get_title()
+    # the indicators on a log scale, blank where not measured (t = 0), thresholds marked
+    for ax, name in ((kappa, "realizability"), (delta, "distance")):
+        mesh = ax.collections[0]
+        assert isinstance(mesh.norm, LogNorm), name
+        blank = numpy.ma.getmaskarray(mesh.get_array()).reshape(5, 24)
+        assert blank[0].all() and not blank[1:].any(), name
+        marks = [line.get_ydata()[0] for line in mesh.colorbar.ax.get_lines()]
+        assert marks == [0.01, 0.05], name
+    assert kappa.get_title().startswith(r"Navier-Stokes realizability $\kappa$(t, x): max ")
+    with xarray.open_zarr(hierarchy_store, consolidated=False) as data:     # the same
+        same = plotting.level_map(data, ax=_axes()).collections[0].get_array()
+    numpy.testing.assert_array_equal(same, ds.level.values)
+
+
+def test_without_a_hierarchy_no_levels_are_drawn(hierarchy_store, ds):
+    levels = granframe.open_run(hierarchy_store)
+    plain = _without_hierarchy(levels)
+    assert set(plotting.figures(plain)) == {"maps", "profiles", "totals"}
+    for draw in (plotting.level_map, plotting.level_shares, plotting.indicator_map):
+        with pytest.raises(ValueError, match=f"{draw.__name__}: parameter 'ds' .* hierarchy "
+                                             "of collision models"):
+            draw(plain, ax=_axes())
+    with pytest.raises(ValueError, match="level_shares: parameter 'ds' .* must be a space run"):
+        plotting.level_shares(ds, ax=_axes())
+    with pytest.raises(ValueError, match="indicator_map: parameter 'indicator' = 'kappa' .* "
+                                         "realizability, distance"):
+        plotting.indicator_map(levels, "kappa", ax=_axes())

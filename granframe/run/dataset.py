@@ -3,20 +3,22 @@
 :func:`open_run` reads what a store has committed and nothing else: the store is refused
 when it is damaged or was never completed, and every array is cut to the snapshots and
 moment records that ``progress`` names, so a commit cut short by a kill never shows. The
-attributes follow the CF conventions and hold only strings, numbers and lists of them,
-so ``open_run(path).to_netcdf(out)`` writes a netCDF-4 file as it is.
+attributes follow the CF conventions and hold only strings, numbers and lists of them
+(``flag_values`` an int64 array, the type of its variable), so
+``open_run(path).to_netcdf(out)`` writes a netCDF-4 file as it is.
 """
 
 from __future__ import annotations
 
 import os
 
+import numpy
 import xarray
 
 from granframe import validators as check
-from granframe.run.storage import (SNAPSHOT_ARRAYS, RunStore, StoreDamagedError,
-                                   array_attributes, flat_attributes, root_attributes,
-                                   summarise)
+from granframe.run.storage import (LEVEL_LONG_NAMES, SNAPSHOT_ARRAYS, RunStore,
+                                   StoreDamagedError, array_attributes, flat_attributes,
+                                   root_attributes, summarise)
 
 #: the coordinate of a space run's wall records: the wall at x = 0, then at x = ell
 WALLS = ("left", "right")
@@ -97,7 +99,14 @@ def open_run(path, *, time_axis: str = "snapshots") -> xarray.Dataset:
           unit area of the wall on the gas; the gas acts on the wall with minus it: the
           ``v1`` component is the pressure on the left wall and minus the pressure on the
           right one, the tangential components are minus the shear stress on the wall
-          (docs/space.md, "Wall pressure and shear stress").
+          (docs/space.md, "Wall pressure and shear stress");
+        - with a hierarchy of collision models (``space.hierarchy``), ``level``
+          (``step_time``, ``x``), int64: the collision model of each cell over the step,
+          its index in the hierarchy's levels, whose names are the attribute ``levels``
+          (and, in the CF style, ``flag_values`` 0 ... n-1 and ``flag_meanings``, the
+          names separated by spaces); ``realizability`` and ``distance`` (``step_time``,
+          ``x``): the indicators kappa and delta that chose it, measured after the
+          collision step (NaN at t = 0).
 
     Raises
     ------
@@ -184,8 +193,31 @@ def run_dataset(store: RunStore) -> xarray.Dataset:
     if "axis2" in dataset.dims:
         dataset["axis2"].attrs = {"long_name": "velocity component of the second index of "
                                                "the pressure tensor"}
+    if "level" in dataset:
+        label_levels(dataset, meta["description"]["space"]["hierarchy"]["levels"])
     dataset.attrs = {**root_attributes(meta), **flat_attributes("progress", meta["progress"])}
     return dataset
+
+
+def label_levels(dataset: xarray.Dataset, levels: list) -> None:
+    """Give the records of a hierarchy of collision models in ``dataset`` their attributes.
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        A space run's dataset with the arrays ``level``, ``realizability`` and
+        ``distance``; their attributes are set in place.
+    levels : list of dict
+        The hierarchy's levels as the stored description has them
+        (``description["space"]["hierarchy"]["levels"]``), each a table with a ``name``,
+        cheapest first.
+    """
+    names = [level["name"] for level in levels]
+    for name, long_name in LEVEL_LONG_NAMES.items():
+        dataset[name].attrs = {"long_name": long_name, "units": "1"}
+    dataset["level"].attrs.update(levels=names,
+                                  flag_values=numpy.arange(len(names), dtype=numpy.int64),
+                                  flag_meanings=" ".join(names))
 
 
 def committed(store: RunStore) -> xarray.Dataset:

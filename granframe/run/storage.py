@@ -120,11 +120,24 @@ _LONG_NAMES = {
     "pressure_tensor": "pressure tensor int (v-u)_i (v-u)_j f dv",
     "heat_flux": "heat flux int (v-u)_i |v-u|^2 f dv / 2",
 }
+#: the long names of the records of a space run with a hierarchy of collision models
+#: (``space.hierarchy``; :data:`granframe.run.problems.space.LEVEL_RECORDS`)
+LEVEL_LONG_NAMES = {
+    "level": "collision model of each cell over the step: its index in space.hierarchy.levels",
+    "realizability": "Navier-Stokes realizability indicator kappa = max(|sigma|_F / p, "
+                     "|q| / (p sqrt T)) of each cell after the collision step (NaN before "
+                     "the first step, infinite where the cell has no equilibrium)",
+    "distance": "relative L1 distance delta = sum |f - M[f]| h^d / rho of each cell from its "
+                "local Maxwellian after the collision step (NaN before the first step and "
+                "where the cell has no equilibrium)",
+}
+
 #: the long names of a space run's arrays where they differ from :data:`_LONG_NAMES`: the
 #: fields are per cell (rho, u, T, P, q of the cell average of f), the totals are
 #: integrals over x as well, and the wall records what entered [0, ell] through each
 #: wall over one step (time-integrated fluxes, positive inwards)
 _SPACE_LONG_NAMES = {
+    **LEVEL_LONG_NAMES,
     "f": "distribution function f(t, x, v), cell averages",
     "x": "cell centre",
     "mass": "total mass int int f dv dx",

@@ -156,7 +156,8 @@ _FIELDS = ("density", "velocity", "temperature")
 @attrs.frozen
 class SinusoidalMode(SpaceCondition):
     """A uniform Maxwellian (rho, u_1, T) with one of them times 1 + A sin(2 pi k x / ell)
-    (the velocity: u_1 + A sin(...)).
+    (the velocity: u_1 + A sin(...) along ``component``; a transverse component, u_2,
+    makes a shear mode).
 
     Parameters
     ----------
@@ -169,6 +170,9 @@ class SinusoidalMode(SpaceCondition):
         A; |A| < 1 for the density and the temperature (positive fields).
     mode : int
         k >= 1, the number of periods on the interval.
+    component : int
+        The velocity component the ``velocity`` mode perturbs: 1 (along x, a longitudinal
+        mode, the default) to d (2 or 3: transverse, a shear mode).
     """
 
     density: float = attrs.field(default=1.0, converter=check.to_float,
@@ -181,6 +185,14 @@ class SinusoidalMode(SpaceCondition):
     amplitude: float = attrs.field(default=0.1, converter=check.to_float,
                                    validator=check.real(-STATE_RANGE[1], STATE_RANGE[1]))
     mode: int = attrs.field(default=1, converter=check.to_int, validator=check.integer(1))
+    component: int = attrs.field(default=1, converter=check.to_int,
+                                 validator=check.integer(1, 3))
+
+    @component.validator
+    def _check_component(self, attribute, value):
+        if value != 1 and self.field != "velocity":
+            check.reject("SinusoidalMode", "component", value, f"applies to the velocity "
+                         f"mode only (field = 'velocity'), not to the {self.field}")
 
     @amplitude.validator
     def _check_amplitude(self, attribute, value):
@@ -189,7 +201,8 @@ class SinusoidalMode(SpaceCondition):
                          f"must be in (-1, 1) for the {self.field}, which must stay positive")
 
     def profile(self, x, length: float = 1.0) -> dict:
-        """rho, u_1, T at the points x of an interval of length ``length``."""
+        """rho, the velocity (its perturbed component) and T at the points x of an interval
+        of length ``length``."""
         wave = self.amplitude * numpy.sin(2.0 * math.pi * self.mode * numpy.asarray(x) / length)
         base = {"density": self.density, "velocity": self.velocity,
                 "temperature": self.temperature}
@@ -209,10 +222,18 @@ class SinusoidalMode(SpaceCondition):
         fields = self.profile(x, edges[-1] - edges[0])
         d = grid.dimension
         f = numpy.zeros((len(edges) - 1,) + tuple(grid.shape))
+        if self.component > d:
+            check.reject("SinusoidalMode", "component", self.component,
+                         f"must be at most the grid's dimension d = {d}")
         for q, w in enumerate(weights):
             for cell in range(f.shape[0]):
-                u = (fields["velocity"][cell, q],) + (0.0,) * (d - 1)
-                f[cell] += w * grid.maxwellian(fields["density"][cell, q], u,
+                u = numpy.zeros(d)
+                if self.component == 1:
+                    u[0] = fields["velocity"][cell, q]
+                else:
+                    u[0] = self.velocity
+                    u[self.component - 1] = fields["velocity"][cell, q] - self.velocity
+                f[cell] += w * grid.maxwellian(fields["density"][cell, q], tuple(u),
                                                fields["temperature"][cell, q])
         return f, (fields["density"] * weights).sum(axis=1)
 

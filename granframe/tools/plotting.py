@@ -32,6 +32,12 @@ three figures of its own:
 - ``totals``: the total mass and energy against t with what entered through the walls
   (:func:`total_mass`, :func:`total_energy`) and the negative share of f
   (:func:`positivity`).
+
+A space run with a hierarchy of collision models (``space.hierarchy``) has a fourth:
+
+- ``levels``: the x-t map of each cell's collision model (:func:`level_map`), the share
+  of the cells at each level against t (:func:`level_shares`), and x-t maps of the two
+  indicators that chose the levels (:func:`indicator_map`).
 """
 
 from __future__ import annotations
@@ -42,6 +48,7 @@ import pathlib
 import numpy
 import xarray
 from matplotlib import colormaps, ticker
+from matplotlib.colors import BoundaryNorm, LogNorm
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
@@ -75,7 +82,8 @@ _STYLE = {"axes.grid": True, "grid.alpha": 0.3, "font.size": 10, "axes.titlesize
 _LAYOUTS = {"temperature": ((1, 2), (11, 4.4)), "entropy": ((1, 1), (8, 5.2)),
             "slices": ((1, 2), (11, 4.4)), "contour": ((1, 2), (11, 5.8)),
             "moments": ((1, 3), (14, 4.2)), "maps": ((2, 3), (15, 8.6)),
-            "profiles": ((2, 3), (15, 8.2)), "totals": ((1, 3), (14, 4.2))}
+            "profiles": ((2, 3), (15, 8.2)), "totals": ((1, 3), (14, 4.2)),
+            "levels": ((2, 2), (11, 8.6))}
 
 #: The fields of a space run that :func:`field_map` and :func:`profiles` draw: name ->
 #: (stored array, component index, symbol, words, signed).
@@ -89,6 +97,17 @@ SPACE_FIELDS = {
 
 #: The totals a space run records after every step (integrals over x and v).
 _SPACE_TOTALS = ("mass", "kinetic_energy", "min_f", "negative_mass_fraction")
+
+#: The indicators of a hierarchy of collision models that :func:`indicator_map` draws:
+#: stored array -> (symbol, words).
+LEVEL_INDICATORS = {
+    "realizability": (r"$\kappa$", "Navier-Stokes realizability"),
+    "distance": (r"$\delta$", "distance from the local Maxwellian"),
+}
+
+#: The colour scale of :func:`indicator_map` starts at this share of the lowest threshold;
+#: smaller values take its lowest colour.
+INDICATOR_FLOOR = 1e-3
 
 
 def _attribute(ds, name):
@@ -151,6 +170,10 @@ class _Run:
         self.grid = self.description.grid
         #: the description's space section; None for a space-homogeneous run
         self.space = getattr(self.description, "space", None)
+        hierarchy = None if self.space is None else self.space.hierarchy
+        #: the names of the levels of a hierarchy of collision models, cheapest first;
+        #: None without one
+        self.levels = None if hierarchy is None else [level.name for level in hierarchy.levels]
         self.status = progress.get("status")
         # the resolution warnings of the last commit: nested in the store's metadata, flat
         # (resolution_warnings) in granframe.open_run's attributes
@@ -245,13 +268,23 @@ class _Run:
         if self.space is not None:
             check.reject(owner, "ds", self.title,
                          "must be a space-homogeneous run; a space run is drawn by "
-                         "field_map, profiles, total_mass, total_energy and positivity")
+                         "field_map, profiles, total_mass, total_energy and positivity "
+                         "(with a hierarchy also level_map, level_shares and "
+                         "indicator_map)")
 
     def inhomogeneous(self, owner):
         """Refuse a space-homogeneous run in the plotting function ``owner``."""
         if self.space is None:
             check.reject(owner, "ds", self.title,
                          "must be a space run (a description with a space section)")
+
+    def hierarchical(self, owner):
+        """Refuse a run without a hierarchy of collision models in the plotting function
+        ``owner``."""
+        self.inhomogeneous(owner)
+        if self.levels is None:
+            check.reject(owner, "ds", self.title, "must be a space run with a hierarchy of "
+                                                  "collision models (space.hierarchy)")
 
 
 def _component(component) -> str:
@@ -822,14 +855,145 @@ def total_energy(ds, ax=None):
     return ax
 
 
+def _level_colours(count):
+    """The colour map of ``count`` levels: one colour of viridis each, cheapest first."""
+    return colormaps["viridis"].resampled(count)
+
+
+def level_map(ds, ax=None):
+    """An x-t map of the collision model of every cell of a space run with a hierarchy.
+
+    One quad per cell and record (as :func:`field_map`), in one colour per level of
+    ``space.hierarchy.levels``; the colour bar names them.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of the store of a space run with a hierarchy of collision models.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into (its figure gets the colour bar); a new captioned figure when
+        None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    run = _Run.of(ds)
+    run.hierarchical("level_map")
+    ax = _axes(ax, run)
+    count = len(run.levels)
+    mesh = ax.pcolormesh(run.ds["x"].values, run.step_time, run.ds["level"].values,
+                         shading="nearest", cmap=_level_colours(count),
+                         norm=BoundaryNorm(numpy.arange(count + 1) - 0.5, count))
+    bar = ax.figure.colorbar(mesh, ax=ax, ticks=numpy.arange(count),
+                             label="collision model (level)")
+    bar.set_ticklabels(run.levels)
+    bar.minorticks_off()
+    ax.grid(False)
+    ax.set(xlabel="position x, cell centres (dimensionless)", ylabel=_TIME,
+           xlim=(0.0, run.space.length),
+           title="collision model of each cell (t, x)")
+    return ax
+
+
+def level_shares(ds, ax=None):
+    """The share of the cells of a space run at each level of its hierarchy, against t.
+
+    Stacked, cheapest at the bottom, in the colours of :func:`level_map`; the level
+    recorded at a step holds over that step (from the previous record to its own). The
+    title gives each level's mean share over the steps.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of the store of a space run with a hierarchy of collision models.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into; a new captioned figure when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    run = _Run.of(ds)
+    run.hierarchical("level_shares")
+    ax = _axes(ax, run)
+    count = len(run.levels)
+    levels = run.ds["level"].values
+    shares = numpy.stack([(levels == k).mean(axis=1) for k in range(count)])
+    ax.stackplot(run.step_time, shares, labels=run.levels, step="pre",
+                 colors=_level_colours(count)(numpy.arange(count)))
+    title = "share of the cells at each level"
+    if shares.shape[1] > 1:           # the record at t = 0 is no step
+        title += "\nmean over the steps: " + ", ".join(
+            f"{name} {share:.0%}" for name, share in zip(run.levels, shares[:, 1:].mean(axis=1)))
+    ax.set(xlabel=_TIME, ylabel="share of the cells (dimensionless)", ylim=(0.0, 1.0),
+           title=title)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.17), ncols=count)
+    return ax
+
+
+def indicator_map(ds, indicator="realizability", ax=None):
+    """An x-t map of one indicator of a space run's hierarchy, on a logarithmic scale.
+
+    The indicator of every cell after every step (as :func:`field_map`), with its
+    thresholds (``space.hierarchy``) marked in red on the colour bar. The scale runs from
+    :data:`INDICATOR_FLOOR` times the lowest threshold, smaller values (zero among them)
+    in its lowest colour, to the largest value or threshold, an infinite kappa (a cell
+    without an equilibrium) in its highest; NaN (not measured: t = 0, and delta where
+    there is no equilibrium) is left blank.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of the store of a space run with a hierarchy of collision models.
+    indicator : {"realizability", "distance"}
+        kappa or delta (:data:`LEVEL_INDICATORS`).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into (its figure gets the colour bar); a new captioned figure when
+        None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    run = _Run.of(ds)
+    run.hierarchical("indicator_map")
+    if indicator not in LEVEL_INDICATORS:
+        check.reject("indicator_map", "indicator", indicator,
+                     f"must be one of {', '.join(LEVEL_INDICATORS)}")
+    symbol, words = LEVEL_INDICATORS[indicator]
+    ax = _axes(ax, run)
+    thresholds = getattr(run.space.hierarchy, indicator)
+    values = run.ds[indicator].values
+    finite = values[numpy.isfinite(values)]
+    low = INDICATOR_FLOOR * min(thresholds)
+    high = max(float(finite.max(initial=0.0)), max(thresholds))
+    mesh = ax.pcolormesh(run.ds["x"].values, run.step_time, numpy.clip(values, low, high),
+                         shading="nearest", cmap="viridis", norm=LogNorm(low, high))
+    bar = ax.figure.colorbar(mesh, ax=ax, extend="min",
+                             label=f"{symbol} (dimensionless), thresholds in red")
+    for threshold in thresholds:
+        bar.ax.axhline(threshold, color="C3", lw=1.5)
+    ax.grid(False)
+    largest = f"max {finite.max():.3g}" if finite.size else "not measured yet"
+    ax.set(xlabel="position x, cell centres (dimensionless)", ylabel=_TIME,
+           xlim=(0.0, run.space.length),
+           title=f"{words} {symbol}(t, x): {largest}\n(log scale; blank: not measured)")
+    return ax
+
+
 def _space_panels(run) -> dict:
     """The figures of a space run: name -> the functions drawing their panels."""
     def drawn(function, field):
         return lambda r, ax: function(r, field, ax)
 
-    return {"maps": tuple(drawn(field_map, name) for name in SPACE_FIELDS),
-            "profiles": tuple(drawn(profiles, name) for name in SPACE_FIELDS),
-            "totals": (total_mass, total_energy, positivity)}
+    panels = {"maps": tuple(drawn(field_map, name) for name in SPACE_FIELDS),
+              "profiles": tuple(drawn(profiles, name) for name in SPACE_FIELDS),
+              "totals": (total_mass, total_energy, positivity)}
+    if run.levels is not None:
+        panels["levels"] = (level_map, level_shares,
+                            *(drawn(indicator_map, name) for name in LEVEL_INDICATORS))
+    return panels
 
 
 def figures(ds) -> dict:
@@ -844,8 +1008,8 @@ def figures(ds) -> dict:
     -------
     dict of str to matplotlib.figure.Figure
         ``temperature``, ``slices``, ``contour``, ``moments`` and, with at least three
-        snapshots, ``entropy``; for a space run ``maps``, ``profiles`` and ``totals``.
-        They are not attached to pyplot.
+        snapshots, ``entropy``; for a space run ``maps``, ``profiles`` and ``totals``, and
+        ``levels`` with a hierarchy of collision models. They are not attached to pyplot.
     """
     run = _Run.of(ds)
     if run.space is not None:
