@@ -85,3 +85,43 @@ def test_the_counting_backend_counts_what_cupy_would_copy():
     a + numpy.arange(4.0)                          # a host operand: CuPy would need a copy
     xp.asarray(numpy.zeros(3))
     assert backend.counts()["to_device"] == 2
+
+
+HIERARCHY = ('conservative = true\n' + TOML).replace(
+    'right = {name = "diffuse", temperature = 0.9}',
+    'right = {name = "diffuse", temperature = 0.9}\n[space.hierarchy]\n'
+    'realizability = [0.002, 0.01]\ndistance = [0.05, 0.1]')
+
+
+def _counted_steps(toml):
+    """(counts of STEPS steps after two, the number of levels in use in each step)."""
+    description = RunDescription.from_toml(toml)
+    problem, backend = counting_problem(description)
+    state = problem.state(problem.f0)
+    dt = description.time_step
+    for k in range(2):                                   # caches fill, levels spread
+        state = problem.step(k * dt, state, dt)
+        problem.record(state)
+    backend.reset()
+    used = []
+    for k in range(2, 2 + STEPS):
+        state = problem.step(k * dt, state, dt)
+        problem.record(state)
+        if problem.hierarchy is not None:
+            used.append(len(numpy.unique(problem.hierarchy.owned_levels)))
+    return backend.counts(), used, problem
+
+
+def test_a_hybrid_step_adds_the_copies_of_the_indicators_and_the_level_indices():
+    """With a hierarchy (every level in use; the heat bath makes the fluid levels integrate
+    the temperature law by substeps, whose count is read from the device once per level),
+    against the same run without one (both with the conservative correction, which copies
+    its small Gram systems to the host in every call): per step at most one more
+    device->host copy (the indicators of the cells) and one per fluid level (the substep
+    count), and one host->device copy of the cell indices per level in use."""
+    baseline, _, _ = _counted_steps(HIERARCHY.split("[space.hierarchy]")[0])
+    counts, used, problem = _counted_steps(HIERARCHY)
+    assert max(used) == 3, used
+    fluid = len(problem.hierarchy.models) - 1
+    assert counts["to_host"] <= baseline["to_host"] + STEPS * (1 + fluid), counts
+    assert counts["to_device"] <= baseline["to_device"] + sum(used), counts

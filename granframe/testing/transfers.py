@@ -181,14 +181,18 @@ def _wrap(value, counter, scalars: bool = False):
 
 
 class _Namespace(ModuleType):
-    """NumPy as the device's array namespace: creators give device arrays, uploads count."""
+    """NumPy as the device's array namespace: creators give device arrays, uploads count;
+    ``linalg`` is :mod:`numpy.linalg` under the same rules (CuPy's ``cupy.linalg`` works on
+    the device)."""
 
-    def __init__(self, backend: "CountingBackend"):
+    def __init__(self, backend: "CountingBackend", module=numpy):
         super().__init__("granframe.testing.transfers.xp")
-        self._backend = backend
+        self._backend, self._module = backend, module
 
     def __getattr__(self, name):
-        attribute = getattr(numpy, name)
+        if self._module is numpy and name == "linalg":
+            return _Namespace(self._backend, numpy.linalg)
+        attribute = getattr(self._module, name)
         backend = self._backend
         if name in _UPLOADS:
             def upload(a, *args, **kwargs):
