@@ -16,15 +16,18 @@ following F. Filbet & T. Rey, SIAM J. Sci. Comput. 37 (2015) A1218-A1247
   time integrator and then cooled, with nu_s the rate at which the run's own operator
   relaxes a shear stress (:func:`relaxation_rate`), so that the level has the
   shear viscosity of the full operator in the first Sonine approximation;
+- ``esbgk``: the ellipsoidal statistical BGK model, stepped and cooled as ``bgk``, with the
+  operator's shear and heat-flux relaxation rates: its viscosity and its conductivity;
 - ``boltzmann``: the run's integrator on the run's collision operator.
 
-Both fluid levels cool their equilibrium at the granular cooling rate of the run's kernel
-and restitution law (:func:`cooling_rate`), and heat it at 2 tau per unit time under a
-heat bath; mass and momentum are kept to round-off, the energy to the cooling the
+The fluid levels cool their equilibrium at the granular cooling rate of the run's kernel
+and restitution law (:class:`CoolingRate`), the ``euler`` level also heats it at 2 tau per
+unit time under a heat bath (the relaxation levels get the heat bath from the run's
+integrator); mass and momentum are kept to round-off, the energy to the cooling the
 formula gives.
 
 Which level a cell takes is decided every ``interval`` steps from two indicators per cell
-(:class:`LevelChooser`):
+(:class:`HybridCollisions`, :func:`choose_levels`):
 
 - from fluid to kinetic, the Navier-Stokes realizability indicator of Levermore,
   Morokoff & Nadiga (Phys. Fluids 10 (1998) 3214), as Filbet & Rey use it: the stress and
