@@ -1,23 +1,29 @@
 """granframe advise: the proposed configurations meet their tolerance (studies/advise_validation.py
 has the brute-force comparison); closed forms and the rescaled formulation are proposed where
-they apply; bad scenes are refused by name."""
+they apply; bad scenes are refused by name; space scenes get a space run, priced all-kinetic
+and with a hierarchy of collision models by the formula of HierarchyPrice."""
 
 import importlib.util
+import json
 import math
 import pathlib
+import tomllib
 
 import attrs
 import numpy
 import pytest
+import tomli_w
 from scipy.interpolate import CubicSpline
 
 import granframe.tools.advise as advise_module
 from granframe.equations.rescaled import Rescaling
 from granframe.run.storage import RunStore
-from granframe.tools.advise import MODES, SPHERE, Scene, advise
+from granframe.tools.advise import (MODES, SPHERE, HierarchyPrice, Scene, advise,
+                                    price_hierarchy)
 from granframe.velocity.quadratures import Lebedev
 from granframe.tools.cli import main
-from granframe.run.description import RunDescription
+from granframe.run.description import Hierarchy, RunDescription
+from granframe.run.problems import make_problem
 from granframe.model.exact import bkw, heated_maxwell_law, heated_maxwell_temperature
 from granframe.run.runner import Simulation
 
@@ -240,3 +246,181 @@ def test_every_advised_description_runs_as_written_and_meets_its_tolerance(
         assert _run(description, store) == 0, capsys.readouterr().err
         error = _measured_error(scene, store, reference)
         assert error <= scene.tolerance, (description.operator, error, advice.errors)
+
+
+# -- space scenes: the velocity advice on the cells' states, and the price of a hierarchy ----
+
+SOD = {"name": "riemann", "left": {"density": 1.0, "temperature": 1.0},
+       "right": {"density": 0.125, "temperature": 0.8}}
+#: the elastic Sod tube at eps = 1e-3 between specular walls (studies/space.py), 20 cells
+SPACE_SCENE = {"dimension": 2, "kernel": "maxwell",
+               "restitution": {"name": "constant", "value": 1.0}, "initial": SOD,
+               "final_time": 0.2, "knudsen": 1e-3, "quantity": "distribution",
+               "tolerance": 1e-2,
+               "space": {"cells": 20, "left": "specular", "right": "specular"}}
+
+
+def _sod_run(cells=20, hierarchy=None):
+    """The Sod tube to t = 0.05 as a run description on 2D N = 24, S = 3.5, dt = 0.05 / cells
+    (the CFL limit is 0.14 / cells), penalised ARS(2,2,2), conservative."""
+    space = {"cells": cells, "left": "specular", "right": "specular"}
+    return RunDescription.from_dict({
+        "grid": {"dimension": 2, "n_modes": 24, "support_radius": 3.5}, "final_time": 0.05,
+        "time_step": 0.05 / cells, "kernel": "maxwell",
+        "restitution": {"name": "constant", "value": 1.0}, "initial": SOD,
+        "integrator": "penalised_ars222", "knudsen": 1e-3, "conservative": True,
+        "space": space if hierarchy is None else {**space, "hierarchy": hierarchy}})
+
+
+def test_space_scene_gets_a_space_run_priced_with_and_without_a_hierarchy(tmp_path, capsys):
+    """A space scene is advised a runnable space run: its grid holds every cell of f0 and
+    the star states behind the Euler waves (T = 0.535 and 1.399 in the Sod tube), dt is
+    within the transport's CFL limit, and eps = 1e-3 is too stiff for RK4 at that dt; the
+    JSON has the price of the default hierarchy, whose shares of t = 0 sum to 1, and the
+    description's cost is its all-kinetic price."""
+    scene = tmp_path / "scene.toml"
+    scene.write_text(tomli_w.dumps(SPACE_SCENE))
+    out = tmp_path / "advised.toml"
+    assert main(["advise", str(scene), "--json", "--out", str(out)]) == 0
+    advice = json.loads(capsys.readouterr().out)
+    description = RunDescription.from_toml(out.read_text())
+    assert description.space.cells == 20 and description.space.hierarchy is None
+    assert description.time_step <= description.space.transport_limit(description.grid)
+    assert description.integrator.name == "penalised_ars222" and description.conservative
+    price = advice["space"]
+    assert price["given"] is False and set(price["shares_at_start"]) == {
+        "euler", "esbgk", "boltzmann"}
+    assert sum(price["shares_at_start"].values()) == pytest.approx(1.0)
+    assert sum(price["counts_at_start"].values()) == 20
+    assert price["steps"] == round(0.2 / description.time_step)
+    assert advice["predicted_seconds"] == pytest.approx(price["kinetic_seconds"])
+    assert advice["errors"]["total"] <= 1e-2 and "time" not in advice["errors"]
+    assert any("not predicted" in reason for reason in advice["reasons"])
+    assert any("behind the Euler waves from T = 0.5348 to 1.399" in reason
+               for reason in advice["reasons"])
+    # the proposal builds as a space run (every cell of f0 checked against the grid)
+    assert make_problem(description).f0.shape == (20,) + description.grid.shape
+
+
+def test_hierarchy_with_most_cells_fluid_is_priced_below_the_all_kinetic_run():
+    """40 cells of the Sod tube with euler | boltzmann levels: at t = 0 only the cells
+    around the interface (and the buffer) are kinetic, and the hierarchy is predicted cheaper
+    than the full operator in every cell, by the formula of HierarchyPrice."""
+    hierarchy = {"levels": ["euler", "boltzmann"], "realizability": [0.05], "distance": [0.05]}
+    price = price_hierarchy(_sod_run(40, hierarchy), repeats=3)
+    assert price.given and sum(price.counts) == 40
+    assert sum(price.shares.values()) == pytest.approx(1.0)
+    assert price.shares["euler"] > 0.75
+    assert price.kinetic_seconds > price.hierarchy_seconds
+    assert price.saving > 1.0 and price.steps == 40
+    assert price.final_counts[-1] >= max(11, price.counts[-1])    # the swept cells at the end
+    (euler_fixed, euler_cell), (full_fixed, full_cell) = price.level_seconds
+    assert price.hierarchy_step_seconds == pytest.approx(
+        price.transport_seconds + price.measure_seconds + price.choose_seconds
+        + euler_fixed + euler_cell * price.counts[0] + full_fixed + full_cell * price.counts[1])
+    assert price.kinetic_step_seconds == pytest.approx(
+        price.transport_seconds + full_fixed + 40 * full_cell)
+    text = price.report()
+    assert "t = 0" in text and "cheaper" in text and "all-kinetic price" in text
+
+
+def test_price_formula():
+    """T_kin = tau_x + a_K + b_K C; T_hier = tau_x + sum over the levels with cells of
+    (a_l + b_l n_l) + m + c / interval; a level without cells costs nothing."""
+    run = _sod_run(20, {"levels": ["euler", "esbgk", "boltzmann"], "interval": 4})
+    price = HierarchyPrice(run, run, (15, 0, 5), 0.002, ((0.01, 0.001), (0.05, 0.002),
+                                                          (0.02, 0.005)), 0.004, 0.008, 8, 5)
+    assert price.kinetic_step_seconds == pytest.approx(0.002 + 0.02 + 20 * 0.005)
+    assert price.hierarchy_step_seconds == pytest.approx(
+        0.002 + (0.01 + 15 * 0.001) + (0.02 + 5 * 0.005) + 0.004 + 0.008 / 4)
+    assert price.steps == 20 and price.saving == pytest.approx(0.122 / 0.078)
+    assert price.shares == {"euler": 0.75, "esbgk": 0.0, "boltzmann": 0.25}
+
+
+def test_cells_swept_by_the_euler_waves_are_priced_at_the_full_level():
+    """The Sod tube's Euler waves (gamma = 2) span [0.5 - 1.414 t, 0.5 + 1.957 t]: at
+    t = 0.05 cells 17 to 23 of 40, 15 to 25 with the buffer of 2; a periodic interval adds
+    the waves of its ends, [-1.957 t, 1.414 t]: cells 36 to 2, 34 to 4 with the buffer."""
+    hierarchy = {"levels": ["euler", "boltzmann"], "realizability": [0.05], "distance": [0.05]}
+    run = _sod_run(40, hierarchy)
+    assert list(numpy.flatnonzero(advise_module._swept_levels(run, numpy.zeros(40, int)))) == (
+        list(range(15, 26)))
+    data = run.to_dict()
+    data["space"]["left"] = data["space"]["right"] = "periodic"
+    swept = advise_module._swept_levels(RunDescription.from_dict(data), numpy.zeros(40, int))
+    assert list(numpy.flatnonzero(swept)) == (list(range(0, 5)) + list(range(15, 26))
+                                              + list(range(34, 40)))
+    data["initial"] = MAXWELLIAN
+    assert advise_module._swept_levels(RunDescription.from_dict(data), swept) is None
+    price = HierarchyPrice(run, run, (35, 5), 0.002, ((0.01, 0.001), (0.02, 0.005)), 0.004,
+                           0.0, 8, 5, (29, 11))
+    assert price.estimated_seconds == pytest.approx(
+        price.steps * 0.5 * (price.hierarchy_step_seconds + 0.002 + 0.004
+                             + 0.01 + 29 * 0.001 + 0.02 + 11 * 0.005))
+
+
+def test_space_run_without_hierarchy_is_told_what_the_default_one_would_save(capsys):
+    """A run description without a hierarchy (and without the conservative correction) is
+    priced with the default one, and the report gives the TOML to add, which gives that
+    hierarchy; --out applies to scenes only."""
+    data = _sod_run().to_dict()
+    data.pop("conservative")
+    data["integrator"] = {"name": "rk4"}
+    data["knudsen"] = 1.0
+    price = price_hierarchy(RunDescription.from_dict(data), repeats=1)
+    assert not price.given and price.hierarchy == Hierarchy()
+    fragment = tomllib.loads(price.fragment())
+    assert fragment["conservative"] is True
+    assert Hierarchy(**fragment["space"]["hierarchy"]) == Hierarchy()
+    assert "add:" in price.report() and "[space.hierarchy]" in price.report()
+
+
+def test_command_line_prices_a_space_run_description(tmp_path, capsys):
+    path = tmp_path / "sod.toml"
+    path.write_text(_sod_run(hierarchy={}).to_toml())
+    assert main(["advise", str(path)]) == 0
+    text = capsys.readouterr().out
+    assert "levels chosen from f0 (t = 0)" in text and "all-kinetic" in text
+    assert main(["advise", str(path), "--out", str(tmp_path / "x.toml")]) == 2
+    error = capsys.readouterr().err
+    assert "'--out'" in error and f"'{path}' is a run description" in error
+    assert not (tmp_path / "x.toml").exists()
+    homogeneous = tmp_path / "homogeneous.toml"
+    data = _sod_run().to_dict()
+    del data["space"], data["conservative"]
+    data.update(initial=MAXWELLIAN, integrator="rk4")
+    homogeneous.write_text(RunDescription.from_dict(data).to_toml())
+    assert main(["advise", str(homogeneous)]) == 2
+    assert "parameter 'space'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("space, parameter", [
+    ({"cells": 0}, "parameter 'cells' = 0"),
+    ({"cells": 3, "left": "specular", "right": "specular"}, "'space.cells' = 3.*stencil"),
+    ({"cellz": 20}, "parameter 'cellz'.*did you mean 'cells'"),
+    ({"cells": 20, "length": -1.0}, "parameter 'length'"),
+    ({"cells": 20, "left": "periodic", "right": "specular"}, "'space.right' = 'specular'"),
+    ({"cells": 20, "left": "specullar", "right": "specular"}, "'specullar'"),
+    ({"cells": 20, "collisions": False}, "'space.collisions'"),
+    ({"cells": 20, "hierarchy": {"levels": ["euler"]}}, "'hierarchy.levels'"),
+    ({"cells": 20, "hierarchy": {"hysteresis": 2.0}}, "'hysteresis' = 2.0"),
+    (20, "parameter 'space' = 20"),
+])
+def test_bad_space_scenes_are_refused_by_name(space, parameter):
+    with pytest.raises((ValueError, TypeError), match=parameter):
+        Scene.from_dict({**SPACE_SCENE, "space": space})
+
+
+def test_initial_data_in_x_needs_a_space_table():
+    scene = {key: value for key, value in SPACE_SCENE.items() if key != "space"}
+    with pytest.raises(ValueError, match="parameter 'initial' = 'riemann'.*space scenes only"):
+        Scene.from_dict(scene)
+
+
+@pytest.mark.parametrize("argument, keywords, parameter", [
+    ("not a description", {}, "parameter 'description'"),
+    (None, {"repeats": 0}, "parameter 'repeats' = 0"),
+])
+def test_price_refuses_bad_arguments_by_name(argument, keywords, parameter):
+    with pytest.raises((ValueError, TypeError), match=parameter):
+        price_hierarchy(_sod_run() if argument is None else argument, **keywords)

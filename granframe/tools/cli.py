@@ -30,7 +30,9 @@ sweep SWEEP.toml --out STORE [--scheduler ADDRESS] [--workers N] [--overwrite]
     running it again skips ended runs and resumes cut ones. Exit status 3 when a run failed.
 advise SCENE.toml [--out DESCRIPTION.toml] [--json]
     Propose the cheapest configuration predicted to meet the scene's tolerance
-    (docs/advise.md); --out writes it as a run description for ``granframe run``.
+    (docs/advise.md); --out writes it as a run description for ``granframe run``. A scene
+    with a [space] table, or a space run description, also gets the price of a hierarchy
+    of collision models against the all-kinetic run.
 limits SOURCE [--quick] [--set KEY=VALUE ...] [--json] [--no-cost]
     The explicit time-step limit of each run of a description, and the rates behind it,
     without building the operator; then the run's estimated cost (its operator built and
@@ -737,25 +739,46 @@ def _limit_table(head, d, limit, adaptive, above, refused) -> None:
 
 
 def _advise(args) -> int:
+    """``granframe advise``: a scene (no ``grid``) gets the advice of
+    :func:`~granframe.tools.advise.advise`; a run description with a ``[space]`` table (it
+    has a ``grid``) is priced as it is, all-kinetic and with a hierarchy of collision models
+    (:func:`~granframe.tools.advise.price_hierarchy`)."""
     import tomllib
 
-    from granframe.tools.advise import Scene, advise
+    from granframe.run.description import RunDescription
+    from granframe.tools.advise import Scene, advise, price_hierarchy
 
     path = pathlib.Path(args.scene)
     if not path.is_file():
         raise ValueError(f"advise: parameter 'scene' = '{args.scene}' is invalid; no such file")
     try:
-        scene = Scene.from_dict(tomllib.loads(_read_text(path, "advise", "scene")))
+        data = tomllib.loads(_read_text(path, "advise", "scene"))
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"advise: the TOML text of '{path}' is invalid: {exc}") from None
-    advice = advise(scene)
+    if "grid" in data:
+        if args.out:
+            raise ValueError(f"advise: parameter '--out' = '{args.out}' is invalid; it writes "
+                             f"the description advised for a scene, and '{path}' is a run "
+                             "description (it has a grid), priced as it is: add the "
+                             "fragment the report shows to it instead")
+        price = price_hierarchy(RunDescription.from_dict(data))
+        if args.json:
+            json.dump({"schema": "granframe.hierarchy_price/1", **price.to_dict()}, sys.stdout,
+                      indent=2)
+            sys.stdout.write("\n")
+        else:
+            print(price.report())
+        return 0
+    advice = advise(Scene.from_dict(data))
     if args.json:
         json.dump({"schema": "granframe.advice/1", "closed_form": advice.closed_form,
                    "errors": advice.errors, "predicted_seconds": advice.predicted_seconds,
                    "evaluation_seconds": advice.evaluation_seconds,
                    "evaluations": advice.evaluations, "reasons": list(advice.reasons),
                    "description": None if advice.description is None
-                   else advice.description.to_dict()}, sys.stdout, indent=2)
+                   else advice.description.to_dict(),
+                   "space": None if advice.space is None else advice.space.to_dict()},
+                  sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
         print(advice.report())
@@ -890,10 +913,13 @@ failed.""",
   granframe sweep sweep.toml --out runs/sweep.zarr --overwrite"""),
     "advise": ("""\
 Propose the cheapest configuration (grid, quadratures, time step) predicted to meet a
-scene's tolerance on its temperature or distribution (docs/advise.md).""",
+scene's tolerance on its temperature or distribution (docs/advise.md). A scene with a
+[space] table (cells, walls), or a space run description, also gets the price of a
+hierarchy of collision models chosen cell by cell against the all-kinetic run.""",
                """\
   granframe advise scene.toml
-  granframe advise scene.toml --out desc.toml && granframe run desc.toml --out runs/a.zarr"""),
+  granframe advise scene.toml --out desc.toml && granframe run desc.toml --out runs/a.zarr
+  granframe advise space-run.toml"""),
     "limits": ("""\
 Report the explicit time-step limit of each run of a description (a .toml file or a study
 module) and the spectral radii behind it (heat bath, collisions, energy dissipation, and the
@@ -1012,7 +1038,9 @@ def build_parser() -> argparse.ArgumentParser:
     advise = commands.add_parser("advise", help="the cheapest configuration for a scene and "
                                  "tolerance")
     advise.add_argument("scene", metavar="SCENE.toml",
-                        help="physics, quantity (temperature or distribution) and tolerance")
+                        help="physics, quantity (temperature or distribution) and tolerance, "
+                             "with a [space] table for a space scene; or a space run "
+                             "description, to price a hierarchy")
     advise.add_argument("--out", metavar="DESCRIPTION.toml",
                         help="write the proposed run description")
     advise.add_argument("--json", action="store_true", help="machine-readable output")
