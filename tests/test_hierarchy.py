@@ -135,18 +135,24 @@ def test_levels_rise_at_the_threshold_fall_below_the_hysteresis_and_spread_by_th
     left = choose_levels(rise, kappa * 0.2, zero, numpy.ones(9, bool), (0.01, 0.05),
                          (0.01, 0.05), 0.5, 0, False)
     assert left[4] == 0
-    # the distance counts only where f is not held at equilibrium (level >= 1)
+    # the distance lifts a cell at any level (a fluid level's cells have at least the
+    # distance of the uniform state the full level tends to)
     delta = numpy.full(9, 0.2)
-    assert choose_levels(start, zero, delta, numpy.ones(9, bool), (0.01, 0.05), (0.01, 0.05),
-                         0.5, 0, False).max() == 0
-    assert (choose_levels(numpy.ones(9, int), zero, delta, numpy.ones(9, bool), (0.01, 0.05),
+    assert (choose_levels(start, zero, delta, numpy.ones(9, bool), (0.01, 0.05),
                           (0.01, 0.05), 0.5, 0, False) == 2).all()
+    assert (choose_levels(start, zero, delta / 10, numpy.ones(9, bool), (0.01, 0.05),
+                          (0.01, 0.05), 0.5, 0, False) == 1).all()
     # no equilibrium: the top level; across the ends of a periodic interval
     realizable = numpy.ones(9, bool)
     realizable[0] = False
     wrapped = choose_levels(start, zero, zero, realizable, (0.01, 0.05), (0.01, 0.05), 0.5, 1,
                             True)
     assert wrapped.tolist() == [2, 2, 0, 0, 0, 0, 0, 0, 2]
+    # a reach per cell: the kinetic cell 4 reaches 3 cells, the level-1 cell 0 none
+    kappa = numpy.array([0.02, 0.0, 0.0, 0.0, 0.1, 0.0, 0.0, 0.0, 0.0])
+    reach = numpy.array([0, 0, 0, 0, 3, 0, 0, 0, 0])
+    assert choose_levels(start, kappa, zero, numpy.ones(9, bool), (0.01, 0.05), (0.01, 0.05),
+                         0.5, reach, False).tolist() == [1, 2, 2, 2, 2, 2, 2, 2, 0]
 
 
 # -- runs ---------------------------------------------------------------------------------------
@@ -221,7 +227,7 @@ def test_collision_steps_of_mixed_levels_conserve_mass_and_momentum_and_cool():
     mass, energy = ds.mass.values, ds.kinetic_energy.values
     assert numpy.abs(mass / mass[0] - 1).max() < 1e-13
     assert (numpy.diff(energy) < 0).all()
-    assert ((numpy.array(seen) > 0).sum(axis=1) >= 2).mean() > 0.5   # levels side by side
+    assert ((numpy.array(seen) > 0).sum(axis=1) >= 2).sum() >= 5     # levels side by side
 
 
 def test_an_interrupted_hybrid_run_resumes_bitwise(tmp_path, monkeypatch):
@@ -281,6 +287,7 @@ def test_the_hierarchy_builds_every_registered_level_through_the_registry():
     ({"hysteresis": 1.5}, "hysteresis", "(0, 1]"),
     ({"buffer": -1}, "buffer", ""),
     ({"interval": 0}, "interval", ""),
+    ({"free_paths": -1.0}, "free_paths", "[0, 100]"),
     ({"thresholds": 0.1}, "thresholds", ""),
 ])
 def test_bad_hierarchies_are_refused_naming_the_parameter(hierarchy, named, says):

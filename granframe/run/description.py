@@ -358,7 +358,11 @@ class Hierarchy:
         In (0, 1]: a cell leaves a level downwards only when its indicators are below this
         share of the thresholds.
     buffer : int
-        Cells (0 to 64) each level is widened by on each side.
+        Cells (0 to 64) each level is widened by on each side, at least.
+    free_paths : float
+        Mean free paths eps sqrt(2T)/nu_s (0 to 100) each level is widened by on each side
+        when that is more than ``buffer`` cells: the particles a kinetic cell sends out fly
+        about that far before they collide.
     interval : int
         Steps between choices of the levels (1 to 1000).
     """
@@ -371,6 +375,8 @@ class Hierarchy:
                                     validator=check.real(0.0, 1.0, lower_open=True))
     buffer: int = attrs.field(default=2, converter=check.to_int,
                               validator=check.integer(0, 64))
+    free_paths: float = attrs.field(default=1.0, converter=check.to_float,
+                                    validator=check.real(0.0, 100.0))
     interval: int = attrs.field(default=1, converter=check.to_int,
                                 validator=check.integer(1, 1000))
 
@@ -413,7 +419,7 @@ class Hierarchy:
         return {"levels": [c.to_dict("space.hierarchy.levels") for c in self.levels],
                 "realizability": list(self.realizability), "distance": list(self.distance),
                 "hysteresis": self.hysteresis, "buffer": self.buffer,
-                "interval": self.interval}
+                "free_paths": self.free_paths, "interval": self.interval}
 
 
 @attrs.frozen(kw_only=True)

@@ -43,8 +43,13 @@ Which level a cell takes is decided every ``interval`` steps from two indicators
 
 A cell at level l rises to level k > l when an indicator exceeds the threshold of k; it
 falls below k only when both are under ``hysteresis`` times that threshold, and every
-level is widened by ``buffer`` cells on each side, so that a wave never reaches a cell
-still at a lower level and cells do not flicker.
+cell lifts its neighbours to its level as far as ``buffer`` cells or ``free_paths`` mean
+free paths eps sqrt(2T)/nu_s on each side, whichever is larger, so that a wave, or the
+particles that fly ahead of it, never reach a cell still at a lower level, and cells do not
+flicker. The fluid levels hold f at a Maxwellian or relax it to a Gaussian, so their
+distance after the step says nothing of what they leave out: for an inelastic gas or
+under a heat bath their cells take at least the distance delta_inf of the uniform state
+the full level tends to (:func:`equilibrium_distance`).
 """
 
 from __future__ import annotations
@@ -522,30 +527,63 @@ def realizability(density, velocity, temperature, dx: float, periodic: bool, knu
 
 
 def choose_levels(previous, kappa, delta, realizable, thresholds, distances,
-                  hysteresis: float, buffer: int, periodic: bool):
+                  hysteresis: float, reach, periodic: bool):
     """The level of every cell from its level ``previous`` and its indicators (see the
     module notes): for each level k >= 1, the cell is at least at k when kappa exceeds
-    ``thresholds[k-1]`` or, in a cell whose f is not held at equilibrium (level >= 1),
-    delta exceeds ``distances[k-1]``, each threshold scaled by ``hysteresis`` for a cell
-    already at k or above; cells without an equilibrium (``realizable`` false) take the
-    top level; then every level is widened by ``buffer`` cells each side (across the ends
-    of a periodic interval)."""
+    ``thresholds[k-1]`` or delta exceeds ``distances[k-1]``, each threshold scaled by
+    ``hysteresis`` for a cell already at k or above; cells without an equilibrium
+    (``realizable`` false) take the top level; then every cell lifts the cells within its
+    ``reach`` (cells each side: an integer, or one per cell; across the ends of a
+    periodic interval) to at least its own level."""
     top = len(thresholds)
     level = numpy.zeros(len(previous), dtype=numpy.int64)
     for k in range(1, top + 1):
         scale = numpy.where(previous >= k, hysteresis, 1.0)
-        need = ((kappa > thresholds[k - 1] * scale)
-                | ((previous >= 1) & (delta > distances[k - 1] * scale)))
+        need = (kappa > thresholds[k - 1] * scale) | (delta > distances[k - 1] * scale)
         level = numpy.where(need, k, level)
     level = numpy.where(realizable, level, top)
-    for _ in range(buffer):
+    cells = len(level)
+    reach = numpy.broadcast_to(numpy.asarray(reach, dtype=numpy.int64), (cells,))
+    widened = level.copy()
+    for j in numpy.flatnonzero((level > 0) & (reach > 0)):
+        r = int(min(reach[j], cells))
         if periodic:
-            left, right = numpy.roll(level, 1), numpy.roll(level, -1)
+            near = numpy.arange(j - r, j + r + 1) % cells
         else:
-            left = numpy.concatenate([level[:1], level[:-1]])
-            right = numpy.concatenate([level[1:], level[-1:]])
-        level = numpy.maximum(level, numpy.maximum(left, right))
-    return level
+            near = numpy.arange(max(j - r, 0), min(j + r, cells - 1) + 1)
+        widened[near] = numpy.maximum(widened[near], level[j])
+    return widened
+
+
+def equilibrium_distance(context, time_step: float, steps: int = 12) -> float:
+    r"""delta_inf: the relative L1 distance from its Maxwellian of the uniform state the
+    full level tends to, for an inelastic gas (the homogeneous cooling state) or under a
+    heat bath (the heated state); the Maxwellian closure of the fluid levels leaves it out.
+
+    One cell, the Maxwellian of the run's mean initial temperature, advanced by the full
+    level (the run's integrator and operator) for ``steps`` steps of
+    min(dt, eps / nu) (nu the mean loss frequency): about ``steps`` collision times, in
+    which the shape relaxes to its self-similar one while the temperature falls by
+    exp(-steps zeta/nu) only. Returns the distance after the last step. Measured once
+    per run, on the run's backend."""
+    equation, integrator = context.equation, context.integrator
+    grid, backend = equation.operator.grid, equation.operator.backend
+    xp = backend.xp
+    temperature = float(context.temperature)
+    cell = backend.asarray(numpy.asarray(grid.maxwellian(1.0, None, temperature))[None])
+    frequency = float(to_host(equation.frequencies(
+        xp.asarray([1.0]), xp.asarray([temperature]),
+        xp.asarray([0.5 * grid.dimension * temperature]))).reshape(-1)[0])
+    step = min(float(time_step), equation.knudsen / frequency)
+    parts = FluidParts(equation)
+    for k in range(steps):
+        before = equation.conserved(cell) if equation.invariants else None
+        cell = equation.restore(integrator.step(equation, k * step, cell, step), before)
+    now, _, ok = parts.equilibria(cell, None)
+    rho = parts.moments.primitives(cell, node="halves")[0]
+    distance = xp.abs(cell - now).sum(axis=tuple(range(1, grid.dimension + 1)))
+    value = float(to_host(distance * grid.cell_volume / rho).reshape(-1)[0])
+    return value if bool(to_host(ok).reshape(-1)[0]) else 2.0
 
 
 class HybridCollisions:
@@ -571,14 +609,19 @@ class HybridCollisions:
     communicator : Communicator
     """
 
-    def __init__(self, settings, models, equation, cells: int, owned: slice, dx: float,
-                 periodic: bool, communicator, shear_coefficient: float):
+    def __init__(self, settings, models, context, cells: int, owned: slice, dx: float,
+                 periodic: bool, communicator, time_step: float):
+        equation = context.equation
         self.settings, self.models, self.equation = settings, models, equation
         self.owned, self.dx, self.periodic = owned, float(dx), periodic
         self.communicator = communicator
         self.parts = FluidParts(equation)
         self.kernel = equation.operator.kernel
-        self.shear_coefficient = shear_coefficient
+        self.shear_coefficient = context.shear_coefficient
+        #: delta_inf, the distance from its Maxwellian of the uniform state the full level
+        #: tends to (:func:`equilibrium_distance`): 0 for an elastic gas without heat bath
+        self.floor = (0.0 if self.parts.cooling.elastic and not self.parts.heat_bath
+                      else equilibrium_distance(context, time_step))
         #: the level of every cell in the last step (all at the top before the first)
         self.levels = numpy.full(cells, len(models) - 1, dtype=numpy.int64)
         #: collision steps taken (decisions fall on multiples of the interval)
@@ -624,7 +667,16 @@ class HybridCollisions:
         kappa = realizability(safe_rho, velocity, safe_t, self.dx, self.periodic,
                               self.equation.knudsen, rate)
         self.kappa = numpy.where(valid, kappa, numpy.inf)
-        self.delta = numpy.where(valid, rows[:, 2 + d], numpy.nan)
+        #: the cells each cell's level reaches on each side: the buffer, or the distance
+        #: free_paths x eps sqrt(2T)/nu_s that particles of the thermal speed fly between
+        #: collisions, whichever is larger
+        path = self.settings.free_paths * self.equation.knudsen * numpy.sqrt(2 * safe_t) / rate
+        self.reach = numpy.maximum(self.settings.buffer, numpy.ceil(path / self.dx - 1e-9)
+                                   ).astype(numpy.int64)
+        fluid = self.levels < len(self.models) - 1
+        self.delta = numpy.where(valid, numpy.where(fluid, numpy.maximum(rows[:, 2 + d],
+                                                                          self.floor),
+                                                    rows[:, 2 + d]), numpy.nan)
 
     def choose(self) -> None:
         """The levels of all cells from :attr:`kappa` and :attr:`delta`
@@ -633,7 +685,7 @@ class HybridCollisions:
         realizable = numpy.isfinite(self.kappa) & numpy.isfinite(self.delta)
         self.levels = choose_levels(self.levels, numpy.where(realizable, self.kappa, 0.0),
                                     numpy.where(realizable, self.delta, 0.0), realizable,
-                                    s.realizability, s.distance, s.hysteresis, s.buffer,
+                                    s.realizability, s.distance, s.hysteresis, self.reach,
                                     self.periodic)
 
     def records(self) -> dict:

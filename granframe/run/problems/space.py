@@ -172,9 +172,9 @@ class SpaceProblem(Problem):
         registries = default_registries()
         models = [registries.create("collision_models", level.name, context=context,
                                     **level.params) for level in settings.levels]
-        return HybridCollisions(settings, models, self.equation, self.description.space.cells,
+        return HybridCollisions(settings, models, context, self.description.space.cells,
                                 self.domain.owned, self.domain.dx, self.left.periodic,
-                                self.communicator, context.shear_coefficient)
+                                self.communicator, self.description.time_step)
 
     def _initial(self, check: bool):
         """f0 as cell averages (cells, *grid.shape), checked and projected cell by cell.
