@@ -257,7 +257,8 @@ def test_an_interrupted_hybrid_run_resumes_bitwise(tmp_path, monkeypatch):
     assert RunStore.open(path).progress["resumes"] == [commits[-1]]
     levels = reference.level.values
     assert len(numpy.unique(levels[commits[-1]:])) >= 2     # the levels are mixed there
-    for name in ("f", "density", "temperature", "level", "realizability", "distance"):
+    for name in ("f", "density", "temperature", "level", "realizability", "distance",
+                 "reach"):
         numpy.testing.assert_array_equal(resumed[name].values, reference[name].values,
                                          err_msg=name)
 

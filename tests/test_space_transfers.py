@@ -121,7 +121,7 @@ def test_a_hybrid_step_adds_the_copies_of_the_indicators_and_the_level_indices()
     count), and one host->device copy of the cell indices per level in use."""
     baseline, _, _ = _counted_steps(HIERARCHY.split("[space.hierarchy]")[0])
     counts, used, problem = _counted_steps(HIERARCHY)
-    assert max(used) == 3, used
+    assert max(used) >= 2, used
     fluid = len(problem.hierarchy.models) - 1
     assert counts["to_host"] <= baseline["to_host"] + STEPS * (1 + fluid), counts
     assert counts["to_device"] <= baseline["to_device"] + sum(used), counts

@@ -205,8 +205,8 @@ def label_levels(dataset: xarray.Dataset, levels: list) -> None:
     Parameters
     ----------
     dataset : xarray.Dataset
-        A space run's dataset with the arrays ``level``, ``realizability`` and
-        ``distance``; their attributes are set in place.
+        A space run's dataset with the arrays ``level``, ``realizability``, ``distance``
+        and ``reach``; their attributes are set in place.
     levels : list of dict
         The hierarchy's levels as the stored description has them
         (``description["space"]["hierarchy"]["levels"]``), each a table with a ``name``,

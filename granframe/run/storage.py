@@ -130,6 +130,8 @@ LEVEL_LONG_NAMES = {
     "distance": "relative L1 distance delta = sum |f - M[f]| h^d / rho of each cell from its "
                 "local Maxwellian after the collision step (NaN before the first step and "
                 "where the cell has no equilibrium)",
+    "reach": "cells on each side that the level of each cell reaches in the next choice: "
+             "max(buffer, free_paths x eps sqrt(2T) / nu_s / dx)",
 }
 
 #: the long names of a space run's arrays where they differ from :data:`_LONG_NAMES`: the

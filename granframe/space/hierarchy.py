@@ -626,8 +626,9 @@ class HybridCollisions:
         self.levels = numpy.full(cells, len(models) - 1, dtype=numpy.int64)
         #: collision steps taken (decisions fall on multiples of the interval)
         self.steps = 0
-        #: the indicators of all cells after the last collision step (None before)
-        self.kappa = self.delta = None
+        #: the indicators of all cells after the last collision step and the cells each
+        #: one's level reaches (None before)
+        self.kappa = self.delta = self.reach = None
         #: wall seconds spent choosing the levels, and per level advancing cells
         self.choice_seconds = 0.0
 
@@ -689,24 +690,30 @@ class HybridCollisions:
                                     self.periodic)
 
     def records(self) -> dict:
-        """The level and the indicators of every owned cell after the last step: what the
-        store keeps (``level``, ``realizability``, ``distance``) and a resumed run takes up
-        (:meth:`take_up`); NaN indicators before the first step."""
+        """The level of every owned cell in the last step and its indicators and reach after
+        it: what the store keeps (``level``, ``realizability``, ``distance``, ``reach``)
+        and a resumed run takes up (:meth:`take_up`); NaN indicators and the buffer as
+        reach before the first step."""
         owned = self.owned
-        empty = numpy.full(owned.stop - owned.start, numpy.nan)
-        return {"level": self.levels[owned].copy(),
-                "realizability": empty if self.kappa is None else self.kappa[owned].copy(),
-                "distance": empty if self.delta is None else self.delta[owned].copy()}
+        count = owned.stop - owned.start
+        if self.kappa is None:
+            return {"level": self.levels[owned].copy(),
+                    "realizability": numpy.full(count, numpy.nan),
+                    "distance": numpy.full(count, numpy.nan),
+                    "reach": numpy.full(count, self.settings.buffer, dtype=numpy.int64)}
+        return {"level": self.levels[owned].copy(), "realizability": self.kappa[owned].copy(),
+                "distance": self.delta[owned].copy(), "reach": self.reach[owned].copy()}
 
-    def take_up(self, steps: int, levels, kappa, delta) -> None:
-        """Continue after ``steps`` steps with the recorded levels and indicators of all
-        cells (NaN indicators: none measured yet)."""
+    def take_up(self, steps: int, levels, kappa, delta, reach) -> None:
+        """Continue after ``steps`` steps with the recorded levels, indicators and reach of
+        all cells (NaN indicators: none measured yet)."""
         self.steps = int(steps)
         self.levels = numpy.asarray(levels, dtype=numpy.int64)
         kappa = numpy.asarray(kappa, dtype=float)
         measured = not numpy.isnan(kappa).all()
         self.kappa = kappa if measured else None
         self.delta = numpy.asarray(delta, dtype=float) if measured else None
+        self.reach = numpy.asarray(reach, dtype=numpy.int64) if measured else None
 
     def advance(self, f, t: float, dt: float):
         """f (owned cells, *grid.shape) after the collision step: on a multiple of the

@@ -49,9 +49,10 @@ from granframe.validators import reject
 WALL_RECORDS = ("wall_mass", "wall_energy", "wall_momentum")
 
 #: with a hierarchy of collision models, after every step for every cell: its level (the
-#: index in the hierarchy's levels) and the indicators that chose it, measured after the
-#: collision step (:class:`~granframe.space.hierarchy.HybridCollisions`)
-LEVEL_RECORDS = {"level": "i8", "realizability": "f8", "distance": "f8"}
+#: index in the hierarchy's levels), the indicators that choose the next levels, measured
+#: after the collision step, and how many cells each side its level reaches
+#: (:class:`~granframe.space.hierarchy.HybridCollisions`)
+LEVEL_RECORDS = {"level": "i8", "realizability": "f8", "distance": "f8", "reach": "i8"}
 
 
 def space_layout(grid, domain: Domain, block: int, levels: bool = False) -> Layout:
