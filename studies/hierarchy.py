@@ -20,8 +20,10 @@ Scenes (2D velocities, Maxwell molecules, the fast operator, the conservative co
 - ``walls``: the granular gas between heated walls, e = 0.9, eps = 0.1, diffuse walls at
   T = 1, from the Maxwellian at T = 1, 40 cells, explicit SSP RK2, t = 2;
 - ``shock``: a gas (rho = 1, T = 1, u = -1.5, Mach 1.06) driven into the specular wall at
-  x = 0, e = 0.9, eps = 1e-2, N = 40, S = 5, 50 cells, t = 0.3: a reflected shock moving
-  into the inflow (and a rarefaction at the far wall);
+  x = 0, e = 0.97, eps = 1e-2, N = 40, S = 5, 50 cells, t = 0.3: a reflected shock moving
+  into the inflow (and a rarefaction at the far wall; with e = 0.9 the cooled, compressed
+  gas at the wall was narrower than the grid resolves and the all-kinetic run lost
+  positivity at t = 0.25);
 - ``shear``: the homogeneous cooling state with a shear mode u_2 = 0.2 sin(2 pi x),
   periodic, e = 0.97, eps = 1e-2, 40 cells, t = 0.5.
 
@@ -86,8 +88,8 @@ def shock(cells, hierarchy=None):
     final = 0.3
     state = {"density": 1.0, "temperature": 1.0, "velocity": -1.5}
     d = RunDescription(
-        title=f"gas driven into a wall, e = 0.9, eps = 1e-2, {cells} cells",
-        grid=SHOCK_GRID, kernel="maxwell", restitution={"name": "constant", "value": 0.9},
+        title=f"gas driven into a wall, e = 0.97, eps = 1e-2, {cells} cells",
+        grid=SHOCK_GRID, kernel="maxwell", restitution={"name": "constant", "value": 0.97},
         initial={"name": "riemann", "left": state, "right": state},
         operator={"name": "fast_spectral"}, integrator="penalised_ars222", knudsen=1e-2,
         conservative=True, time_step=SPACE.cfl_time_step(cells, final, SHOCK_GRID),
