@@ -90,7 +90,7 @@ def test_the_counting_backend_counts_what_cupy_would_copy():
 HIERARCHY = ('conservative = true\n' + TOML).replace(
     'right = {name = "diffuse", temperature = 0.9}',
     'right = {name = "diffuse", temperature = 0.9}\n[space.hierarchy]\n'
-    'realizability = [0.002, 0.01]\ndistance = [0.05, 0.1]')
+    'realizability = [0.002, 0.01]\ndistance = [0.05, 0.1]\nfree_paths = 0.0')
 
 
 def _counted_steps(toml):

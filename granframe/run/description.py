@@ -375,7 +375,7 @@ class Hierarchy:
                                     validator=check.real(0.0, 1.0, lower_open=True))
     buffer: int = attrs.field(default=2, converter=check.to_int,
                               validator=check.integer(0, 64))
-    free_paths: float = attrs.field(default=1.0, converter=check.to_float,
+    free_paths: float = attrs.field(default=2.0, converter=check.to_float,
                                     validator=check.real(0.0, 100.0))
     interval: int = attrs.field(default=1, converter=check.to_int,
                                 validator=check.integer(1, 1000))
