@@ -230,8 +230,8 @@ class FluidParts:
         r"""(M, M', ok) for f (cells, *grid.shape): the discrete Maxwellian of every cell's
         mass, momentum (node -L at -L, as Q conserves it) and second moment, the one of its
         mass, momentum and second moment after dt of cooling (and of the heat bath's
-        heating with ``heat``),
-        S' = S + rho d (T' - T), and where both exist."""
+        heating with ``heat``), S' = S + rho d (T' - T), and where both exist; with ``dt``
+        None, M twice (no cooling is integrated)."""
         xp, d = self.xp, self.grid.dimension
         rho, velocity, temperature, energy = self.moments.primitives(f, node="periodic")
         valid = xp.isfinite(rho) & (rho > 0) & xp.isfinite(temperature) & (temperature > 0)
@@ -239,14 +239,13 @@ class FluidParts:
         safe_t = xp.where(valid, temperature, 1.0)
         momentum = safe_rho[:, None] * xp.where(valid[:, None], velocity, 0.0)
         second = xp.where(valid, 2.0 * energy, d * safe_t)
-        later = self.cooling.cooled(safe_rho, safe_t, xp.where(valid & (energy > 0), energy,
-                                                                 1.0),
-                                    0.0 if dt is None else dt, self.knudsen,
-                                    self.heat_bath if heat else 0.0, xp)
         now, ok_now = discrete_maxwellians(self.grid, safe_rho, momentum, second, xp,
                                            self.moments.points)
         if dt is None:
             return now, now, ok_now & valid
+        later = self.cooling.cooled(safe_rho, safe_t, xp.where(valid & (energy > 0), energy,
+                                                                 1.0),
+                                    dt, self.knudsen, self.heat_bath if heat else 0.0, xp)
         cooled = second + safe_rho * d * (later - safe_t)
         after, ok_after = discrete_maxwellians(self.grid, safe_rho, momentum, cooled, xp,
                                                self.moments.points)
