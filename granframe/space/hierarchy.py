@@ -215,6 +215,16 @@ def relaxation_rate(operator, mode: str, temperature: float, density: float = 1.
     return -change / (2.0 * float(numpy.sum(perturbation * weight)))
 
 
+def scaled_rates(coefficient: float, kernel, density, temperature, energy, xp=numpy):
+    """nu = c rho T^(lambda/2) E^gamma of every cell (arrays in ``xp``; T where it is not
+    positive taken as 1): how a relaxation rate measured at one state
+    (:func:`relaxation_rate`) scales with the cell's state for the kernel
+    C |g|^lambda b E^gamma."""
+    factor = kernel.energy_factors(energy) if kernel.energy_exponent else 1.0
+    return (coefficient * density * factor
+            * xp.where(temperature > 0, temperature, 1.0) ** (kernel.speed_exponent / 2))
+
+
 class FluidParts:
     """What the fluid levels share: the moments of a batch of cells, their discrete
     Maxwellians and the cooled temperature, all on the backend."""
@@ -291,11 +301,9 @@ class RelaxationEquation(CellCollisions):
         self.coefficient = float(coefficient)
 
     def rates(self, rho, temperature, energy):
-        """nu_s of every cell (arrays on the backend)."""
-        kernel, xp = self.operator.kernel, self.operator.backend.xp
-        factor = kernel.energy_factors(energy) if kernel.energy_exponent else 1.0
-        return (self.coefficient * rho * factor
-                * xp.where(temperature > 0, temperature, 1.0) ** (kernel.speed_exponent / 2))
+        """nu_s of every cell (arrays on the backend, :func:`scaled_rates`)."""
+        return scaled_rates(self.coefficient, self.operator.kernel, rho, temperature, energy,
+                            self.operator.backend.xp)
 
     def nonlinear(self, t, f):
         grid, xp = self.operator.grid, self.operator.backend.xp
@@ -661,9 +669,7 @@ class HybridCollisions:
         safe_rho = numpy.where(valid, rho, 1.0)
         safe_t = numpy.where(valid, temperature, 1.0)
         energy = 0.5 * safe_rho * ((velocity ** 2).sum(axis=1) + d * safe_t)
-        factor = self.kernel.energy_factors(energy) if self.kernel.energy_exponent else 1.0
-        rate = (self.shear_coefficient * safe_rho * factor
-                * safe_t ** (self.kernel.speed_exponent / 2))
+        rate = scaled_rates(self.shear_coefficient, self.kernel, safe_rho, safe_t, energy)
         kappa = realizability(safe_rho, velocity, safe_t, self.dx, self.periodic,
                               self.equation.knudsen, rate)
         self.kappa = numpy.where(valid, kappa, numpy.inf)
