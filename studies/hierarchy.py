@@ -25,16 +25,22 @@ Scenes (2D velocities, Maxwell molecules, the fast operator, the conservative co
   gas at the wall was narrower than the grid resolves and the all-kinetic run lost
   positivity at t = 0.25);
 - ``shear``: the homogeneous cooling state with a shear mode u_2 = 0.2 sin(2 pi x),
-  periodic, e = 0.97, eps = 1e-2, 40 cells, t = 0.5.
+  periodic, e = 0.97, eps = 1e-2, 40 cells, t = 0.5;
+- ``sod3d`` (only when named: about an hour here): the Sod tube at eps = 1e-3 with 3D
+  velocities (N = 24, S = 3.5), 40 cells, t = 0.1.
 
 ``--timing3d`` adds the time per step of the Sod tube at eps = 1e-3 with 3D velocities
 (N = 24, S = 3.5, 40 cells): the hybrid run to t = 0.1 and the mean of the all-kinetic
 run's first steps (its cost per step does not depend on the solution), with the shares,
 and the cost per cell of the transport and of each level. ``--refinement`` adds the mean
 shares of the levels of the 2D Sod tube at eps = 1e-3 on 50, 100 and 200 cells and the 3D
-speed-up they would give with those costs.
+speed-up they would give with those costs. ``--thresholds 0.05,0.03`` adds, for every
+scene, hybrid runs with the middle level's realizability threshold set to each value
+(``calibration.png``: the ratio against the share of the full level). ``--model-error``
+runs the shear scene with every cell at the ES-BGK level, inelastic and elastic.
 
-    python studies/hierarchy.py --out DIR [--scenes sod_1e-3,walls] [--timing3d] [--refinement]
+    python studies/hierarchy.py --out DIR [--scenes sod_1e-3,walls] [--timing3d]
+        [--refinement] [--thresholds 0.05,0.03] [--model-error]
 
 writes ``hierarchy.csv``, ``hierarchy.md``, ``levels_<scene>.png`` (the x-t map of the
 levels and their shares over time) there and prints the tables.
@@ -49,10 +55,11 @@ import time
 
 import numpy
 
+from granframe.tools.studykit import save_figure, write_csv
+import matplotlib.pyplot as plt  # noqa: E402  (after studykit chose the Agg backend)
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.tools import plotting
-from granframe.tools.studykit import save_figure, write_csv
 
 _spec = importlib.util.spec_from_file_location(
     "space_study", pathlib.Path(__file__).resolve().parent / "space.py")
@@ -61,6 +68,7 @@ _spec.loader.exec_module(SPACE)
 
 SOD_GRID = SPACE.SOD_GRID
 SHOCK_GRID = {"dimension": 2, "n_modes": 40, "support_radius": 5.0}
+GRID_3D = {"dimension": 3, "n_modes": 24, "support_radius": 3.5}
 
 
 def _with(description: RunDescription, hierarchy) -> RunDescription:
@@ -112,9 +120,16 @@ def shear(cells, hierarchy=None):
     return _with(d, hierarchy)
 
 
-#: name -> (description builder, cells, the velocity component compared)
+def sod3d(cells, hierarchy=None):
+    return sod(1e-3)(cells, hierarchy, grid=GRID_3D, final=0.1)
+
+
+#: name -> (description builder, cells, the velocity component compared); ``sod3d`` (3D
+#: velocities, about an hour on 2 cores) runs only when named
 SCENES = {"sod_1e-3": (sod(1e-3), 50, 0), "sod_1e-2": (sod(1e-2), 50, 0),
-          "walls": (walls, 40, 0), "shock": (shock, 50, 0), "shear": (shear, 40, 1)}
+          "walls": (walls, 40, 0), "shock": (shock, 50, 0), "shear": (shear, 40, 1),
+          "sod3d": (sod3d, 40, 0)}
+DEFAULT_SCENES = ("sod_1e-3", "sod_1e-2", "walls", "shock", "shear")
 FIELDS = ("rho", "u", "T")
 
 
@@ -137,7 +152,18 @@ def coarsened(fields: numpy.ndarray) -> numpy.ndarray:
     return 0.5 * (fields[:, 0::2] + fields[:, 1::2])
 
 
-def scene_row(name: str, out: pathlib.Path) -> dict:
+def _shares(hybrid) -> tuple[list[str], numpy.ndarray, numpy.ndarray]:
+    """(level names, mean share of each level over the steps, share at the last step)."""
+    levels = hybrid.level.values[1:]
+    names = list(hybrid.level.attrs["levels"])
+    return (names, numpy.array([(levels == k).mean() for k in range(len(names))]),
+            numpy.array([(levels[-1] == k).mean() for k in range(len(names))]))
+
+
+def scene_row(name: str, out: pathlib.Path, middle=()) -> tuple[dict, list[dict]]:
+    """The row of scene ``name`` with the default hierarchy, and one calibration row for
+    each threshold of the middle level in ``middle`` (``realizability = [0.002, t]``, the
+    rest default) measured against the same all-kinetic and refined runs."""
     build, cells, component = SCENES[name]
     kinetic, t_kinetic, w_kinetic = run(build(cells))
     refined, t_refined, w_refined = run(build(2 * cells))
@@ -146,10 +172,7 @@ def scene_row(name: str, out: pathlib.Path) -> dict:
     error = numpy.abs(base - coarsened(final_fields(refined, component))).mean(axis=1)
     difference = numpy.abs(final_fields(hybrid, component) - base).mean(axis=1)
     steps = int(hybrid.sizes["step_time"] - 1)
-    levels = hybrid.level.values[1:]
-    names = list(hybrid.level.attrs["levels"])
-    shares = numpy.array([(levels == k).mean() for k in range(len(names))])
-    final = numpy.array([(levels[-1] == k).mean() for k in range(len(names))])
+    names, shares, final = _shares(hybrid)
     figure = plotting.figures(hybrid).get("levels")
     if figure is not None:
         save_figure(figure, out / f"levels_{name}.png")
@@ -163,9 +186,73 @@ def scene_row(name: str, out: pathlib.Path) -> dict:
            **{f"share_{n}": float(s) for n, s in zip(names, shares)},
            **{f"final_{n}": float(s) for n, s in zip(names, final)},
            "warnings": " | ".join(sorted(set(w_kinetic + w_refined + w_hybrid)))[:300]}
+    _print(row)
+    calibration = []
+    for threshold in middle:
+        other, seconds, _ = run(build(cells, {"realizability": [0.002, threshold]}))
+        difference = numpy.abs(final_fields(other, component) - base).mean(axis=1)
+        names, shares, _ = _shares(other)
+        calibration.append({"scene": name, "realizability": threshold,
+                            **{f"ratio_{k}": float(v) for k, v in zip(FIELDS, difference / error)},
+                            **{f"share_{n}": float(s) for n, s in zip(names, shares)},
+                            "hybrid_s": seconds})
+        _print(calibration[-1])
+    return row, calibration
+
+
+#: every cell at the ES-BGK level after the first step (thresholds no cell exceeds)
+ALL_ESBGK = {"levels": ["esbgk", "boltzmann"], "realizability": [1.0], "distance": [2.0]}
+
+
+def model_error(cells: int = 40) -> list[dict]:
+    """The ES-BGK model's own error on the shear scene: the L1 difference of rho, u_2, T
+    between the all-kinetic run and the run with every cell at the ES-BGK level, for the
+    inelastic gas of the scene (e = 0.97) and the elastic one (e = 1), the latter telling
+    what is due to the model at this Knudsen number and not to the granular cooling."""
+    rows = []
+    for e in (0.97, 1.0):
+        def build(hierarchy):
+            table = shear(cells, hierarchy).to_dict()
+            table["restitution"] = {"name": "constant", "value": e}
+            return RunDescription.from_dict(table)
+        kinetic = final_fields(run(build(None))[0], 1)
+        relaxed = final_fields(run(build(ALL_ESBGK))[0], 1)
+        difference = numpy.abs(relaxed - kinetic).mean(axis=1)
+        amplitude = numpy.ptp(kinetic, axis=1)
+        rows.append({"restitution": e,
+                     **{f"difference_{k}": float(v) for k, v in zip(FIELDS, difference)},
+                     **{f"range_{k}": float(v) for k, v in zip(FIELDS, amplitude)}})
+        _print(rows[-1])
+    return rows
+
+
+def _print(row: dict) -> None:
     print(" ".join(f"{k}={v:.3g}" if isinstance(v, float) else f"{k}={v}"
                    for k, v in row.items()), flush=True)
-    return row
+
+
+def calibration_figure(rows: list[dict]):
+    """The largest ratio over rho, u, T against the mean share of the full level, one line
+    per scene through the thresholds of the middle level, and the tolerance 0.1."""
+    fig, ax = plt.subplots(figsize=(6.4, 4.4), layout="constrained")
+    for scene in dict.fromkeys(r["scene"] for r in rows):
+        points = sorted((r["share_boltzmann"], max(r[f"ratio_{k}"] for k in FIELDS),
+                         r["realizability"]) for r in rows if r["scene"] == scene)
+        share, ratio, threshold = zip(*points)
+        ratio = numpy.maximum(ratio, 1e-4)
+        ax.plot(share, ratio, "o-", label=scene)
+        for x, y, t in points:
+            ax.annotate(f"{t:g}", (x, max(y, 1e-4)), fontsize=7, xytext=(3, 3),
+                        textcoords="offset points")
+    ax.axhline(0.1, color="red", lw=0.8, ls="--", label="tolerance 0.1")
+    ax.set_yscale("log")
+    ax.set_xlabel("mean share of cells at the full level (the cost in 3D)")
+    ax.set_ylabel("|hybrid - all-kinetic| / all-kinetic error\n"
+                  "(max over rho, u, T; 0 drawn at 1e-4)")
+    ax.set_title("accuracy against cost: the middle level's realizability threshold",
+                 fontsize=9)
+    ax.legend(fontsize=8)
+    return fig
 
 
 def level_costs(description, batch: int = 8, repeats: int = 3) -> dict:
@@ -237,9 +324,8 @@ def refinement(costs: dict | None, cell_counts=(50, 100, 200)) -> list[dict]:
     rows = []
     for cells in cell_counts:
         hybrid, seconds, _ = run(sod(1e-3)(cells, {}))
-        levels = hybrid.level.values[1:]
-        names = list(hybrid.level.attrs["levels"])
-        shares = {n: float((levels == k).mean()) for k, n in enumerate(names)}
+        names, mean, _ = _shares(hybrid)
+        shares = dict(zip(names, mean.tolist()))
         row = {"cells": cells, "hybrid_s": seconds, **shares}
         if costs:
             row["projected_3d_speedup"] = (costs["transport"] + costs["boltzmann"]) / (
@@ -272,13 +358,23 @@ def markdown(rows) -> str:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", required=True, type=pathlib.Path)
-    parser.add_argument("--scenes", default=",".join(SCENES))
+    parser.add_argument("--scenes", default=",".join(DEFAULT_SCENES))
+    parser.add_argument("--thresholds", default="",
+                        help="middle-level realizability thresholds to calibrate, e.g. "
+                             "0.05,0.03,0.01")
     parser.add_argument("--timing3d", action="store_true")
     parser.add_argument("--refinement", action="store_true")
+    parser.add_argument("--model-error", action="store_true",
+                        help="the ES-BGK level everywhere on the shear scene, e = 0.97 and 1")
     args = parser.parse_args(argv)
+    middle = [float(t) for t in args.thresholds.split(",") if t]
     args.out.mkdir(parents=True, exist_ok=True)
     began = time.perf_counter()
-    rows = [scene_row(name, args.out) for name in args.scenes.split(",") if name]
+    rows, calibration = [], []
+    for name in filter(None, args.scenes.split(",")):
+        row, more = scene_row(name, args.out, middle)
+        rows.append(row)
+        calibration += more
     costs = None
     if args.timing3d:
         row, costs = timing3d(args.out)
@@ -289,6 +385,25 @@ def main(argv=None) -> int:
     if costs:
         table += ("\n3D N = 24, seconds per cell and step: "
                   + ", ".join(f"{k} {v:.3g}" for k, v in costs.items()) + "\n")
+    if calibration:
+        write_csv(args.out / "hierarchy_calibration.csv", calibration,
+                  fields=sorted({k for r in calibration for k in r}))
+        save_figure(calibration_figure(calibration), args.out / "calibration.png")
+        table += ("\n| scene | realizability (middle) | ratio rho, u, T | mean share "
+                  "boltzmann |\n|---|---|---|---|\n")
+        for r in calibration:
+            table += (f"| {r['scene']} | {r['realizability']:g} | "
+                      + ", ".join(f"{r['ratio_' + k]:.3f}" for k in FIELDS)
+                      + f" | {r['share_boltzmann']:.0%} |\n")
+    if args.model_error:
+        errors = model_error()
+        write_csv(args.out / "hierarchy_model_error.csv", errors)
+        table += ("\n| e | all-esbgk - all-kinetic rho, u_2, T | range of rho, u_2, T |\n"
+                  "|---|---|---|\n")
+        for r in errors:
+            table += (f"| {r['restitution']:g} | "
+                      + ", ".join(f"{r['difference_' + k]:.2e}" for k in FIELDS) + " | "
+                      + ", ".join(f"{r['range_' + k]:.2e}" for k in FIELDS) + " |\n")
     if args.refinement:
         finer = refinement(costs)
         write_csv(args.out / "hierarchy_refinement.csv", finer)

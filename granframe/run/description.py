@@ -369,7 +369,7 @@ class Hierarchy:
 
     levels: tuple = attrs.field(default=(Component("euler"), Component("esbgk"),
                                          Component("boltzmann")), converter=_levels)
-    realizability: tuple = attrs.field(default=(0.002, 0.05), converter=_floats)
+    realizability: tuple = attrs.field(default=(0.002, 0.02), converter=_floats)
     distance: tuple = attrs.field(default=(0.002, 0.05), converter=_floats)
     hysteresis: float = attrs.field(default=0.5, converter=check.to_float,
                                     validator=check.real(0.0, 1.0, lower_open=True))
