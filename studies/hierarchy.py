@@ -57,7 +57,7 @@ import numpy
 
 from granframe.tools.studykit import save_figure, write_csv
 import matplotlib.pyplot as plt  # noqa: E402  (after studykit chose the Agg backend)
-from granframe.run.description import RunDescription
+from granframe.run.description import Hierarchy, RunDescription
 from granframe.run.runner import Simulation
 from granframe.tools import plotting
 
@@ -161,9 +161,10 @@ def _shares(hybrid) -> tuple[list[str], numpy.ndarray, numpy.ndarray]:
 
 
 def scene_row(name: str, out: pathlib.Path, middle=()) -> tuple[dict, list[dict]]:
-    """The row of scene ``name`` with the default hierarchy, and one calibration row for
-    each threshold of the middle level in ``middle`` (``realizability = [0.002, t]``, the
-    rest default) measured against the same all-kinetic and refined runs."""
+    """The row of scene ``name`` with the default hierarchy, and (when ``middle`` is given)
+    calibration rows: the default's, and one for each threshold of the middle level in
+    ``middle`` (``realizability = [0.002, t]``, the rest default), all measured against the
+    same all-kinetic and refined runs."""
     build, cells, component = SCENES[name]
     kinetic, t_kinetic, w_kinetic = run(build(cells))
     refined, t_refined, w_refined = run(build(2 * cells))
@@ -187,7 +188,9 @@ def scene_row(name: str, out: pathlib.Path, middle=()) -> tuple[dict, list[dict]
            **{f"final_{n}": float(s) for n, s in zip(names, final)},
            "warnings": " | ".join(sorted(set(w_kinetic + w_refined + w_hybrid)))[:300]}
     _print(row)
-    calibration = []
+    calibration = [{"scene": name, "realizability": Hierarchy().realizability[-1],
+                    **{k: row[k] for k in row if k.startswith(("ratio_", "share_"))},
+                    "hybrid_s": t_hybrid}] if middle else []
     for threshold in middle:
         other, seconds, _ = run(build(cells, {"realizability": [0.002, threshold]}))
         difference = numpy.abs(final_fields(other, component) - base).mean(axis=1)

@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import math
 import pathlib
+import textwrap
 
 import numpy
 import xarray
@@ -301,6 +302,13 @@ def _component(component) -> str:
     return f"{name}({shown})"
 
 
+def _wrapped(text: str, width: int = 110) -> str:
+    """``text`` with every line longer than ``width`` characters broken at spaces, so that a
+    figure's caption (a long warning above all) stays within the figure."""
+    return "\n".join(textwrap.fill(line, width) if len(line) > width else line
+                     for line in text.splitlines())
+
+
 def caption(ds) -> str:
     """The caption of every figure of a run, from its stored description.
 
@@ -364,7 +372,7 @@ def _axes(ax, run):
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7, 4.8), layout="constrained")
-    fig.suptitle(caption(run), fontsize=8)
+    fig.suptitle(_wrapped(caption(run)), fontsize=8)
     return ax
 
 
@@ -1022,7 +1030,7 @@ def figures(ds) -> dict:
                   "moments": (mass_drift, kurtosis, positivity)}
         if run.count >= 3:
             panels["entropy"] = (entropy,)
-    text = caption(run)
+    text = _wrapped(caption(run))
     drawn = {}
     for name, draws in panels.items():
         layout, size = _LAYOUTS[name]
