@@ -697,6 +697,11 @@ class Boundary(abc.ABC):
     #: The conformance kit checks a wall at times spread over its period.
     period: float | None = None
 
+    #: what the boundary does commutes with the scaling v -> omega v of the velocities
+    #: (no temperature, speed or time of its own): a rescaled space run
+    #: (:mod:`granframe.equations.rescaled`) admits only such boundaries
+    scale_free: ClassVar[bool] = False
+
     def check(self, grid) -> None:
         """Refuse a velocity grid the boundary does not fit (a wall velocity of the wrong
         dimension), with a message naming the parameter."""

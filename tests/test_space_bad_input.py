@@ -230,10 +230,10 @@ def test_an_adaptive_integrator_is_refused(tmp_path):
             r"fixed-step integrator in a space run")
 
 
-def test_rescaled_with_space_is_refused(tmp_path):
+def test_rescaled_with_a_diffuse_wall_is_refused(tmp_path):
     refused(tmp_path, [("rescaled", True), ("restitution.value", 0.5)],
-            r"^RunDescription: parameter 'rescaled' = True is invalid; applies to "
-            r"space-homogeneous runs only")
+            r"^RunDescription: parameter 'space.right' = 'diffuse' is invalid; must be a "
+            r"boundary that commutes with the scaling of the velocities \(periodic, specular\)")
 
 
 def test_a_heat_bath_without_collisions_is_refused(tmp_path):
@@ -521,3 +521,42 @@ def test_fuzzed_space_initial_conditions_build_or_name_a_parameter(condition):
         assert _names_a_parameter(str(exc), names), str(exc)
         return
     assert f.shape == (8, 16, 16) and numpy.isfinite(f).all() and f.min() >= 0.0
+
+
+def _family(x, v1, v2, *, density=1.0, wave=0.0, periods=1):
+    return density * (1 + wave * numpy.sin(2 * math.pi * periods * x)) * gaussian(x, v1, v2)
+
+
+def test_a_space_function_takes_its_parameters_by_name_from_the_description(tmp_path):
+    """One function, two runs: params reach the function as keyword arguments and are kept
+    in the stored description."""
+    reference = _function("family", _family)
+    edges = numpy.linspace(0.0, 1.0, 9)
+    plain, _ = SpaceFunction(reference).sample_cells(GRID, edges)
+    waved, _ = SpaceFunction(reference, params={"wave": 0.5, "periods": 2}).sample_cells(
+        GRID, edges)
+    assert numpy.allclose(plain, plain[:1])
+    cells = 0.5 * (edges[:-1] + edges[1:])
+    mass = GRID.cell_volume * waved.sum(axis=(1, 2))
+    # the cell averages of 1 + 0.5 sin(4 pi x) (6-point Gauss: exact for the sine to 1e-9)
+    exact = 1 + 0.5 * (numpy.cos(4 * math.pi * edges[:-1]) - numpy.cos(4 * math.pi * edges[1:])) \
+        / (4 * math.pi * numpy.diff(edges))
+    assert numpy.allclose(mass / mass.mean(), exact, rtol=1e-6), (mass, cells)
+    sim = accepted([("initial", {"name": "space_function", "function": reference,
+                                 "params": {"wave": 0.2}})])
+    assert sim.description.to_dict()["initial"]["params"] == {"wave": 0.2}
+
+
+@pytest.mark.parametrize("params,match", [
+    ({"amplitude": 0.3}, r"parameter 'params.amplitude' = 0.3 is invalid; is not a keyword "
+                         r"argument of the function 'sbi_functions:family' \(it takes \['x', "
+                         r"'v1', 'v2', 'density', 'wave', 'periods'\]\)"),
+    ([0.3], r"parameter 'params' = \[0.3\] is invalid; must be a table of keyword arguments"),
+    ({"wave": "big"}, r"parameter 'function' = 'sbi_functions:family' is invalid; .* with "
+                      r"params \{'wave': 'big'\}; calling it raised"),
+])
+def test_space_function_parameters_the_function_does_not_take_are_refused(tmp_path, params,
+                                                                          match):
+    reference = _function("family", _family)
+    refused(tmp_path, [("initial", {"name": "space_function", "function": reference,
+                                    "params": params})], match)

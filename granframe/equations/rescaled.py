@@ -30,6 +30,10 @@ Then T(t) = T_g(s) / (1 + \kappa a_0 t)^{2/\kappa}: Haff's law, with T_g(s)
 converging to the HCS. For \kappa < 0 that state repels, and such kernels are
 refused.
 
+A space run takes one scale for the whole interval, f(t, x, v) = \omega^d g(s, x, \omega v)
+about a gas at rest along x: the transport becomes \omega^{\kappa - 1} \xi_1 \partial_x g
+(:meth:`Rescaling.transport_time`; :class:`~granframe.space.collisions.RescaledCellCollisions`).
+
 References: F. Filbet, T. Rey, "A rescaling velocity method for dissipative kinetic
 equations. Applications to granular media", J. Comput. Phys. 248 (2013) 177-199;
 the review (Carrillo, Hu, Ma, Rey), section 3, Test 3.
@@ -80,6 +84,21 @@ class Rescaling:
         t = numpy.asarray(t, dtype=float)
         growth = self.degree * self.rate
         return t if growth == 0.0 else numpy.log1p(growth * t) / growth
+
+    def transport_time(self, s: float, duration: float) -> float:
+        r"""The time of free transport that ``duration`` of s, from s, stands for in a
+        rescaled space run: \int_s^{s + \Delta s} \omega^{\kappa - 1} d\sigma.
+
+        With f(t, x, v) = \omega^d g(s, x, \omega v) (mean velocity 0 along x),
+        v_1 \partial_x f becomes \omega^{\kappa - 1} \xi_1 \partial_x g in s, so the
+        transport of g over [s, s + \Delta s] is that of the unscaled equation over this
+        time: \Delta s itself for hard spheres (\kappa = 1), else
+        e^{(\kappa - 1) a_0 s} (e^{(\kappa - 1) a_0 \Delta s} - 1) / ((\kappa - 1) a_0).
+        """
+        slope = (self.degree - 1.0) * self.rate
+        if slope == 0.0:
+            return float(duration)
+        return float(math.exp(slope * s) * math.expm1(slope * duration) / slope)
 
     def temperature(self, s, rescaled_temperature):
         r"""T(t(s)) = T_g(s) / \omega(s)^2."""
@@ -154,17 +173,75 @@ def check_rescalable(kernel, restitution, heat_bath: float, owner: str) -> float
     return degree
 
 
-class RescaledBoltzmann(HomogeneousBoltzmann):
-    r"""d_s g = Q(g, g)/eps - a_0 div((xi - u) chi g): free cooling in self-similar variables.
+class SelfSimilarDrift:
+    r"""The drift of the rescaled formulation, div((xi - u) chi g), on f of shape
+    (..., *grid.shape): any number of distributions at once (the cells of a space run).
 
-    See the module notes for the formulation. The drift velocity is tapered:
     chi(|xi - u|) = 1 up to min(1.5 S, 0.75 L'), then cos^2 down to 0 at L' = L - max|u_j|.
     The taper is needed because (xi - u) jumps across the periodic box. Untapered, the
     spectral discretisation of the drift has eigenvalues with real part up to 2.1, 3.3 and
     4.9 a_0 per axis at N = 32, 64 and 128: growing modes at the faces. Tapered, they reach
     0.56, 0.66 and 0.73 a_0, which the collisional loss term damps. g is small where
     chi < 1, since it keeps the temperature of f0. The divergence is taken spectrally in
-    conservation form, so mass is conserved exactly, and momentum and energy to the
+    conservation form, so it conserves mass exactly.
+
+    Parameters
+    ----------
+    grid : VelocityGrid
+    backend : ArrayBackend
+    velocity : tuple of float
+        u, the fixed point of the rescaling.
+    """
+
+    def __init__(self, grid, backend, velocity):
+        self.grid, self.backend = grid, backend
+        self.velocity = tuple(float(u) for u in velocity)
+        mesh = [c - u for c, u in zip(grid.mesh(), self.velocity)]
+        radius = numpy.sqrt(sum(c * c for c in mesh))
+        outer = grid.half_width - max(abs(u) for u in self.velocity)
+        inner = min(1.5 * grid.support_radius, 0.75 * outer)
+        ramp = numpy.clip((radius - inner) / (outer - inner), 0.0, 1.0)
+        taper = numpy.cos(0.5 * math.pi * ramp) ** 2
+        self._field = [backend.asarray(taper * c) for c in mesh]
+        d = grid.dimension
+        factor = math.pi / grid.half_width / float(grid.n_modes) ** d
+        derivative = []
+        for axis, k in enumerate(grid.half_wavenumbers()):
+            symbol = numpy.reshape(1j * factor * k, [-1 if j == axis else 1 for j in range(d)])
+            symbol = grid.without_nyquist(numpy.broadcast_to(symbol, grid.half_shape).copy())
+            derivative.append(backend.asarray(symbol))
+        self._derivative = derivative
+        #: |xi - u|^2 h^d on the nodes: the weight of the energy balance that fixes a_0
+        self.energy_weight = backend.asarray(radius ** 2 * grid.cell_volume)
+        # bound on the spectral radius of the discrete drift per unit rate: sum over axes
+        # of max |chi (xi_j - u_j)| times the largest evolved wavenumber
+        k_max = math.pi / grid.half_width * (grid.n_modes // 2 - 1)
+        self.unit_radius = k_max * sum(float(numpy.max(numpy.abs(taper * c))) for c in mesh)
+        self._plans = {}
+
+    def __call__(self, g):
+        r"""div((xi - u) chi g) of every distribution in g, spectrally:
+        IDFT(sum_j i k_j pi/L DFT((xi_j - u_j) chi g)) over the last d axes."""
+        shape = tuple(g.shape)
+        fft = self._plans.get(shape)
+        if fft is None:
+            d = self.grid.dimension
+            fft = self._plans[shape] = self.backend.real_fft(
+                shape, tuple(range(len(shape) - d, len(shape))), threads=1)
+        total = None
+        for field, symbol in zip(self._field, self._derivative):
+            fft.real[...] = field * g
+            term = fft.forward() * symbol
+            total = term if total is None else total + term
+        fft.spectrum[...] = total
+        return fft.inverse().copy()
+
+
+class RescaledBoltzmann(HomogeneousBoltzmann):
+    r"""d_s g = Q(g, g)/eps - a_0 div((xi - u) chi g): free cooling in self-similar variables.
+
+    See the module notes for the formulation and :class:`SelfSimilarDrift` for the
+    tapered drift chi. Mass is conserved exactly, and momentum and energy to the
     accuracy of the collision operator.
 
     Parameters
@@ -189,59 +266,48 @@ class RescaledBoltzmann(HomogeneousBoltzmann):
         super().__init__(operator, 0.0, knudsen, penalty)
         grid, backend = operator.grid, operator.backend
         xp = backend.xp
-        self._fft = backend.real_fft(grid.shape, tuple(range(grid.dimension)), threads=1)
         velocity = tuple(float(c) for c in grid.bulk_velocity(initial, xp))
-        if kernel.energy_exponent != 0.0 and any(abs(u) > 1e-12 for u in velocity):
-            check.reject("RescaledBoltzmann", "initial", f"f0 with mean velocity {velocity}",
-                         "must have mean velocity 0 when the kernel has an energy factor E^gamma "
-                         "(E = int |v|^2/2 f then does not scale with omega)")
-        mesh = [c - u for c, u in zip(grid.mesh(), velocity)]
-        radius = numpy.sqrt(sum(c * c for c in mesh))
-        outer = grid.half_width - max(abs(u) for u in velocity)
-        inner = min(1.5 * grid.support_radius, 0.75 * outer)
-        ramp = numpy.clip((radius - inner) / (outer - inner), 0.0, 1.0)
-        taper = numpy.cos(0.5 * math.pi * ramp) ** 2
-        self._field = [backend.asarray(taper * c) for c in mesh]
-        d = grid.dimension
-        factor = math.pi / grid.half_width / float(grid.n_modes) ** d
-        derivative = []
-        for axis, k in enumerate(grid.half_wavenumbers()):
-            symbol = numpy.reshape(1j * factor * k, [-1 if j == axis else 1 for j in range(d)])
-            symbol = grid.without_nyquist(numpy.broadcast_to(symbol, grid.half_shape).copy())
-            derivative.append(backend.asarray(symbol))
-        self._derivative = derivative
-        weight = backend.asarray(radius ** 2 * grid.cell_volume)
+        check_drift_velocity(kernel, velocity, "RescaledBoltzmann", "initial")
+        self.drift = SelfSimilarDrift(grid, backend, velocity)
         if dissipation is None:
-            dissipation = float(xp.sum(operator(initial) * weight))
-        dissipation = dissipation / self.knudsen
-        transport = float(xp.sum(self.divergence(initial) * weight))
-        rate = dissipation / transport if transport else 0.0
-        if not (math.isfinite(rate) and rate >= 0.0):
-            check.reject("RescaledBoltzmann", "initial", "f0",
-                         f"gives the cooling rate a_0 = {rate:.6g}; it must be finite and "
-                         ">= 0 (f0 must have positive temperature)")
+            dissipation = float(xp.sum(operator(initial) * self.drift.energy_weight))
+        transport = float(xp.sum(self.drift(initial) * self.drift.energy_weight))
+        rate = cooling_rate(dissipation / self.knudsen, transport, "RescaledBoltzmann")
         self.rescaling = Rescaling(rate, degree, velocity)
-        # bound on the spectral radius of the discrete drift: sum over axes of
-        # max |chi (xi_j - u_j)| times the largest evolved wavenumber
-        k_max = math.pi / grid.half_width * (grid.n_modes // 2 - 1)
-        self._drift_radius = rate * k_max * sum(float(numpy.max(numpy.abs(taper * c)))
-                                                for c in mesh)
+        self._drift_radius = rate * self.drift.unit_radius
 
     def divergence(self, g):
-        r"""div((xi - u) chi g), spectrally: IDFT(sum_j i k_j pi/L DFT((xi_j - u_j) chi g))."""
-        fft, total = self._fft, None
-        for field, symbol in zip(self._field, self._derivative):
-            fft.real[...] = field * g
-            term = fft.forward() * symbol
-            total = term if total is None else total + term
-        fft.spectrum[...] = total
-        return fft.inverse().copy()
+        r"""div((xi - u) chi g) (:class:`SelfSimilarDrift`)."""
+        return self.drift(g)
 
     def nonlinear(self, t, g):
-        drift = self.divergence(g) * self.rescaling.rate
+        drift = self.drift(g) * self.rescaling.rate
         return super().nonlinear(t, g) - drift
 
     def stiffness(self, g) -> dict:
         """The rates of :class:`HomogeneousBoltzmann` and the drift's, a_0 sum_j max|chi (xi_j -
         u_j)| k_max, a bound on the (imaginary) spectrum of the discrete drift term."""
         return {**super().stiffness(g), Part.DRIFT: self._drift_radius}
+
+
+def check_drift_velocity(kernel, velocity, owner: str, name: str) -> None:
+    """Refuse a mean velocity u != 0 with an energy factor E^gamma in the kernel (E then
+    does not scale with omega)."""
+    if kernel.energy_exponent != 0.0 and any(abs(u) > 1e-12 for u in velocity):
+        check.reject(owner, name, f"f0 with mean velocity {tuple(velocity)}",
+                     "must have mean velocity 0 when the kernel has an energy factor E^gamma "
+                     "(E = int |v|^2/2 f then does not scale with omega)")
+
+
+def cooling_rate(dissipation: float, transport: float, owner: str) -> float:
+    r"""a_0 = dissipation / transport (the module notes), refused unless finite and >= 0;
+    a rate of round-off size (|a_0| <= 1e-12, in units of the collision frequency: an
+    elastic gas) is 0."""
+    rate = dissipation / transport if transport else 0.0
+    if abs(rate) <= 1e-12:
+        rate = 0.0
+    if not (math.isfinite(rate) and rate >= 0.0):
+        check.reject(owner, "initial", "f0",
+                     f"gives the cooling rate a_0 = {rate:.6g}; it must be finite and "
+                     ">= 0 (f0 must have positive temperature)")
+    return rate

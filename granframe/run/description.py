@@ -760,9 +760,6 @@ class RunDescription:
             check.reject(owner, "integrator", self.integrator.name,
                          "must be a fixed-step integrator in a space run (the transport's "
                          "CFL limit sets the step)")
-        if self.rescaled:
-            check.reject(owner, "rescaled", True, "applies to space-homogeneous runs only "
-                         "(free cooling in self-similar variables has no x)")
         if not self.space.collisions and self.heat_bath:
             check.reject(owner, "heat_bath", self.heat_bath, "must be 0 in a collisionless "
                          "run (space.collisions = false solves free transport only)")
@@ -774,6 +771,37 @@ class RunDescription:
                          "so in the cells of the full level (docs/conservative.md)")
         self._light["space"] = self.space.check(self.grid, self.time_step,
                                                 self.health.step_limit)
+        if self.rescaled:
+            self._check_rescaled_space()
+
+    def _check_rescaled_space(self):
+        """Refuse a rescaled space run that the self-similar variables do not hold for:
+        walls with a temperature or a speed (their scale does not follow omega), a
+        collisionless gas (nothing cools), a hierarchy of collision models (its levels
+        have no drift), or lambda + 2 gamma > 1 (the transport's speed omega^(kappa - 1)
+        xi_1 would grow without bound)."""
+        owner = "RunDescription"
+        if not self.space.collisions:
+            check.reject(owner, "rescaled", True, "needs collisions (space.collisions = "
+                         "true): a collisionless gas does not cool")
+        if self.space.hierarchy is not None:
+            check.reject(owner, "space.hierarchy", "a hierarchy", "must be left out of a "
+                         "rescaled run: its fluid and relaxation levels have no "
+                         "self-similar drift")
+        for side in ("left", "right"):
+            if not self._light["space"][side].scale_free:
+                check.reject(owner, f"space.{side}", getattr(self.space, side).name,
+                             "must be a boundary that commutes with the scaling of the "
+                             "velocities (periodic, specular) in a rescaled run: a wall with "
+                             "a temperature or a speed sets a scale that the self-similar "
+                             "variables do not keep")
+        kernel = self._light["kernel"]
+        degree = kernel.exponent + 2.0 * kernel.energy_exponent
+        if degree > 1.0:
+            check.reject(owner, "kernel", kernel,
+                         f"has lambda + 2 gamma = {degree:g} > 1; a rescaled space run needs "
+                         "<= 1 (its transport speed omega^(lambda + 2 gamma - 1) xi_1 would "
+                         "grow without bound)")
 
     def _check_time_stepping(self, adaptive: bool):
         owner, name = "RunDescription", self.integrator.name

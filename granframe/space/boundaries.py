@@ -51,6 +51,7 @@ class Periodic(contracts.Boundary):
     """The two ends are one: x = ell continues at x = 0 (both ends must be periodic)."""
 
     periodic = True
+    scale_free = True
 
     def ghosts(self, inside, grid, xp, *, t=0.0, side="left"):
         raise TypeError("Periodic: the ghost cells of a periodic interval are filled from the "
@@ -64,6 +65,8 @@ class Periodic(contracts.Boundary):
 class Specular(contracts.Boundary):
     """Specular reflection f(x_w, v) = f(x_w, R v), R: v_1 -> -v_1: a wall that conserves
     mass, momentum parallel to it and energy exactly (on the nodes, to round-off)."""
+
+    scale_free = True
 
     def ghosts(self, inside, grid, xp, *, t=0.0, side="left"):
         """The mirror images f(-x, R v) of the cells next to the wall (method of images)."""

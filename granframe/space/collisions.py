@@ -17,11 +17,17 @@ alone; an explicit integrator keeps its own limit O(eps).
 
 from __future__ import annotations
 
+import math
+
 import numpy
 
+from granframe import validators as check
+from granframe.abc import Part
 from granframe.backends import to_host
 from granframe.equations.conservative import ConservativeCorrection
 from granframe.equations.homogeneous import HomogeneousBoltzmann
+from granframe.equations.rescaled import (Rescaling, SelfSimilarDrift, check_drift_velocity,
+                                          check_rescalable, cooling_rate)
 from granframe.model.restitution import is_elastic
 from granframe.space.fields import FieldMoments
 from granframe.velocity.equilibrium import discrete_maxwellians
@@ -139,16 +145,25 @@ class SplitStep:
     collisionless gas), T(dt/2) T(dt/2). ``hierarchy``: a
     :class:`~granframe.space.hierarchy.HybridCollisions` that takes the collision step
     of every cell at its own level instead. The walls see the time of each transport stage.
+    ``rescaling``: the :class:`~granframe.equations.rescaled.Rescaling` of a rescaled run,
+    whose transport over a half step of s is that of
+    :meth:`~granframe.equations.rescaled.Rescaling.transport_time`.
     """
 
     adaptive = False
 
-    def __init__(self, integrator, transport, hierarchy=None):
+    def __init__(self, integrator, transport, hierarchy=None, rescaling=None):
         self.integrator, self.transport, self.hierarchy = integrator, transport, hierarchy
+        self.rescaling = rescaling
+
+    def _transport(self, array, t, duration):
+        if self.rescaling is not None:
+            duration = self.rescaling.transport_time(t, duration)
+        self.transport.advance(array, duration, t)
 
     def step(self, equation, t, array, dt):
         half = 0.5 * dt
-        self.transport.advance(array, half, t)
+        self._transport(array, t, half)
         if self.hierarchy is not None:
             inner = self.transport.domain.interior(array)
             cells = inner.reshape((-1,) + inner.shape[2:])
@@ -157,5 +172,95 @@ class SplitStep:
             inner = self.transport.domain.interior(array)
             before = equation.conserved(inner) if equation.invariants else None
             inner[...] = equation.restore(self.integrator.step(equation, t, inner, dt), before)
-        self.transport.advance(array, half, t + half)
+        self._transport(array, t + half, half)
         return array
+
+
+#: Largest mean velocity along x, relative to the thermal speed, of the cells of a rescaled
+#: space run: 1e-10 admits the round-off of f0's samples (a sine's mean) and refuses any
+#: flow, whose transport would not scale with the velocities.
+DRIFT_TOLERANCE = 1e-10
+
+
+class RescaledCellCollisions(CellCollisions):
+    r"""d_s g = Q(g, g)/eps - a_0 div((xi - u) chi g) in every cell: the collision step of
+    a rescaled space run (:mod:`granframe.equations.rescaled`).
+
+    One scale \omega(s) = e^{a_0 s} for the whole interval, about the mean velocity u of
+    all cells (its component along x must vanish, so that the transport stays
+    \omega^{\kappa - 1} \xi_1 \partial_x g: :meth:`Rescaling.transport_time`), and a_0
+    the rate that keeps the total energy of g stationary at s = 0,
+
+    .. math:: a_0 = \frac{\sum_c \int Q(g_c, g_c) |\xi - u|^2 d\xi / \varepsilon}
+                         {\sum_c \int \nabla_\xi\cdot((\xi - u)\chi g_c) |\xi - u|^2 d\xi},
+
+    each sum over every cell in cell order (the same a_0 on any number of processes).
+    The drift moves a cell's momentum towards (1 - a_0 ds) of its deviation from u: in
+    self-similar variables velocity differences grow with \omega. So the collision step
+    keeps only the mass of every cell (with the conservative correction) against
+    round-off.
+
+    Parameters
+    ----------
+    operator : CollisionOperator
+        As for :class:`~granframe.equations.rescaled.RescaledBoltzmann`.
+    cells : array
+        g(0) of the owned cells (cells, *grid.shape), on the backend.
+    knudsen, penalty : float
+    communicator : Communicator
+        The processes of the run; their cells in rank order are all the cells.
+    dissipation : array or None
+        int Q(g_c, g_c) |xi - u|^2 dxi of the owned cells (before 1/eps); None: from the
+        operator, one batched call.
+    """
+
+    def __init__(self, operator, cells, knudsen: float = 1.0, penalty: float = 2.0,
+                 communicator=None, dissipation=None):
+        owner = "RescaledCellCollisions"
+        degree = check_rescalable(operator.kernel, operator.restitution, 0.0, owner)
+        super().__init__(operator, 0.0, knudsen, penalty)
+        grid = operator.grid
+        gather = ((lambda part: [part]) if communicator is None
+                  else communicator.allgather_object)
+        rho, velocity, temperature, _ = (to_host(a) for a in self.moments.primitives(cells))
+        periodic = to_host(self.moments.primitives(cells, node="periodic")[1])
+        rho, momentum, periodic, heat = (
+            numpy.concatenate(gather(part)) for part in
+            (rho, rho[:, None] * velocity, rho[:, None] * periodic, rho * temperature))
+        along = float(momentum[:, 0].sum() / rho.sum())
+        thermal = math.sqrt(float(heat.sum() / rho.sum()))
+        if not abs(along) <= DRIFT_TOLERANCE * thermal:
+            check.reject(owner, "initial", f"f0 with mean velocity u_1 = {along:.6g}",
+                         f"must have mean velocity 0 along x (to {DRIFT_TOLERANCE:g} of the "
+                         f"thermal speed {thermal:.6g}) in a rescaled space run: the "
+                         "transport of g is then omega^(kappa - 1) xi_1 d_x g; take the frame "
+                         "that moves with the gas")
+        # the fixed point: 0 along x, where the transport needs it, and across x the mean
+        # velocity in the periodic grid's convention, as the homogeneous formulation takes it
+        mean = (0.0,) + tuple(float(m) for m in periodic[:, 1:].sum(axis=0) / rho.sum())
+        check_drift_velocity(operator.kernel, mean, owner, "initial")
+        self.drift = SelfSimilarDrift(grid, operator.backend, mean)
+        if dissipation is None:
+            dissipation = self._weighted(operator(cells))
+        transport = self._weighted(self.drift(cells))
+        dissipation = numpy.concatenate(gather(to_host(dissipation)))
+        transport = numpy.concatenate(gather(transport))
+        rate = cooling_rate(float(dissipation.sum()) / self.knudsen, float(transport.sum()),
+                            owner)
+        self.rescaling = Rescaling(rate, degree, mean)
+        self._drift_radius = rate * self.drift.unit_radius
+        self.invariants = ("mass",) if isinstance(operator, ConservativeCorrection) else ()
+
+    def _weighted(self, f):
+        """int f |xi - u|^2 dxi of every cell of f (cells, *grid.shape), on the host."""
+        d = self.operator.grid.dimension
+        axes = tuple(range(f.ndim - d, f.ndim))
+        return to_host(self.operator.backend.xp.sum(f * self.drift.energy_weight, axis=axes))
+
+    def nonlinear(self, t, g):
+        return super().nonlinear(t, g) - self.drift(g) * self.rescaling.rate
+
+    def stiffness(self, f) -> dict:
+        """:meth:`CellCollisions.stiffness` and the drift's bound a_0 sum_j max|chi (xi_j -
+        u_j)| k_max."""
+        return {**super().stiffness(f), Part.DRIFT: self._drift_radius}

@@ -18,6 +18,8 @@ over the interval (the distribution of the whole gas).
 
 from __future__ import annotations
 
+import functools
+import inspect
 import math
 
 import attrs
@@ -238,13 +240,36 @@ class SinusoidalMode(SpaceCondition):
         return f, (fields["density"] * weights).sum(axis=1)
 
 
+def _parameters(value):
+    """The keyword arguments of a :class:`SpaceFunction`: a table of names to values."""
+    if value is None:
+        return {}
+    if not isinstance(value, dict) or not all(isinstance(k, str) and k.isidentifier()
+                                              for k in value):
+        check.reject("SpaceFunction", "params", value, "must be a table of keyword "
+                     "arguments of the function (names to values)", error=TypeError)
+    return dict(value)
+
+
 @attrs.frozen
 class SpaceFunction(SpaceCondition):
-    """f0(x, v_1, ..., v_d) from a function, averaged over each cell by Gauss-Legendre
-    quadrature; ``function`` a callable or a ``module:function`` string, vectorised over
-    arrays of x and v broadcast against each other."""
+    """f0(x, v_1, ..., v_d, **params) from a function, averaged over each cell by
+    Gauss-Legendre quadrature.
+
+    Parameters
+    ----------
+    function : callable or str
+        A callable or a ``module:function`` string, vectorised over arrays of x and v
+        broadcast against each other.
+    params : dict
+        Keyword arguments passed to every call (numbers, strings, lists, tables): one
+        function serves a family of initial data, each run naming its own values
+        (``initial = {name = "space_function", function = "mymod:f0", params = {k = 3}}``).
+        A name the function does not take is refused naming it.
+    """
 
     function: object = attrs.field()
+    params: dict = attrs.field(factory=dict, converter=_parameters)
 
     @function.validator
     def _check_function(self, attribute, value):
@@ -254,9 +279,29 @@ class SpaceFunction(SpaceCondition):
             check.reject("SpaceFunction", "function", value, "must be a callable or a "
                          "'module:function' string", error=TypeError)
 
-    def sample_cells(self, grid, edges):
+    def _resolved(self):
+        """The function, its keyword arguments bound (refused naming a name it does not
+        take)."""
         function = (resolve_callable("SpaceFunction", "function", self.function)
                     if isinstance(self.function, str) else self.function)
+        if not self.params:
+            return function
+        try:
+            signature = inspect.signature(function)
+        except (TypeError, ValueError):     # no signature to check: the call will tell
+            signature = None
+        if signature is not None and not any(p.kind is p.VAR_KEYWORD
+                                             for p in signature.parameters.values()):
+            for name in self.params:
+                taken = signature.parameters.get(name)
+                if taken is None or taken.kind is taken.POSITIONAL_ONLY:
+                    check.reject("SpaceFunction", f"params.{name}", self.params[name],
+                                 f"is not a keyword argument of the function {self.function!r}"
+                                 f" (it takes {list(signature.parameters)})")
+        return functools.partial(function, **self.params)
+
+    def sample_cells(self, grid, edges):
+        function = self._resolved()
         edges = numpy.asarray(edges, dtype=float)
         x, weights = _gauss(edges)
         mesh = grid.mesh()
@@ -278,8 +323,9 @@ class SpaceFunction(SpaceCondition):
         except Exception as exc:  # the user's function: report it with what it was given
             check.reject("SpaceFunction", "function", self.function,
                          f"must map x and the {len(mesh)} velocity components (broadcastable "
-                         f"arrays, x of shape {x.shape}) to f0 of shape {shape}; calling it "
-                         f"raised {type(exc).__name__}: {exc}")
+                         f"arrays, x of shape {x.shape}) to f0 of shape {shape}"
+                         + (f" with params {self.params}" if self.params else "")
+                         + f"; calling it raised {type(exc).__name__}: {exc}")
         check_real(raw, values, "SpaceFunction", self.function)
         return values
 

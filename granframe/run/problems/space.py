@@ -27,6 +27,7 @@ import numpy
 
 from granframe.abc import Problem, deferred_checks
 from granframe.backends import NumpyBackend, to_host
+from granframe.equations.conservative import ConservativeCorrection
 from granframe.memory import check_run_memory
 from granframe.model.initial import check_fits, check_projection
 from granframe.parallel import Halo, SerialCommunicator, partition, world
@@ -34,7 +35,7 @@ from granframe.run.description import cell_divisors
 from granframe.run.monitors import CELL_INDICATORS, CellEdgeMonitors, cell_resolution_report
 from granframe.run.problems.parts import build_operator, check_step
 from granframe.run.storage import STEP_RECORDS, Layout, RecordArray
-from granframe.space.collisions import CellCollisions, SplitStep
+from granframe.space.collisions import CellCollisions, RescaledCellCollisions, SplitStep
 from granframe.space.domain import Domain
 from granframe.registry import default_registries
 from granframe.space.fields import FIELDS, TOTALS, FieldMoments
@@ -152,12 +153,29 @@ class SpaceProblem(Problem):
         self.transport = Transport(self.domain, self.reconstruction, self.left, self.right)
         self.projection = None
         self.f0 = self._initial(check=not outline)
-        self.equation = (CellCollisions(self.operator, d.heat_bath, d.knudsen) if collide
-                         else None)
+        self.equation = (None if not collide else self._rescaled(outline) if d.rescaled
+                         else CellCollisions(self.operator, d.heat_bath, d.knudsen))
+        #: the map of a rescaled run to physical variables (kept in the store), or None
+        self.rescaling = getattr(self.equation, "rescaling", None)
         self.fields = FieldMoments(grid, self.domain.dx, xp)
         #: the hierarchy of collision models (None: the full operator in every cell)
         self.hierarchy = None if outline else self._hierarchy()
-        self.integrator = SplitStep(self.collision_integrator, self.transport, self.hierarchy)
+        self.integrator = SplitStep(self.collision_integrator, self.transport, self.hierarchy,
+                                    self.rescaling)
+
+    def _rescaled(self, outline: bool):
+        """The :class:`~granframe.space.collisions.RescaledCellCollisions` of the owned
+        cells of f0; with ``outline`` its a_0 from the closed-form dissipation of every cell
+        (:meth:`~granframe.equations.conservative.ConservativeCorrection.dissipation` of the
+        :class:`~granframe.stepping.stability.OperatorOutline`)."""
+        d, xp = self.description, self.backend.xp
+        cells = self.f0[self.owned]
+        dissipation = None
+        if outline:
+            correction = ConservativeCorrection(self.operator)
+            dissipation = numpy.array([float(correction.dissipation(f)) for f in cells])
+        return RescaledCellCollisions(self.operator, xp.asarray(cells), d.knudsen,
+                                      communicator=self.communicator, dissipation=dissipation)
 
     def _hierarchy(self):
         """The :class:`~granframe.space.hierarchy.HybridCollisions` of ``space.hierarchy``,
@@ -231,8 +249,6 @@ class SpaceProblem(Problem):
                f"h = {grid.spacing:.4g}) do not resolve f0, whose projection rings below zero; "
                "use a larger grid.n_modes, or a smaller grid.support_radius if f0 is "
                "negligible well inside the faces of the box (h = 2L/N falls with it)")
-
-    rescaling = None
 
     def layout(self):
         return space_layout(self.grid, self.domain,
