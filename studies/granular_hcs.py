@@ -1,0 +1,133 @@
+r"""Instabilities of the homogeneous cooling state: the shear mode against linear granular
+hydrodynamics (3D inelastic hard spheres, the rescaled formulation).
+
+In the rescaled variables of a hard-sphere gas (kappa = 1) the cooling state is steady,
+T_g constant, and linear Navier-Stokes hydrodynamics gives the transverse velocity mode
+u_2 = A sin(k x) the constant rate in s
+
+    Gamma(k) = a_0 - (eta(T_g) / rho) k^2,
+
+with zeta_g = 2 a_0 the cooling rate of g (its energy is stationary) and eta the shear
+viscosity. In granframe's units (B = |g|/(4 pi), Q/eps: pi sigma^2 = 1/eps, unit mass) the
+first Sonine approximation (Brey, Dufty, Kim & Santos, Phys. Rev. E 58 (1998) 4638; Garzo &
+Dufty, Phys. Rev. E 59 (1999) 5895) gives, with eta_0 = (5/16) eps sqrt(pi T) and
+nu_0 = rho T / eta_0,
+
+    zeta = nu_0 zeta*,   zeta* = (5/12)(1 - e^2)(1 + 3 a_2 / 16),
+    eta  = eta_0 / (nu_eta* - zeta*/2),   nu_eta* = (3 - e)(1 + e)/4 (1 - a_2/32),
+    a_2  = 16 (1 - e)(1 - 2 e^2) / (81 - 17 e + 30 e^2 (1 - e))   (van Noije & Ernst 1998),
+
+so the shear mode grows for k < k_c = sqrt(rho zeta / (2 eta)).
+
+Run: ``python studies/granular_hcs.py --out DIR [--restitution 0.9] [--n-modes 16]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import pathlib
+import time
+
+import numpy
+
+import granframe
+from granframe.run.description import RunDescription
+from granframe.run.runner import Simulation
+
+
+def sonine(e: float) -> dict:
+    """The first-Sonine a_2, zeta* and eta* = eta/eta_0 of 3D inelastic hard spheres."""
+    a2 = 16 * (1 - e) * (1 - 2 * e * e) / (81 - 17 * e + 30 * e * e * (1 - e))
+    zeta = 5 / 12 * (1 - e * e) * (1 + 3 * a2 / 16)
+    nu_eta = (3 - e) * (1 + e) / 4 * (1 - a2 / 32)
+    return {"a2": a2, "zeta*": zeta, "eta*": 1 / (nu_eta - zeta / 2)}
+
+
+def theory(e: float, knudsen: float, density: float, temperature: float, k: float) -> dict:
+    """zeta, eta and the Navier-Stokes rate Gamma(k) = zeta/2 - eta k^2 / rho of the shear
+    mode, in granframe's units."""
+    coefficients = sonine(e)
+    eta0 = 5 / 16 * knudsen * math.sqrt(math.pi * temperature)
+    nu0 = density * temperature / eta0
+    zeta = nu0 * coefficients["zeta*"]
+    eta = eta0 * coefficients["eta*"]
+    return {"zeta": zeta, "eta": eta, "rate": zeta / 2 - eta * k * k / density,
+            "k_c": math.sqrt(density * zeta / (2 * eta))}
+
+
+def description(e: float, length: float, cells: int, n_modes: int, support: float,
+                final: float, amplitude: float = 0.02, knudsen: float = 1.0) -> RunDescription:
+    """A rescaled 3D hard-sphere gas in a periodic box of ``length`` with the shear mode
+    u_2 = amplitude sin(2 pi x / length)."""
+    grid = {"dimension": 3, "n_modes": n_modes, "support_radius": support}
+    return RunDescription(
+        title=f"HCS shear mode, e = {e:g}, length {length:g}, {cells} cells, N = {n_modes}",
+        grid=grid, kernel="hard_spheres", restitution={"name": "constant", "value": e},
+        initial={"name": "sinusoidal_mode", "field": "velocity", "component": 2,
+                 "amplitude": amplitude},
+        integrator="rk4", time_step=DT, final_time=final, rescaled=True, conservative=True,
+        knudsen=knudsen, output={"snapshot_interval": final},
+        space={"cells": cells, "length": length, "reconstruction": "weno5"})
+
+
+DT = 0.05
+
+
+def measured_rate(ds, length: float, skip: float) -> dict:
+    """The rate d ln A / ds of the sine amplitude A of u_2 / sqrt(T) (= that of g) by least
+    squares over s >= skip, and its spread (the rates of the two halves of that window)."""
+    s = ds.time.values
+    x = ds.x.values
+    wave = ds.velocity.values[:, :, 1] / numpy.sqrt(ds.temperature.values)
+    amplitude = 2 * numpy.mean(wave * numpy.sin(2 * math.pi * x / length)[None], axis=1)
+    keep = s >= skip
+    fit = numpy.polyfit(s[keep], numpy.log(amplitude[keep]), 1)[0]
+    half = keep.nonzero()[0]
+    first, second = half[: len(half) // 2], half[len(half) // 2:]
+    rates = [numpy.polyfit(s[i], numpy.log(amplitude[i]), 1)[0] for i in (first, second)]
+    return {"rate": float(fit), "drift": float(rates[1] - rates[0])}
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--restitution", type=float, default=0.9)
+    parser.add_argument("--n-modes", type=int, default=16)
+    parser.add_argument("--support", type=float, default=3.5)
+    parser.add_argument("--cells", type=int, default=12)
+    parser.add_argument("--final", type=float, default=6.0)
+    parser.add_argument("--skip", type=float, default=1.0)
+    parser.add_argument("--k-over-kc", default="0.5,1,1.5")
+    args = parser.parse_args(argv)
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    e = args.restitution
+    rows = []
+    for ratio in (float(r) for r in args.k_over_kc.split(",")):
+        k = ratio * theory(e, 1.0, 1.0, 1.0, 1.0)["k_c"]
+        length = 2 * math.pi / k
+        began = time.perf_counter()
+        run = Simulation(description(e, length, args.cells, args.n_modes, args.support,
+                                     args.final))
+        store = out / f"shear_e{e:g}_k{ratio:g}.zarr"
+        run.run(store, progress=False, overwrite=True)
+        ds = granframe.open_run(store, time_axis="steps")
+        seconds = time.perf_counter() - began
+        temperature = float(ds.temperature.values[-1].mean())
+        predicted = theory(e, 1.0, 1.0, temperature, k)
+        row = {"e": e, "k/k_c": ratio, "k": k, "length": length, "cells": args.cells,
+               "N": args.n_modes, "S": args.support, "a_0": ds.attrs["rescaling_rate"],
+               "zeta/2 Sonine": predicted["zeta"] / 2, "T_g": temperature,
+               **{f"measured {k_}": v for k_, v in measured_rate(ds, length, args.skip).items()},
+               "Navier-Stokes rate": predicted["rate"],
+               "Navier-Stokes rate with a_0": ds.attrs["rescaling_rate"]
+               - predicted["eta"] * k * k, "seconds": seconds}
+        rows.append(row)
+        print(json.dumps(row))
+    (out / f"shear_e{e:g}.json").write_text(json.dumps(rows, indent=1))
+
+
+if __name__ == "__main__":
+    main()
