@@ -17,9 +17,17 @@ nu_0 = rho T / eta_0,
     eta  = eta_0 / (nu_eta* - zeta*/2),   nu_eta* = (3 - e)(1 + e)/4 (1 - a_2/32),
     a_2  = 16 (1 - e)(1 - 2 e^2) / (81 - 17 e + 30 e^2 (1 - e))   (van Noije & Ernst 1998),
 
-so the shear mode grows for k < k_c = sqrt(rho zeta / (2 eta)).
+so the shear mode grows for k < k_c = sqrt(rho zeta / (2 eta)). The heat flux
+q = -kappa grad T - mu grad n has, with kappa_0 = (75/64) eps sqrt(pi T),
 
-Run: ``python studies/granular_hcs.py --out DIR [--restitution 0.9] [--n-modes 16]``.
+    kappa* = kappa/kappa_0 = (2/3)(1 + 2 a_2) / (nu_kappa* - 2 zeta*),
+    nu_kappa* = (1 + e)/3 (1 + 33 (1 - e)/16 + (19 - 3e) a_2 / 512),
+    mu* = n mu / (T kappa_0) = 2 (zeta* kappa* + 2 a_2 / 3) / (2 nu_kappa* - 3 zeta*)
+
+(Garzo & Dufty 1999 in the dilute limit; the same expressions, with c* = 2 a_2, are the
+dilute limit of the GD99 model of the MFIX code, model/calc_mu_s.f).
+
+Run: ``python studies/granular_hcs.py --out DIR [--restitution 0.9] [--n-modes 20]``.
 """
 
 from __future__ import annotations
@@ -38,11 +46,17 @@ from granframe.run.runner import Simulation
 
 
 def sonine(e: float) -> dict:
-    """The first-Sonine a_2, zeta* and eta* = eta/eta_0 of 3D inelastic hard spheres."""
+    """The first-Sonine a_2, zeta*, eta* = eta/eta_0, kappa* = kappa/kappa_0 and
+    mu* = n mu/(T kappa_0) of 3D inelastic hard spheres (module notes; the heat flux is
+    q = -kappa grad T - mu grad n)."""
     a2 = 16 * (1 - e) * (1 - 2 * e * e) / (81 - 17 * e + 30 * e * e * (1 - e))
     zeta = 5 / 12 * (1 - e * e) * (1 + 3 * a2 / 16)
     nu_eta = (3 - e) * (1 + e) / 4 * (1 - a2 / 32)
-    return {"a2": a2, "zeta*": zeta, "eta*": 1 / (nu_eta - zeta / 2)}
+    nu_kappa = (1 + e) / 3 * (1 + 33 * (1 - e) / 16 + (19 - 3 * e) * a2 / 512)
+    kappa = 2 / 3 * (1 + 2 * a2) / (nu_kappa - 2 * zeta)
+    mu = 2 * (zeta * kappa + 2 * a2 / 3) / (2 * nu_kappa - 3 * zeta)
+    return {"a2": a2, "zeta*": zeta, "eta*": 1 / (nu_eta - zeta / 2), "kappa*": kappa,
+            "mu*": mu}
 
 
 def theory(e: float, knudsen: float, density: float, temperature: float, k: float) -> dict:
@@ -94,7 +108,7 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", required=True)
     parser.add_argument("--restitution", type=float, default=0.9)
-    parser.add_argument("--n-modes", type=int, default=16)
+    parser.add_argument("--n-modes", type=int, default=20)
     parser.add_argument("--support", type=float, default=3.5)
     parser.add_argument("--cells", type=int, default=12)
     parser.add_argument("--final", type=float, default=6.0)

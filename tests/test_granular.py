@@ -6,7 +6,9 @@ import importlib.util
 import math
 import pathlib
 
+import numpy
 import pytest
+import scipy.integrate
 
 import granframe
 from granframe.run.runner import Simulation
@@ -25,7 +27,12 @@ HCS = _study("granular_hcs")
 
 def test_sonine_coefficients_reduce_to_the_elastic_gas_and_match_the_table():
     elastic = HCS.sonine(1.0)
-    assert elastic == {"a2": 0.0, "zeta*": 0.0, "eta*": 1.0}
+    assert elastic == {"a2": 0.0, "zeta*": 0.0, "eta*": 1.0, "kappa*": 1.0, "mu*": 0.0}
+    # the table of docs/granular.md (the dilute limit of MFIX's GD99 model agrees to 2e-16)
+    for e, kappa, mu in ((0.9, 1.068491, 0.115695), (0.7, 1.357967, 0.483735),
+                         (0.5, 1.911421, 1.174914)):
+        assert HCS.sonine(e)["kappa*"] == pytest.approx(kappa, abs=1e-6)
+        assert HCS.sonine(e)["mu*"] == pytest.approx(mu, abs=1e-6)
     # van Noije & Ernst: a_2 changes sign at e = 1/sqrt(2)
     assert HCS.sonine(2 ** -0.5)["a2"] == pytest.approx(0.0, abs=1e-15)
     assert HCS.sonine(0.9)["a2"] == pytest.approx(-0.01456, abs=1e-5)
@@ -48,3 +55,29 @@ def test_a_long_shear_mode_of_the_cooling_state_grows_at_the_navier_stokes_rate(
     eta = HCS.theory(e, 1.0, 1.0, float(ds.temperature.values[-1].mean()), k)["eta"]
     predicted = ds.attrs["rescaling_rate"] - eta * k * k
     assert predicted > 0.05 and measured == pytest.approx(predicted, rel=0.15)
+
+
+WALLS = _study("granular_walls")
+
+
+def test_the_navier_stokes_profile_between_heated_walls_solves_its_problem():
+    """W = (T/T_b)^(3/2) solves W'' = Lambda W^(-1/3) with W = 1 at the walls, the mass
+    is 1, Lambda = C rho_b^2, and for small Lambda T_min/T_b = 1 - Lambda/12 + O(Lambda^2);
+    an elastic gas is uniform."""
+    result = WALLS.navier_stokes(0.9, 0.1)
+    y, t = result["distance"], result["T/T_b"]
+    w = t ** 1.5
+    h = y[1] - y[0]
+    second = (w[2:] - 2 * w[1:-1] + w[:-2]) / h ** 2
+    assert numpy.allclose(second, result["Lambda"] * w[1:-1] ** (-1 / 3), rtol=2e-3)
+    assert t[-1] == pytest.approx(1.0, abs=1e-12) and t[0] == result["T_min/T_b"] < 0.6
+    mass = 2 * result["rho_b"] * scipy.integrate.simpson(1 / t, x=y)
+    assert mass == pytest.approx(1.0, abs=1e-9)
+    coefficients = HCS.sonine(0.9)
+    c = 6.144 * coefficients["zeta*"] / (math.pi * 0.02 * (coefficients["kappa*"]
+                                                         - coefficients["mu*"]))
+    assert result["Lambda"] == pytest.approx(c * result["rho_b"] ** 2, rel=1e-9)
+    dilute = WALLS.navier_stokes(0.9, 2.0)
+    assert dilute["T_min/T_b"] == pytest.approx(1 - dilute["Lambda"] / 12,
+                                                abs=dilute["Lambda"] ** 2)
+    assert WALLS.navier_stokes(1.0, 0.1)["T_min/T_b"] == 1.0

@@ -1,0 +1,161 @@
+r"""A granular gas heated by two diffuse walls (no gravity), 3D inelastic hard spheres,
+against the granular Navier-Stokes equations with the first-Sonine coefficients.
+
+Both walls at T_w = 1, x in [0, 1], mean density 1; eps = sqrt(2) Kn (lambda_mfp =
+eps / (sqrt 2 rho), docs/granular.md). The steady state has u = 0 and, to Navier-Stokes
+order, a uniform pressure p = rho T; the energy balance
+
+    d q / dx = -(3/2) zeta rho T,     q = -kappa dT/dx - mu d rho/dx = -kappa_0 (kappa* - mu*) dT/dx
+
+(with rho = p/T: mu d rho/dx = -mu (p/T^2) dT/dx = -kappa_0 mu* dT/dx, since mu =
+kappa_0 T mu*/n), kappa_0 = (75/64) eps sqrt(pi T), zeta = nu_0 zeta*, nu_0 = 16 n sqrt(T) /
+(5 eps sqrt(pi)). With w = T^{3/2} it is w'' = C p^2 w^{-1/3},
+C = 6.144 zeta* / (pi eps^2 (kappa* - mu*)); in units of the gas at the wall (T_b, rho_b =
+p/T_b), W = (T/T_b)^{3/2} solves
+
+    W'' = Lambda W^{-1/3},  W(0) = W(1) = 1,   Lambda = C rho_b^2,
+
+and the mass fixes rho_b: rho_b int_0^1 W^{-2/3} dx = 1. So T_min/T_b and rho_max/rho_b
+follow from e and eps alone, whatever the temperature jump T_w - T_b at the walls: those
+are compared with the kinetic run (T_b and rho_b its profiles extrapolated to the walls).
+
+Run: ``python studies/granular_walls.py --out DIR [--restitution 0.9] [--knudsen 0.1]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import pathlib
+import sys
+import time
+
+import numpy
+import scipy.integrate
+import scipy.optimize
+
+import granframe
+from granframe.run.description import RunDescription
+from granframe.run.runner import Simulation
+
+sys.path.insert(0, str(pathlib.Path(__file__).parent))
+from granular_hcs import sonine  # noqa: E402  (the first-Sonine coefficients)
+from space import cfl_time_step, energy_balance  # noqa: E402
+
+
+def navier_stokes(e: float, knudsen: float) -> dict:
+    """The steady Navier-Stokes profile between the walls (module notes): rho_b, Lambda,
+    T_min/T_b, rho_max/rho_b, and T/T_b at 101 distances from the centre (0 to 1/2).
+
+    Shot from the centre, where the profile is flat: V'' = beta V^(-1/3), V(0) = 1,
+    V'(0) = 0 gives W = V/V(1/2) for Lambda = beta V(1/2)^(4/3), and beta is found so that
+    Lambda = C rho_b^2 with rho_b from the mass."""
+    coefficients = sonine(e)
+    eps = math.sqrt(2.0) * knudsen
+    conduction = coefficients["kappa*"] - coefficients["mu*"]
+    c = 6.144 * coefficients["zeta*"] / (math.pi * eps * eps * conduction)
+    x = numpy.linspace(0.0, 0.5, 101)
+    if c == 0.0:                                   # elastic: no sink, a uniform gas
+        return {"rho_b": 1.0, "Lambda": 0.0, "T_min/T_b": 1.0, "rho_max/rho_b": 1.0,
+                "distance": x, "T/T_b": numpy.ones_like(x)}
+
+    def shoot(beta):
+        """From the centre: V = W/W_c with V(0) = 1, V'(0) = 0, V'' = beta V^(-1/3)
+        (beta = Lambda W_c^(-4/3)), on 0 <= y <= 1/2 (y the distance from the centre)."""
+        solution = scipy.integrate.solve_ivp(
+            lambda _, y: [y[1], beta * y[0] ** (-1.0 / 3.0)], (0.0, 0.5), [1.0, 0.0],
+            t_eval=x, rtol=1e-12, atol=1e-14, method="DOP853")
+        v = solution.y[0]
+        w = v / v[-1]                              # W = V / V(1/2): W = 1 at the wall
+        rho_b = 1.0 / (2.0 * scipy.integrate.simpson(w ** (-2.0 / 3.0), x=x))
+        return w, rho_b, beta * v[-1] ** (-4.0 / 3.0)    # Lambda = beta W_c^(4/3)
+
+    def mismatch(log_beta):
+        _, rho_b, lam = shoot(math.exp(log_beta))
+        return math.log(lam / (c * rho_b * rho_b))
+
+    log_beta = scipy.optimize.brentq(mismatch, math.log(1e-8), math.log(1e8), xtol=1e-13)
+    w, rho_b, lam = shoot(math.exp(log_beta))
+    temperature = w ** (2.0 / 3.0)
+    return {"rho_b": rho_b, "Lambda": lam, "T_min/T_b": float(temperature[0]),
+            "rho_max/rho_b": float(1.0 / temperature[0]), "distance": x,
+            "T/T_b": temperature}
+
+
+def description(e: float, knudsen: float, cells: int, n_modes: int, support: float,
+                final: float, time_step: float) -> RunDescription:
+    """3D hard spheres between diffuse walls at T_w = 1, from the Maxwellian of T = 1."""
+    return RunDescription(
+        title=f"heated walls, e = {e:g}, Kn = {knudsen:g}, {cells} cells, N = {n_modes}",
+        grid={"dimension": 3, "n_modes": n_modes, "support_radius": support},
+        kernel="hard_spheres", restitution={"name": "constant", "value": e},
+        initial={"name": "maxwellian"}, integrator="ssp_rk2", conservative=True,
+        knudsen=math.sqrt(2.0) * knudsen, time_step=time_step, final_time=final,
+        output={"snapshot_interval": final},
+        space={"cells": cells, "reconstruction": "muscl",
+               "left": {"name": "diffuse", "temperature": 1.0},
+               "right": {"name": "diffuse", "temperature": 1.0}})
+
+
+def at_walls(values, cells: int) -> float:
+    """The profile's value at x = 0 and x = 1 (mean of both), by the quadratic through the
+    first three cell averages (their centres) extrapolated to the wall."""
+    centres = (numpy.arange(3) + 0.5) / cells
+    ends = []
+    for side in (values[:3], values[::-1][:3]):
+        ends.append(numpy.polyval(numpy.polyfit(centres, side, 2), 0.0))
+    return float(numpy.mean(ends))
+
+
+def kinetic(ds, operator, knudsen: float) -> dict:
+    """T_min/T_b, rho_max/rho_b, the jump T_w - T_b and the energy budget of a run."""
+    cells = ds.sizes["x"]
+    temperature = ds.temperature.values[-1]
+    density = ds.density.values[-1]
+    t_b, rho_b = at_walls(temperature, cells), at_walls(density, cells)
+    budget = energy_balance(ds, operator, math.sqrt(2.0) * knudsen)
+    return {"T_b": t_b, "rho_b": rho_b, "T_min/T_b": float(temperature.min() / t_b),
+            "rho_max/rho_b": float(density.max() / rho_b), "jump": 1.0 - t_b,
+            "heat": budget["heat"], "dissipation": budget["dissipation"],
+            "unsteadiness": budget["unsteadiness"], "residual": budget["residual"]}
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--restitution", type=float, default=0.9)
+    parser.add_argument("--knudsen", type=float, default=0.1)
+    parser.add_argument("--cells", type=int, default=16)
+    parser.add_argument("--n-modes", type=int, default=16)
+    parser.add_argument("--support", type=float, default=3.5)
+    parser.add_argument("--final", type=float, default=3.0)
+    parser.add_argument("--steps", type=int, default=None,
+                        help="steps to the final time (default: the transport's CFL limit)")
+    args = parser.parse_args(argv)
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    e, kn = args.restitution, args.knudsen
+    grid = {"n_modes": args.n_modes, "support_radius": args.support}
+    time_step = (args.final / args.steps if args.steps
+                 else cfl_time_step(args.cells, args.final, grid))
+    began = time.perf_counter()
+    run = Simulation(description(e, kn, args.cells, args.n_modes, args.support, args.final,
+                                 time_step))
+    store = out / f"walls_e{e:g}_kn{kn:g}_c{args.cells}_n{args.n_modes}.zarr"
+    run.run(store, progress=False, overwrite=True)
+    seconds = time.perf_counter() - began
+    ds = granframe.open_run(store, time_axis="steps")
+    measured = kinetic(ds, run.problem.operator, kn)
+    theory = navier_stokes(e, kn)
+    row = {"e": e, "Kn": kn, "cells": args.cells, "N": args.n_modes, "S": args.support,
+           "dt": time_step, "final": args.final, "seconds": seconds,
+           "steps": int(ds.sizes["time"]) - 1, **measured,
+           "NS rho_b": theory["rho_b"], "NS T_min/T_b": theory["T_min/T_b"],
+           "NS rho_max/rho_b": theory["rho_max/rho_b"]}
+    print(json.dumps(row))
+    (store.with_suffix(".json")).write_text(json.dumps(row, indent=1))
+
+
+if __name__ == "__main__":
+    main()
