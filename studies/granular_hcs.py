@@ -27,7 +27,7 @@ q = -kappa grad T - mu grad n has, with kappa_0 = (75/64) eps sqrt(pi T),
 (Garzo & Dufty 1999 in the dilute limit; the same expressions, with c* = 2 a_2, are the
 dilute limit of the GD99 model of the MFIX code, model/calc_mu_s.f).
 
-Run: ``python studies/granular_hcs.py --out DIR [--restitution 0.9] [--n-modes 20]``.
+Run: ``python studies/granular_hcs.py --out DIR [--restitution 0.9] [--n-modes 24]``.
 """
 
 from __future__ import annotations
@@ -71,16 +71,57 @@ def theory(e: float, knudsen: float, density: float, temperature: float, k: floa
             "k_c": math.sqrt(density * zeta / (2 * eta))}
 
 
+def longitudinal(e: float, k_star: float):
+    r"""The linearised Navier-Stokes matrix of the longitudinal modes about the cooling
+    state, d/d tau (rho', w, theta) = M (rho', w, theta), for the Fourier amplitudes of
+    rho/rho_H - 1, i u_1/sqrt(T_H) and T/T_H - 1 at wavenumber k* = k sqrt(T_H)/nu_0, in
+    tau = int nu_0 dt (module notes, derived in docs/granular.md):
+
+        d rho'/d tau  = k* w
+        d w/d tau     = -k* (rho' + theta) + (zeta*/2 - (4/3) eta* k*^2) w
+        d theta/d tau = -(zeta* + (5/2) mu* k*^2) rho' - (2/3) k* w
+                        - (zeta*/2 + (5/2) kappa* k*^2) theta
+
+    (w = i u_1/sqrt(T) makes the matrix real)."""
+    c = sonine(e)
+    return numpy.array([
+        [0.0, k_star, 0.0],
+        [-k_star, c["zeta*"] / 2 - 4 / 3 * c["eta*"] * k_star ** 2, -k_star],
+        [-(c["zeta*"] + 2.5 * c["mu*"] * k_star ** 2), -2 / 3 * k_star,
+         -(c["zeta*"] / 2 + 2.5 * c["kappa*"] * k_star ** 2)]])
+
+
+def collision_scale(knudsen: float, density: float, temperature: float) -> float:
+    """nu_0 = rho T / eta_0 = 16 rho sqrt(T) / (5 eps sqrt(pi))."""
+    return 16 * density * math.sqrt(temperature) / (5 * knudsen * math.sqrt(math.pi))
+
+
+def density_response(e: float, knudsen: float, temperature: float, k: float, s):
+    """rho'(s)/rho'(0) of Navier-Stokes for a density mode with u = 0, T uniform at s = 0,
+    in the rescaled time s of a hard-sphere run with T_g = ``temperature``
+    (d tau = nu_0(T_g) ds)."""
+    nu0 = collision_scale(knudsen, 1.0, temperature)
+    matrix = longitudinal(e, k * math.sqrt(temperature) / nu0)
+    values, vectors = numpy.linalg.eig(matrix)
+    weights = numpy.linalg.solve(vectors, numpy.array([1.0, 0.0, 0.0]))
+    tau = nu0 * numpy.asarray(s, dtype=float)
+    return numpy.real((vectors[0][None, :] * weights[None, :]
+                       * numpy.exp(values[None, :] * tau[:, None])).sum(axis=1))
+
+
 def description(e: float, length: float, cells: int, n_modes: int, support: float,
-                final: float, amplitude: float = 0.02, knudsen: float = 1.0) -> RunDescription:
+                final: float, amplitude: float = 0.02, knudsen: float = 1.0,
+                field: str = "velocity") -> RunDescription:
     """A rescaled 3D hard-sphere gas in a periodic box of ``length`` with the shear mode
-    u_2 = amplitude sin(2 pi x / length)."""
+    u_2 = amplitude sin(2 pi x / length), or (``field`` 'density') the density mode
+    rho = 1 + amplitude sin(2 pi x / length) at uniform T."""
     grid = {"dimension": 3, "n_modes": n_modes, "support_radius": support}
+    mode = ({"field": "velocity", "component": 2} if field == "velocity"
+            else {"field": "density"})
     return RunDescription(
-        title=f"HCS shear mode, e = {e:g}, length {length:g}, {cells} cells, N = {n_modes}",
+        title=f"HCS {field} mode, e = {e:g}, length {length:g}, {cells} cells, N = {n_modes}",
         grid=grid, kernel="hard_spheres", restitution={"name": "constant", "value": e},
-        initial={"name": "sinusoidal_mode", "field": "velocity", "component": 2,
-                 "amplitude": amplitude},
+        initial={"name": "sinusoidal_mode", "amplitude": amplitude, **mode},
         integrator="rk4", time_step=DT, final_time=final, rescaled=True, conservative=True,
         knudsen=knudsen, output={"snapshot_interval": final},
         space={"cells": cells, "length": length, "reconstruction": "weno5"})
@@ -104,16 +145,33 @@ def measured_rate(ds, length: float, skip: float) -> dict:
     return {"rate": float(fit), "drift": float(rates[1] - rates[0])}
 
 
+def density_comparison(ds, e: float, length: float, knudsen: float = 1.0) -> dict:
+    """The density mode's amplitude A(s)/A(0) (the sine coefficient of rho) against
+    Navier-Stokes (:func:`density_response` at the run's mean T_g): at the end, and the
+    largest difference over the run."""
+    s = ds.time.values
+    x = ds.x.values
+    wave = ds.density.values - ds.density.values.mean(axis=1, keepdims=True)
+    amplitude = numpy.mean(wave * numpy.sin(2 * math.pi * x / length)[None], axis=1)
+    measured = amplitude / amplitude[0]
+    temperature = float(ds.temperature.values.mean())
+    predicted = density_response(e, knudsen, temperature, 2 * math.pi / length, s)
+    return {"A(end)/A(0)": float(measured[-1]), "NS A(end)/A(0)": float(predicted[-1]),
+            "max difference": float(numpy.abs(measured - predicted).max())}
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", required=True)
     parser.add_argument("--restitution", type=float, default=0.9)
-    parser.add_argument("--n-modes", type=int, default=20)
+    parser.add_argument("--n-modes", type=int, default=24)
     parser.add_argument("--support", type=float, default=3.5)
     parser.add_argument("--cells", type=int, default=12)
     parser.add_argument("--final", type=float, default=6.0)
     parser.add_argument("--skip", type=float, default=1.0)
     parser.add_argument("--k-over-kc", default="0.5,1,1.5")
+    parser.add_argument("--field", choices=("velocity", "density"), default="velocity",
+                        help="the shear mode (velocity, u_2) or the density mode")
     args = parser.parse_args(argv)
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -124,9 +182,10 @@ def main(argv=None):
         length = 2 * math.pi / k
         began = time.perf_counter()
         run = Simulation(description(e, length, args.cells, args.n_modes, args.support,
-                                     args.final))
-        store = out / f"shear_e{e:g}_k{ratio:g}.zarr"
-        run.run(store, progress=False, overwrite=True)
+                                     args.final, field=args.field))
+        name = "shear" if args.field == "velocity" else "density"
+        store = out / f"{name}_e{e:g}_k{ratio:g}.zarr"
+        result = run.run(store, progress=False, overwrite=True)
         ds = granframe.open_run(store, time_axis="steps")
         seconds = time.perf_counter() - began
         temperature = float(ds.temperature.values[-1].mean())
@@ -134,13 +193,16 @@ def main(argv=None):
         row = {"e": e, "k/k_c": ratio, "k": k, "length": length, "cells": args.cells,
                "N": args.n_modes, "S": args.support, "a_0": ds.attrs["rescaling_rate"],
                "zeta/2 Sonine": predicted["zeta"] / 2, "T_g": temperature,
-               **{f"measured {k_}": v for k_, v in measured_rate(ds, length, args.skip).items()},
+               **(density_comparison(ds, e, length) if args.field == "density" else
+                  {f"measured {key}": value
+                   for key, value in measured_rate(ds, length, args.skip).items()}),
                "Navier-Stokes rate": predicted["rate"],
                "Navier-Stokes rate with a_0": ds.attrs["rescaling_rate"]
-               - predicted["eta"] * k * k, "seconds": seconds}
+               - predicted["eta"] * k * k, "seconds": seconds,
+               "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
         rows.append(row)
         print(json.dumps(row))
-    (out / f"shear_e{e:g}.json").write_text(json.dumps(rows, indent=1))
+    (out / f"{name}_e{e:g}.json").write_text(json.dumps(rows, indent=1))
 
 
 if __name__ == "__main__":

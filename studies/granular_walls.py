@@ -143,7 +143,7 @@ def main(argv=None):
     run = Simulation(description(e, kn, args.cells, args.n_modes, args.support, args.final,
                                  time_step))
     store = out / f"walls_e{e:g}_kn{kn:g}_c{args.cells}_n{args.n_modes}.zarr"
-    run.run(store, progress=False, overwrite=True)
+    result = run.run(store, progress=False, overwrite=True)
     seconds = time.perf_counter() - began
     ds = granframe.open_run(store, time_axis="steps")
     measured = kinetic(ds, run.problem.operator, kn)
@@ -152,7 +152,8 @@ def main(argv=None):
            "dt": time_step, "final": args.final, "seconds": seconds,
            "steps": int(ds.sizes["time"]) - 1, **measured,
            "NS rho_b": theory["rho_b"], "NS T_min/T_b": theory["T_min/T_b"],
-           "NS rho_max/rho_b": theory["rho_max/rho_b"]}
+           "NS rho_max/rho_b": theory["rho_max/rho_b"],
+           "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
     print(json.dumps(row))
     (store.with_suffix(".json")).write_text(json.dumps(row, indent=1))
 
