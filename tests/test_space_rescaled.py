@@ -45,10 +45,10 @@ def test_transport_time_is_the_integral_of_omega_to_the_kappa_minus_one():
 
 
 def test_uniform_data_follow_the_homogeneous_rescaled_run_in_every_cell():
-    """Hard spheres, e = 0.8: the same a_0 to 3e-7 (measured 1.1e-7: the space run's fixed point has u_1 = 0
-    exactly, the homogeneous one the periodic grid's mean, 8e-5 off) and the same g to 5e-6
-    of its peak after 20 steps, in every cell (measured 2.2e-6: the two fixed points part
-    by a_0 s u_1 = 4e-6 in xi_1)."""
+    """Hard spheres, e = 0.8: the same a_0 to 3e-7 (measured 1.1e-7: the space run's fixed
+    point has u_1 = 0 exactly, the homogeneous one the periodic grid's mean, 8e-5 off) and
+    the same g to 5e-6 of its peak after 20 steps, in every cell (measured 2.2e-6: the two
+    fixed points part by a_0 s u_1 = 4e-6 in xi_1)."""
     space = _run(_description(initial={"name": "maxwellian"}))
     homogeneous = _run(RunDescription(
         grid=GRID, kernel="hard_spheres", restitution={"name": "constant", "value": 0.8},
