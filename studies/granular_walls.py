@@ -133,9 +133,10 @@ def main(argv=None):
     parser.add_argument("--final", type=float, default=3.0)
     parser.add_argument("--steps", type=int, default=None,
                         help="steps to the final time (default: the transport's CFL limit)")
-    parser.add_argument("--quadrature", choices=("auto", "review"), default="review",
+    parser.add_argument("--quadrature", choices=("auto", "review"), default="auto",
                         help="the fast operator's rules (review: a quarter of the cost at "
-                             "N = 24 in 3D)")
+                             "N = 24 in 3D, but Q differs from the default rules' by 3.7 %% "
+                             "of max |Q| there)")
     args = parser.parse_args(argv)
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
