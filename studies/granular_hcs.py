@@ -163,6 +163,54 @@ def density_comparison(ds, e: float, length: float, knudsen: float = 1.0) -> dic
             "max difference": float(numpy.abs(measured - predicted).max())}
 
 
+def amplitude_history(ds, length: float, field: str = "velocity"):
+    """s and the sine amplitude of u_2/sqrt(T) (``velocity``) or of rho - <rho>."""
+    x = ds.x.values
+    if field == "velocity":
+        wave = ds.velocity.values[:, :, 1] / numpy.sqrt(ds.temperature.values)
+    else:
+        wave = ds.density.values - ds.density.values.mean(axis=1, keepdims=True)
+    return ds.time.values, 2 * numpy.mean(wave * numpy.sin(2 * math.pi * x / length)[None],
+                                          axis=1)
+
+
+def figure(stores, path) -> None:
+    """ln(A(s)/A(0)) of each run against s, with the Navier-Stokes prediction (dashed):
+    the shear mode's rate a_0 - eta k^2/rho, the density mode's :func:`density_response`."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for store in stores:
+        ds = granframe.open_run(store, time_axis="steps")
+        description = RunDescription.from_toml(ds.attrs["description_toml"])
+        length, e = description.space.length, description.restitution.params["value"]
+        field = description.initial.params.get("field", "velocity")
+        s, amplitude = amplitude_history(ds, length, field)
+        label = (f"{'shear' if field == 'velocity' else 'density'}, e = {e:g}, "
+                 f"k = {2 * math.pi / length:.3f}, N = {description.grid.n_modes}")
+        line, = ax.plot(s, numpy.log(amplitude / amplitude[0]), label=label)
+        k = 2 * math.pi / length
+        temperature = float(ds.temperature.values.mean())
+        if field == "velocity":
+            eta = theory(e, description.knudsen, 1.0, temperature, k)["eta"]
+            rate = ds.attrs["rescaling_rate"] - eta * k * k
+            reference = numpy.log(amplitude[s >= 1.0][0] / amplitude[0]) + rate * (s - 1.0)
+        else:
+            reference = numpy.log(density_response(e, description.knudsen, temperature, k, s))
+        ax.plot(s, reference, "--", color=line.get_color(), lw=1)
+    ax.set_xlabel("rescaled time s")
+    ax.set_ylabel("ln A(s)/A(0)")
+    ax.set_title("modes of the cooling state (3D hard spheres): granframe (solid), "
+                 "Navier-Stokes (dashed)", fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", required=True)
@@ -175,6 +223,8 @@ def main(argv=None):
     parser.add_argument("--k-over-kc", default="0.5,1,1.5")
     parser.add_argument("--field", choices=("velocity", "density"), default="velocity",
                         help="the shear mode (velocity, u_2) or the density mode")
+    parser.add_argument("--figure", nargs="+", metavar="STORE",
+                        help="draw these runs' amplitudes into OUT/modes.png and stop")
     parser.add_argument("--quadrature", choices=("auto", "review"), default="auto",
                         help="the fast operator's rules (review: a quarter of the cost at "
                              "N = 24 in 3D, but Q differs from the default rules' by 3.7 %% "
@@ -182,6 +232,9 @@ def main(argv=None):
     args = parser.parse_args(argv)
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    if args.figure:
+        figure(args.figure, out / "modes.png")
+        return
     e = args.restitution
     rows = []
     for ratio in (float(r) for r in args.k_over_kc.split(",")):

@@ -122,6 +122,44 @@ def kinetic(ds, operator, knudsen: float) -> dict:
             "unsteadiness": budget["unsteadiness"], "residual": budget["residual"]}
 
 
+def figure(stores, path) -> None:
+    """T/T_b and rho/rho_b of each run (cell averages, markers) against the Navier-Stokes
+    profile of its e and Kn (lines)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    for store in stores:
+        ds = granframe.open_run(store, time_axis="steps")
+        description = RunDescription.from_toml(ds.attrs["description_toml"])
+        e = description.restitution.params["value"]
+        knudsen = description.knudsen / math.sqrt(2.0)
+        cells = ds.sizes["x"]
+        temperature, density = ds.temperature.values[-1], ds.density.values[-1]
+        t_b, rho_b = at_walls(temperature, cells), at_walls(density, cells)
+        theory = navier_stokes(e, knudsen)
+        y = theory["distance"]
+        x = numpy.concatenate([0.5 - y[::-1], 0.5 + y[1:]])
+        profile = numpy.concatenate([theory["T/T_b"][::-1], theory["T/T_b"][1:]])
+        label = f"e = {e:g}, Kn = {knudsen:g}, N = {description.grid.n_modes}, {cells} cells"
+        line, = axes[0].plot(ds.x.values, temperature / t_b, "o", ms=4, label=label)
+        axes[0].plot(x, profile, "-", color=line.get_color(), lw=1)
+        axes[1].plot(ds.x.values, density / rho_b, "o", ms=4, color=line.get_color())
+        axes[1].plot(x, 1.0 / profile, "-", color=line.get_color(), lw=1)
+    axes[0].set_ylabel("T / T_b")
+    axes[1].set_ylabel("rho / rho_b")
+    for ax in axes:
+        ax.set_xlabel("x")
+    axes[0].legend(fontsize=7)
+    fig.suptitle("heated walls, 3D hard spheres: granframe (markers), granular "
+                 "Navier-Stokes (lines); T_b, rho_b at the walls", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", required=True)
@@ -137,9 +175,14 @@ def main(argv=None):
                         help="the fast operator's rules (review: a quarter of the cost at "
                              "N = 24 in 3D, but Q differs from the default rules' by 3.7 %% "
                              "of max |Q| there)")
+    parser.add_argument("--figure", nargs="+", metavar="STORE",
+                        help="draw these runs' profiles into OUT/walls.png and stop")
     args = parser.parse_args(argv)
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    if args.figure:
+        figure(args.figure, out / "walls.png")
+        return
     e, kn = args.restitution, args.knudsen
     grid = {"n_modes": args.n_modes, "support_radius": args.support}
     time_step = (args.final / args.steps if args.steps

@@ -81,3 +81,17 @@ def test_the_navier_stokes_profile_between_heated_walls_solves_its_problem():
     assert dilute["T_min/T_b"] == pytest.approx(1 - dilute["Lambda"] / 12,
                                                 abs=dilute["Lambda"] ** 2)
     assert WALLS.navier_stokes(1.0, 0.1)["T_min/T_b"] == 1.0
+
+
+def test_longitudinal_modes_of_the_cooling_state_at_long_wavelengths():
+    """At k* = 0 the eigenvalues are 0 and +-zeta*/2 (Brey et al. 1998); the heat mode's
+    real positive eigenvalue survives at small k* (clustering) and is gone by k* = 0.2 at
+    e = 0.9; the density response starts at 1."""
+    zeta = HCS.sonine(0.9)["zeta*"]
+    values = numpy.sort(numpy.linalg.eigvals(HCS.longitudinal(0.9, 0.0)).real)
+    assert numpy.allclose(values, [-zeta / 2, 0.0, zeta / 2], atol=1e-15)
+    small = numpy.linalg.eigvals(HCS.longitudinal(0.9, 0.05))
+    assert any(v.real > 0 and abs(v.imag) < 1e-12 for v in small)
+    assert all(v.real < 0 for v in numpy.linalg.eigvals(HCS.longitudinal(0.9, 0.2)))
+    response = HCS.density_response(0.9, 1.0, 1.0, 0.2, [0.0, 1.0])
+    assert response[0] == pytest.approx(1.0, abs=1e-12)
