@@ -174,6 +174,44 @@ def amplitude_history(ds, length: float, field: str = "velocity"):
                                           axis=1)
 
 
+def study_arguments(doc: str, n_modes: int, cells: int, final: float):
+    """The options both granular studies take (what they share of their command line)."""
+    parser = argparse.ArgumentParser(description=doc.splitlines()[0])
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--restitution", type=float, default=0.9)
+    parser.add_argument("--n-modes", type=int, default=n_modes)
+    parser.add_argument("--support", type=float, default=3.5)
+    parser.add_argument("--cells", type=int, default=cells)
+    parser.add_argument("--final", type=float, default=final)
+    parser.add_argument("--quadrature", choices=("auto", "review"), default="auto",
+                        help="the fast operator's rules (review: a quarter of the cost at "
+                             "N = 24 in 3D, but Q differs from the default rules' by 3.7 %% "
+                             "of max |Q| there)")
+    parser.add_argument("--figure", nargs="+", metavar="STORE",
+                        help="draw these runs into a figure in OUT and stop")
+    return parser
+
+
+def output_folder(args, draw, name: str):
+    """OUT, created; with ``--figure`` the stores drawn by ``draw`` into OUT/``name``
+    instead, and None (nothing to run)."""
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    if args.figure:
+        draw(args.figure, out / name)
+        return None
+    return out
+
+
+def save_figure(fig, path) -> None:
+    """Lay out, write at 120 dpi and close."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
 def figure(stores, path) -> None:
     """ln(A(s)/A(0)) of each run against s, with the Navier-Stokes prediction (dashed):
     the shear mode's rate a_0 - eta k^2/rho, the density mode's :func:`density_response`."""
@@ -206,34 +244,18 @@ def figure(stores, path) -> None:
     ax.set_title("modes of the cooling state (3D hard spheres): granframe (solid), "
                  "Navier-Stokes (dashed)", fontsize=9)
     ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", required=True)
-    parser.add_argument("--restitution", type=float, default=0.9)
-    parser.add_argument("--n-modes", type=int, default=24)
-    parser.add_argument("--support", type=float, default=3.5)
-    parser.add_argument("--cells", type=int, default=12)
-    parser.add_argument("--final", type=float, default=6.0)
+    parser = study_arguments(__doc__, n_modes=24, cells=12, final=6.0)
     parser.add_argument("--skip", type=float, default=1.0)
     parser.add_argument("--k-over-kc", default="0.5,1,1.5")
     parser.add_argument("--field", choices=("velocity", "density"), default="velocity",
                         help="the shear mode (velocity, u_2) or the density mode")
-    parser.add_argument("--figure", nargs="+", metavar="STORE",
-                        help="draw these runs' amplitudes into OUT/modes.png and stop")
-    parser.add_argument("--quadrature", choices=("auto", "review"), default="auto",
-                        help="the fast operator's rules (review: a quarter of the cost at "
-                             "N = 24 in 3D, but Q differs from the default rules' by 3.7 %% "
-                             "of max |Q| there)")
     args = parser.parse_args(argv)
-    out = pathlib.Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    if args.figure:
-        figure(args.figure, out / "modes.png")
+    out = output_folder(args, figure, "modes.png")
+    if out is None:
         return
     e = args.restitution
     rows = []

@@ -19,7 +19,7 @@ and the mass fixes rho_b: rho_b int_0^1 W^{-2/3} dx = 1. So T_min/T_b and rho_ma
 follow from e and eps alone, whatever the temperature jump T_w - T_b at the walls: those
 are compared with the kinetic run (T_b and rho_b its profiles extrapolated to the walls).
 
-Run: ``python studies/granular_walls.py --out DIR [--restitution 0.9] [--knudsen 0.1]``.
+Run: ``python studies/granular_walls.py --out DIR [--restitution 0.9] [--knudsen 0.2]``.
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from granular_hcs import sonine  # noqa: E402  (the first-Sonine coefficients)
+from granular_hcs import output_folder, save_figure, sonine, study_arguments  # noqa: E402
 from space import cfl_time_step, energy_balance  # noqa: E402
 
 
@@ -155,33 +155,17 @@ def figure(stores, path) -> None:
     axes[0].legend(fontsize=7)
     fig.suptitle("heated walls, 3D hard spheres: granframe (markers), granular "
                  "Navier-Stokes (lines); T_b, rho_b at the walls", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", required=True)
-    parser.add_argument("--restitution", type=float, default=0.9)
-    parser.add_argument("--knudsen", type=float, default=0.1)
-    parser.add_argument("--cells", type=int, default=16)
-    parser.add_argument("--n-modes", type=int, default=16)
-    parser.add_argument("--support", type=float, default=3.5)
-    parser.add_argument("--final", type=float, default=3.0)
+    parser = study_arguments(__doc__, n_modes=24, cells=12, final=3.0)
+    parser.add_argument("--knudsen", type=float, default=0.2)
     parser.add_argument("--steps", type=int, default=None,
                         help="steps to the final time (default: the transport's CFL limit)")
-    parser.add_argument("--quadrature", choices=("auto", "review"), default="auto",
-                        help="the fast operator's rules (review: a quarter of the cost at "
-                             "N = 24 in 3D, but Q differs from the default rules' by 3.7 %% "
-                             "of max |Q| there)")
-    parser.add_argument("--figure", nargs="+", metavar="STORE",
-                        help="draw these runs' profiles into OUT/walls.png and stop")
     args = parser.parse_args(argv)
-    out = pathlib.Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    if args.figure:
-        figure(args.figure, out / "walls.png")
+    out = output_folder(args, figure, "walls.png")
+    if out is None:
         return
     e, kn = args.restitution, args.knudsen
     grid = {"n_modes": args.n_modes, "support_radius": args.support}
