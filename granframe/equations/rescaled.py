@@ -49,6 +49,7 @@ import numpy
 from granframe import validators as check
 from granframe.abc import Part
 from granframe.equations.homogeneous import HomogeneousBoltzmann
+from granframe.model.restitution import is_elastic
 
 
 @attrs.frozen
@@ -272,7 +273,8 @@ class RescaledBoltzmann(HomogeneousBoltzmann):
         if dissipation is None:
             dissipation = float(xp.sum(operator(initial) * self.drift.energy_weight))
         transport = float(xp.sum(self.drift(initial) * self.drift.energy_weight))
-        rate = cooling_rate(dissipation / self.knudsen, transport, "RescaledBoltzmann")
+        rate = cooling_rate(dissipation / self.knudsen, transport,
+                            is_elastic(operator.restitution, grid), "RescaledBoltzmann")
         self.rescaling = Rescaling(rate, degree, velocity)
         self._drift_radius = rate * self.drift.unit_radius
 
@@ -299,13 +301,11 @@ def check_drift_velocity(kernel, velocity, owner: str, name: str) -> None:
                      "(E = int |v|^2/2 f then does not scale with omega)")
 
 
-def cooling_rate(dissipation: float, transport: float, owner: str) -> float:
+def cooling_rate(dissipation: float, transport: float, elastic: bool, owner: str) -> float:
     r"""a_0 = dissipation / transport (the module notes), refused unless finite and >= 0;
-    a rate of round-off size (|a_0| <= 1e-12, in units of the collision frequency: an
-    elastic gas) is 0."""
-    rate = dissipation / transport if transport else 0.0
-    if abs(rate) <= 1e-12:
-        rate = 0.0
+    0 for an ``elastic`` gas (:func:`~granframe.model.restitution.is_elastic`), whose
+    dissipation is round-off of either sign."""
+    rate = 0.0 if elastic or not transport else dissipation / transport
     if not (math.isfinite(rate) and rate >= 0.0):
         check.reject(owner, "initial", "f0",
                      f"gives the cooling rate a_0 = {rate:.6g}; it must be finite and "

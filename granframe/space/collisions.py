@@ -223,10 +223,8 @@ class RescaledCellCollisions(CellCollisions):
         gather = ((lambda part: [part]) if communicator is None
                   else communicator.allgather_object)
         rho, velocity, temperature, _ = (to_host(a) for a in self.moments.primitives(cells))
-        periodic = to_host(self.moments.primitives(cells, node="periodic")[1])
-        rho, momentum, periodic, heat = (
-            numpy.concatenate(gather(part)) for part in
-            (rho, rho[:, None] * velocity, rho[:, None] * periodic, rho * temperature))
+        rho, momentum, heat = (numpy.concatenate(gather(part)) for part in
+                               (rho, rho[:, None] * velocity, rho * temperature))
         along = float(momentum[:, 0].sum() / rho.sum())
         thermal = math.sqrt(float(heat.sum() / rho.sum()))
         if not abs(along) <= DRIFT_TOLERANCE * thermal:
@@ -236,8 +234,9 @@ class RescaledCellCollisions(CellCollisions):
                          "transport of g is then omega^(kappa - 1) xi_1 d_x g; take the frame "
                          "that moves with the gas")
         # the fixed point: 0 along x, where the transport needs it, and across x the mean
-        # velocity in the periodic grid's convention, as the homogeneous formulation takes it
-        mean = (0.0,) + tuple(float(m) for m in periodic[:, 1:].sum(axis=0) / rho.sum())
+        # velocity (the same in the periodic grid's convention, which the homogeneous
+        # formulation takes: the node -L shifts only the component along its own axis)
+        mean = (0.0,) + tuple(float(m) for m in momentum[:, 1:].sum(axis=0) / rho.sum())
         check_drift_velocity(operator.kernel, mean, owner, "initial")
         self.drift = SelfSimilarDrift(grid, operator.backend, mean)
         if dissipation is None:
@@ -246,7 +245,7 @@ class RescaledCellCollisions(CellCollisions):
         dissipation = numpy.concatenate(gather(to_host(dissipation)))
         transport = numpy.concatenate(gather(transport))
         rate = cooling_rate(float(dissipation.sum()) / self.knudsen, float(transport.sum()),
-                            owner)
+                            is_elastic(operator.restitution, grid), owner)
         self.rescaling = Rescaling(rate, degree, mean)
         self._drift_radius = rate * self.drift.unit_radius
         self.invariants = ("mass",) if isinstance(operator, ConservativeCorrection) else ()
