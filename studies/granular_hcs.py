@@ -133,13 +133,21 @@ def description(e: float, length: float, cells: int, n_modes: int, support: floa
 DT = 0.05
 
 
+def amplitude_history(ds, length: float, field: str = "velocity"):
+    """s and the sine amplitude of u_2/sqrt(T) (``velocity``) or of rho - <rho>."""
+    x = ds.x.values
+    if field == "velocity":
+        wave = ds.velocity.values[:, :, 1] / numpy.sqrt(ds.temperature.values)
+    else:
+        wave = ds.density.values - ds.density.values.mean(axis=1, keepdims=True)
+    return ds.time.values, 2 * numpy.mean(wave * numpy.sin(2 * math.pi * x / length)[None],
+                                          axis=1)
+
+
 def measured_rate(ds, length: float, skip: float) -> dict:
     """The rate d ln A / ds of the sine amplitude A of u_2 / sqrt(T) (= that of g) by least
     squares over s >= skip, and its spread (the rates of the two halves of that window)."""
-    s = ds.time.values
-    x = ds.x.values
-    wave = ds.velocity.values[:, :, 1] / numpy.sqrt(ds.temperature.values)
-    amplitude = 2 * numpy.mean(wave * numpy.sin(2 * math.pi * x / length)[None], axis=1)
+    s, amplitude = amplitude_history(ds, length)
     keep = s >= skip
     fit = numpy.polyfit(s[keep], numpy.log(amplitude[keep]), 1)[0]
     half = keep.nonzero()[0]
@@ -152,26 +160,12 @@ def density_comparison(ds, e: float, length: float, knudsen: float = 1.0) -> dic
     """The density mode's amplitude A(s)/A(0) (the sine coefficient of rho) against
     Navier-Stokes (:func:`density_response` at the run's mean T_g): at the end, and the
     largest difference over the run."""
-    s = ds.time.values
-    x = ds.x.values
-    wave = ds.density.values - ds.density.values.mean(axis=1, keepdims=True)
-    amplitude = numpy.mean(wave * numpy.sin(2 * math.pi * x / length)[None], axis=1)
+    s, amplitude = amplitude_history(ds, length, "density")
     measured = amplitude / amplitude[0]
     temperature = float(ds.temperature.values.mean())
     predicted = density_response(e, knudsen, temperature, 2 * math.pi / length, s)
     return {"A(end)/A(0)": float(measured[-1]), "NS A(end)/A(0)": float(predicted[-1]),
             "max difference": float(numpy.abs(measured - predicted).max())}
-
-
-def amplitude_history(ds, length: float, field: str = "velocity"):
-    """s and the sine amplitude of u_2/sqrt(T) (``velocity``) or of rho - <rho>."""
-    x = ds.x.values
-    if field == "velocity":
-        wave = ds.velocity.values[:, :, 1] / numpy.sqrt(ds.temperature.values)
-    else:
-        wave = ds.density.values - ds.density.values.mean(axis=1, keepdims=True)
-    return ds.time.values, 2 * numpy.mean(wave * numpy.sin(2 * math.pi * x / length)[None],
-                                          axis=1)
 
 
 def study_arguments(doc: str, n_modes: int, cells: int, final: float):
