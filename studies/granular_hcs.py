@@ -91,6 +91,18 @@ def longitudinal(e: float, k_star: float):
          -(c["zeta*"] / 2 + 2.5 * c["kappa*"] * k_star ** 2)]])
 
 
+def heat_critical(e: float) -> float:
+    r"""k*_h, where the heat mode stops growing: det M(k*) = k*^2 (zeta*/2 - (5/2)(kappa* -
+    mu*) k*^2) (expanding :func:`longitudinal` along its first row) vanishes at
+
+        k*_h = sqrt(zeta* / (5 (kappa* - mu*))),
+
+    and a longitudinal perturbation of k* < k*_h has a growing mode (the clustering
+    instability; Brey, Dufty, Kim & Santos 1998, in the units k* = k sqrt(T)/nu_0)."""
+    c = sonine(e)
+    return math.sqrt(c["zeta*"] / (5.0 * (c["kappa*"] - c["mu*"])))
+
+
 def collision_scale(knudsen: float, density: float, temperature: float) -> float:
     """nu_0 = rho T / eta_0 = 16 rho sqrt(T) / (5 eps sqrt(pi))."""
     return 16 * density * math.sqrt(temperature) / (5 * knudsen * math.sqrt(math.pi))
@@ -168,15 +180,17 @@ def density_comparison(ds, e: float, length: float, knudsen: float = 1.0) -> dic
             "max difference": float(numpy.abs(measured - predicted).max())}
 
 
-def study_arguments(doc: str, n_modes: int, cells: int, final: float):
-    """The options both granular studies take (what they share of their command line)."""
+def study_arguments(doc: str, n_modes: int, cells: int, final: float | None):
+    """The options the granular studies share (``--final`` only where ``final`` is not
+    None)."""
     parser = argparse.ArgumentParser(description=doc.splitlines()[0])
     parser.add_argument("--out", required=True)
     parser.add_argument("--restitution", type=float, default=0.9)
     parser.add_argument("--n-modes", type=int, default=n_modes)
     parser.add_argument("--support", type=float, default=3.5)
     parser.add_argument("--cells", type=int, default=cells)
-    parser.add_argument("--final", type=float, default=final)
+    if final is not None:
+        parser.add_argument("--final", type=float, default=final)
     parser.add_argument("--quadrature", choices=("auto", "review"), default="auto",
                         help="the fast operator's rules (review: a quarter of the cost at "
                              "N = 24 in 3D, but Q differs from the default rules' by 3.7 %% "

@@ -95,3 +95,134 @@ def test_longitudinal_modes_of_the_cooling_state_at_long_wavelengths():
     assert all(v.real < 0 for v in numpy.linalg.eigvals(HCS.longitudinal(0.9, 0.2)))
     response = HCS.density_response(0.9, 1.0, 1.0, 0.2, [0.0, 1.0])
     assert response[0] == pytest.approx(1.0, abs=1e-12)
+
+
+def test_the_heat_mode_stops_growing_where_the_longitudinal_determinant_vanishes():
+    """k*_h = sqrt(zeta*/(5 (kappa* - mu*))): det M(k*_h) = 0, one real eigenvalue > 0 just
+    below it and none just above; below the shear mode's k*_c = sqrt(zeta*/(2 eta*))."""
+    for e in (0.9, 0.8, 0.5):
+        k_h = HCS.heat_critical(e)
+        assert numpy.linalg.det(HCS.longitudinal(e, k_h)) == pytest.approx(0.0, abs=1e-15)
+        below = numpy.linalg.eigvals(HCS.longitudinal(e, 0.99 * k_h))
+        above = numpy.linalg.eigvals(HCS.longitudinal(e, 1.01 * k_h))
+        assert sum(v.real > 0 for v in below) == 1
+        assert all(v.real < 0 for v in above)
+        c = HCS.sonine(e)
+        assert k_h < math.sqrt(c["zeta*"] / (2 * c["eta*"]))
+    assert HCS.heat_critical(0.9) * HCS.collision_scale(1.0, 1.0, 1.0) == pytest.approx(
+        0.23242, abs=1e-5)
+
+
+SHOCK = _study("granular_shock")
+
+
+def test_rankine_hugoniot_of_the_piston_problem_against_the_closed_form():
+    """rho_2/rho_1 = (gamma+1) M^2/((gamma-1) M^2 + 2), p_2/p_1 = 1 + 2 gamma/(gamma+1)
+    (M^2 - 1) (Landau & Lifshitz section 89), with U from M by the piston relation."""
+    gamma = SHOCK.GAMMA
+    for mach in (1.2, 1.5, 2.0, 3.0):
+        state = SHOCK.rankine_hugoniot(SHOCK.piston_speed(mach))
+        assert state["mach"] == pytest.approx(mach, rel=1e-12)
+        ratio = (gamma + 1) * mach ** 2 / ((gamma - 1) * mach ** 2 + 2)
+        assert state["rho_2"] == pytest.approx(ratio, rel=1e-12)
+        assert state["p_2"] == pytest.approx(1 + 2 * gamma / (gamma + 1) * (mach ** 2 - 1),
+                                             rel=1e-12)
+
+
+def test_the_granular_euler_reference_keeps_rankine_hugoniot_and_cools_at_the_exact_rate():
+    """e = 1: the plateau and the shock position of the finite-volume reference within
+    1e-3 of the exact solution (1000 cells). Uniform gas at rest with e < 1: T(t) =
+    exp(-c rho t) to round-off (the exact cooling substep)."""
+    speed = SHOCK.piston_speed(1.5)
+    exact = SHOCK.rankine_hugoniot(speed)
+    ref = SHOCK.granular_euler(speed, 1.0, 1e-3, 1.0, [0.15], cells=1000)
+    x, rho, temperature = ref["x"], ref["density"][-1], ref["temperature"][-1]
+    position = SHOCK.shock_position(x, rho)
+    assert position == pytest.approx(exact["shock_speed"] * 0.15, abs=1e-3)
+    assert SHOCK.plateau(x, rho, position) == pytest.approx(exact["rho_2"], rel=1e-3)
+    assert SHOCK.plateau(x, temperature, position) == pytest.approx(exact["T_2"], rel=1e-3)
+    rest = SHOCK.granular_euler(0.0, 0.9, 0.5, 1.0, [0.3], cells=50)
+    assert rest["temperature"][-1] == pytest.approx(
+        math.exp(-SHOCK.cooling_rate(0.9, 0.5) * 0.3), rel=1e-13)
+
+
+def test_the_maxwell_kernel_cools_any_gas_at_the_rate_the_shock_reference_uses(tmp_path):
+    """The homogeneous 2D Maxwell gas (B = 1/(2 pi)): T(t) = exp(-(1 - e^2) rho t/(4 eps))."""
+    from granframe.run.description import RunDescription
+
+    d = RunDescription(
+        title="Maxwell cooling", grid={"dimension": 2, "n_modes": 32, "support_radius": 5.0},
+        kernel="maxwell", restitution={"name": "constant", "value": 0.9},
+        initial={"name": "maxwellian"}, operator={"name": "fast_spectral"},
+        integrator="rk4", knudsen=0.5, time_step=0.01, final_time=0.2,
+        output={"snapshot_interval": 0.2})
+    Simulation(d).run(tmp_path / "cool.zarr", progress=False)
+    temperature = float(granframe.open_run(tmp_path / "cool.zarr").temperature.values[-1])
+    assert temperature == pytest.approx(math.exp(-SHOCK.cooling_rate(0.9, 0.5) * 0.2),
+                                        rel=1e-4)
+
+
+def test_a_quick_elastic_shock_moves_at_the_rankine_hugoniot_speed(tmp_path):
+    """40 cells, eps = 1e-3, Mach 1.5, to t = 0.15: the kinetic shock speed within 5 % and
+    the plateau within 2 % of Rankine-Hugoniot, the mass to round-off."""
+    speed = SHOCK.piston_speed(1.5)
+    d = SHOCK.description(speed, 1.0, 1e-3, 40, 1.0, 0.15, 32, 4.5, 0.15 / 60)
+    store = tmp_path / "shock.zarr"
+    Simulation(d).run(store, progress=False)
+    row = SHOCK.compare(store, speed, 1.0, 1e-3, 1.0)
+    assert row["shock speed"] == pytest.approx(row["RH shock speed"], rel=0.05)
+    assert row["rho_2"] == pytest.approx(row["RH rho_2"], rel=0.02)
+    assert row["T_2"] == pytest.approx(row["RH T_2"], rel=0.02)
+    assert row["mass drift"] < 1e-13
+
+
+VIBRATED = _study("granular_vibrated")
+
+
+def test_the_effective_wall_temperature_is_the_period_mean_energy_of_the_vibrating_wall():
+    """(d+1) T_eff / 2 = <J2/J0> of the vibrating wall (granframe.space.exact) to its
+    fourth-order term c_4 eps^4 T_w, and T_eff = T_w at rest."""
+    from granframe.space import exact
+
+    assert VIBRATED.effective_temperature(0.0, 1.3) == 1.3
+    for speed, wall in ((0.1, 1.0), (0.2, 0.5), (0.5, 2.0)):
+        omega = 20.0
+        mean = exact.vibrating_wall_energy_per_period(
+            2, wall, speed / omega, omega, 1.0, 1.0)["mean_energy"]
+        eps2 = speed * speed / wall
+        fourth = wall * exact.VIBRATING_WALL_COEFFICIENTS[1] * eps2 * eps2
+        assert 1.5 * VIBRATED.effective_temperature(speed, wall) == pytest.approx(
+            mean - fourth, rel=1e-6)
+
+
+def test_a_quick_vibrated_gas_balances_its_energy_over_a_period(tmp_path):
+    """8 cells, N = 24, eps = 0.5, two periods: the mass to round-off; over the last period
+    the wall's energy plus the dissipation (eight snapshots) is the energy's change to 2 %
+    of what came in, and the vibrating wall puts in more than the resting one."""
+    rows = {}
+    for speed in (0.0, 1.0):
+        d = VIBRATED.description(0.9, 0.5, speed, 0.25, 8, 24, 4.0, 2, 24)
+        store = tmp_path / f"v{speed:g}.zarr"
+        run = Simulation(d)
+        run.run(store, progress=False)
+        ds = granframe.open_run(store, time_axis="steps")
+        assert abs(ds.mass.values[-1] / ds.mass.values[0] - 1) < 1e-13
+        rows[speed] = VIBRATED.period_balance(ds, run.problem.operator, 0.5, 0.25)
+        assert abs(rows[speed]["residual"]) < 0.02
+    assert rows[1.0]["injected"] > rows[0.0]["injected"]
+
+
+CLUSTERS = _study("granular_clusters")
+
+
+def test_a_quick_cluster_run_reports_its_monitors(tmp_path):
+    """16 cells, N = 24, to s = 1: the mass to round-off, the shear mode starts to pile up
+    density (contrast above 1), and the monitors' keys are there."""
+    d = CLUSTERS.description(0.8, 40.0, 16, 24, 4.0, 1.0, 0.3)
+    store = tmp_path / "clusters.zarr"
+    Simulation(d).run(store, progress=False)
+    row = CLUSTERS.monitors(granframe.open_run(store, time_axis="steps"))
+    assert row["mass drift"] < 1e-13
+    assert row["rho max/min"] > 1.0 + 1e-6
+    assert row["status"] == "finished"
+    assert row["negative mass share"] < 1e-3

@@ -1,0 +1,130 @@
+r"""Clusters growing out of the homogeneous cooling state, past the linear regime, with the
+velocity grid's monitors watched until they say it no longer holds the cold dense gas.
+
+A periodic box of length ell, the gas at rho = 1, T = 1 with the transverse mode
+u_2 = A sin(2 pi x / ell) (k below the shear mode's critical k_c), in the rescaled
+formulation (docs/space.md: the cooling state is steady, the velocity grid follows the
+mean temperature). The shear mode grows; once u_2 is of the thermal speed its viscous
+heating, largest where du_2/dx is, drives gas out of the shear zones into the extrema of
+u_2, where it cools faster than the mean (the sink goes as rho^2 T^{3/2}): two dense, cold
+bands per wavelength. The run records at every step the total mass (its drift), the
+smallest value of f and the share of negative mass, and the grid's resolution monitors
+(spectral tail, support, heat flux of the outermost shell, edge mass and energy); it
+stops on its own when f becomes too negative (the positivity guard) or at the final s.
+
+2D velocities with the kernel B = |g|/(2 pi) (kappa = 1, so the rescaled transport is that
+of f); the point is what the monitors report as the clusters sharpen, not a number for
+hard disks.
+
+Run: ``python studies/granular_clusters.py --out DIR [--restitution 0.8] [--final 40]``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import pathlib
+import sys
+import time
+
+import numpy
+
+import granframe
+from granframe.run.description import RunDescription
+from granframe.run.runner import Simulation
+
+sys.path.insert(0, str(pathlib.Path(__file__).parent))
+from granular_hcs import output_folder, save_figure, study_arguments  # noqa: E402
+
+DT = 0.05
+
+
+def description(e: float, length: float, cells: int, n_modes: int, support: float,
+                final: float, amplitude: float) -> RunDescription:
+    """The rescaled 2D gas (B = |g|/(2 pi), eps = 1) with the shear mode, WENO5, RK4 with
+    the conservative correction, ds = :data:`DT`, f stored every 2 s (or at the end)."""
+    return RunDescription(
+        title=f"clusters, e = {e:g}, length {length:g}, {cells} cells, N = {n_modes}",
+        grid={"dimension": 2, "n_modes": n_modes, "support_radius": support},
+        kernel="hard_spheres", restitution={"name": "constant", "value": e},
+        initial={"name": "sinusoidal_mode", "field": "velocity", "component": 2,
+                 "amplitude": amplitude},
+        operator={"name": "fast_spectral"}, integrator="rk4", time_step=DT,
+        final_time=final, rescaled=True, conservative=True, knudsen=1.0,
+        output={"snapshot_interval": min(2.0, final)},
+        space={"cells": cells, "length": length, "reconstruction": "weno5"})
+
+
+def monitors(ds) -> dict:
+    """What the run's monitors say: the largest mass drift, the smallest f, the largest
+    negative mass share, the density contrast rho_max/rho_min and the coldest cell's
+    T/<T> at the end, and the step at which the accuracy monitor first flagged (if it did)."""
+    mass = ds.mass.values
+    density = ds.density.values
+    temperature = ds.temperature.values
+    return {"s": float(ds.time.values[-1]), "steps": int(len(mass) - 1),
+            "mass drift": float(numpy.abs(mass / mass[0] - 1.0).max()),
+            "min f / max f0": float(ds.min_f.values.min()),
+            "negative mass share": float(ds.negative_mass_fraction.values.max()),
+            "rho max/min": float(density[-1].max() / density[-1].min()),
+            "T min/mean": float(temperature[-1].min() / temperature[-1].mean()),
+            "status": ds.attrs.get("progress_status"),
+            "accuracy flagged at s": ds.attrs.get("progress_accuracy_flagged_time"),
+            "accuracy flagged monitor": ds.attrs.get("progress_accuracy_flagged_monitor")}
+
+
+def figure(stores, path) -> None:
+    """The x-s map of rho of each run, with the density contrast, the smallest T/<T> and
+    the negative mass share against s below."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, len(stores), figsize=(5 * len(stores), 7), squeeze=False)
+    for column, store in enumerate(stores):
+        ds = granframe.open_run(store, time_axis="steps")
+        s, x = ds.time.values, ds.x.values
+        density, temperature = ds.density.values, ds.temperature.values
+        top = axes[0, column].pcolormesh(x, s, density, shading="nearest", cmap="viridis")
+        fig.colorbar(top, ax=axes[0, column], label="density")
+        axes[0, column].set_xlabel("x")
+        axes[0, column].set_ylabel("rescaled time s")
+        axes[0, column].set_title(ds.attrs["title"], fontsize=8)
+        low = axes[1, column]
+        low.semilogy(s, density.max(axis=1) / density.min(axis=1), label="rho max / rho min")
+        low.semilogy(s, temperature.min(axis=1) / temperature.mean(axis=1),
+                     label="T min / <T>")
+        low.semilogy(s, numpy.maximum(ds.negative_mass_fraction.values, 1e-16),
+                     label="negative mass share")
+        low.axhline(1e-3, color="k", lw=0.6, ls=":")
+        low.set_xlabel("rescaled time s")
+        low.legend(fontsize=7)
+    save_figure(fig, path)
+
+
+def main(argv=None):
+    parser = study_arguments(__doc__, n_modes=32, cells=32, final=30.0)
+    parser.set_defaults(restitution=0.8, support=4.0)
+    parser.add_argument("--length", type=float, default=40.0)
+    parser.add_argument("--amplitude", type=float, default=0.3)
+    args = parser.parse_args(argv)
+    out = output_folder(args, figure, "clusters.png")
+    if out is None:
+        return
+    began = time.perf_counter()
+    run = Simulation(description(args.restitution, args.length, args.cells, args.n_modes,
+                                 args.support, args.final, args.amplitude))
+    store = out / f"clusters_e{args.restitution:g}_c{args.cells}_n{args.n_modes}.zarr"
+    result = run.run(store, progress=False, overwrite=True)
+    ds = granframe.open_run(store, time_axis="steps")
+    row = {"e": args.restitution, "length": args.length, "cells": args.cells,
+           "N": args.n_modes, "S": args.support, "seconds": time.perf_counter() - began,
+           **monitors(ds),
+           "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
+    print(json.dumps(row))
+    store.with_suffix(".json").write_text(json.dumps(row, indent=1))
+
+
+if __name__ == "__main__":
+    main()
