@@ -75,7 +75,8 @@ def monitors(ds) -> dict:
 
 def figure(stores, path) -> None:
     """The x-s map of rho of each run, with the density contrast, the smallest T/<T> and
-    the negative mass share against s below."""
+    the negative mass share against s below; a red dashed line where the accuracy monitor
+    first flagged."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -98,6 +99,15 @@ def figure(stores, path) -> None:
         low.semilogy(s, numpy.maximum(ds.negative_mass_fraction.values, 1e-16),
                      label="negative mass share")
         low.axhline(1e-3, color="k", lw=0.6, ls=":")
+        flagged = ds.attrs.get("progress_accuracy_flagged_time")
+        if flagged is not None:
+            for ax in (axes[0, column], low):
+                horizontal = ax is axes[0, column]
+                (ax.axhline if horizontal else ax.axvline)(flagged, color="r", lw=0.8,
+                                                           ls="--")
+            monitor = ds.attrs.get("progress_accuracy_flagged_monitor")
+            low.text(flagged, 1e-6, f" accuracy monitor flags\n ({monitor}) at s = {flagged:g}",
+                     color="r", fontsize=7)
         low.set_xlabel("rescaled time s")
         low.legend(fontsize=7)
     save_figure(fig, path)

@@ -100,8 +100,9 @@ def period_balance(ds, operator, knudsen: float, period: float) -> dict:
 
 
 def figure(stores, path) -> None:
-    """Period-mean T(x) and rho(x) of each run; T divided by T_eff/T_w (dashed) should lie
-    on the resting wall's."""
+    """Period-mean T(x) and rho(x) of each run; T divided by T_eff (dashed; T_eff =
+    T_w + 2 c_2 (A omega)^2/(d+1)) lies on the run at rest with T_w = 1 where the wall
+    acts as one at rest at T_eff."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -116,12 +117,14 @@ def figure(stores, path) -> None:
         steps = int(round(SNAPSHOTS * d.output.snapshot_interval / d.time_step))
         density = ds.density.values[-steps:].mean(axis=0)
         temperature = ds.temperature.values[-steps:].mean(axis=0)
+        wall = left.get("temperature", 1.0)
         line, = axes[0].plot(ds.x.values, temperature, "o-", ms=3, lw=0.8,
-                             label=f"A omega = {speed:g}")
-        axes[0].plot(ds.x.values, temperature / effective_temperature(speed), "--",
+                             label=f"A omega = {speed:g}, T_w = {wall:.4g}, N = "
+                                   f"{d.grid.n_modes}")
+        axes[0].plot(ds.x.values, temperature / effective_temperature(speed, wall), "--",
                      color=line.get_color(), lw=0.8)
         axes[1].plot(ds.x.values, density, "o-", ms=3, lw=0.8, color=line.get_color())
-    axes[0].set_ylabel("period-mean T (dashed: T / (T_eff / T_w))")
+    axes[0].set_ylabel("period-mean T (dashed: T / T_eff)")
     axes[1].set_ylabel("period-mean density")
     for ax in axes:
         ax.set_xlabel("x (vibrating wall at 0, specular at 1)")
@@ -183,7 +186,8 @@ def main(argv=None):
                                                       ).max())
             print(row["A omega"], row["T/T(0) mean"], row["T_eff/T_w"],
                   row["T/T(0) spread"], row["rho - rho(0) max"])
-    (out / f"vibrated_e{args.restitution:g}_c{args.cells}.json").write_text(
+    (out / f"vibrated_e{args.restitution:g}_tw{args.wall_temperature:g}_c{args.cells}"
+           f"_n{args.n_modes}.json").write_text(
         json.dumps(rows, indent=1))
 
 
