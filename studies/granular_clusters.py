@@ -10,7 +10,8 @@ u_2, where it cools faster than the mean (the sink goes as rho^2 T^{3/2}): two d
 bands per wavelength. The run records at every step the total mass (its drift), the
 smallest value of f and the share of negative mass, and the grid's resolution monitors
 (spectral tail, support, heat flux of the outermost shell, edge mass and energy); it
-stops on its own when f becomes too negative (the positivity guard) or at the final s.
+stops on its own when f becomes too negative (the positivity guard: the study then reports
+the stop and the monitors up to it) or at the final s.
 
 2D velocities with the kernel B = |g|/(2 pi) (kappa = 1, so the rescaled transport is that
 of f); the point is what the monitors report as the clusters sharpen, not a number for
@@ -31,7 +32,7 @@ import numpy
 
 import granframe
 from granframe.run.description import RunDescription
-from granframe.run.runner import Simulation
+from granframe.run.runner import HealthError, Simulation
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from granular_hcs import output_folder, save_figure, study_arguments  # noqa: E402
@@ -109,7 +110,7 @@ def figure(stores, path) -> None:
             low.text(flagged, 1e-6, f" accuracy monitor flags\n ({monitor}) at s = {flagged:g}",
                      color="r", fontsize=7)
         low.set_xlabel("rescaled time s")
-        low.legend(fontsize=7)
+        low.legend(fontsize=7, loc="upper left")
     save_figure(fig, path)
 
 
@@ -126,12 +127,15 @@ def main(argv=None):
     run = Simulation(description(args.restitution, args.length, args.cells, args.n_modes,
                                  args.support, args.final, args.amplitude))
     store = out / f"clusters_e{args.restitution:g}_c{args.cells}_n{args.n_modes}.zarr"
-    result = run.run(store, progress=False, overwrite=True)
+    try:
+        result = run.run(store, progress=False, overwrite=True)
+        warnings = [str(w) for w in result.warnings + result.accuracy_warnings]
+    except HealthError as stop:              # the store keeps every step up to the stop
+        warnings = [f"stopped: {stop}"]
     ds = granframe.open_run(store, time_axis="steps")
     row = {"e": args.restitution, "length": args.length, "cells": args.cells,
            "N": args.n_modes, "S": args.support, "seconds": time.perf_counter() - began,
-           **monitors(ds),
-           "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
+           **monitors(ds), "warnings": warnings}
     print(json.dumps(row))
     store.with_suffix(".json").write_text(json.dumps(row, indent=1))
 

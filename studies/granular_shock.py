@@ -210,20 +210,38 @@ def cell_averages(reference_x, values, edges):
 def compare(store, speed: float, e: float, knudsen: float, length: float) -> dict:
     """The kinetic run against Rankine-Hugoniot (shock speed, rho_2, T_2: elastic) and
     against granular Euler (the L1 distance of rho and T behind the shock over the run's
-    last state, the wall cell's rho and T, the shock position; any e)."""
+    last state; ``bulk rho``, ``bulk T``: the largest relative difference over the cells in
+    [0.15, 0.75] x Euler's shock position, away from the wall's layer and the shock; the
+    wall cell's rho and T, the shock position; any e), with ``history``:
+    the wall cell's rho and T and the shock position at a quarter, half, three quarters and
+    the whole of the run, against granular Euler's (averaged over the same cells)."""
     ds = granframe.open_run(store, time_axis="steps")
     t = ds.time.values
     x = ds.x.values
     cells = len(x)
     density, temperature = ds.density.values, ds.temperature.values
     positions, shock = shock_track(t, x, density)
-    reference = granular_euler(speed, e, knudsen, length, [t[-1]],
+    quarters = [t[-1] * q for q in (0.25, 0.5, 0.75, 1.0)]
+    reference = granular_euler(speed, e, knudsen, length, quarters,
                                cells=cells * max(1, 4000 // cells))
     edges = numpy.linspace(0.0, length, cells + 1)
     rho_ref = cell_averages(reference["x"], reference["density"][-1], edges)
     t_ref = cell_averages(reference["x"], reference["temperature"][-1], edges)
+    rows = [int(numpy.argmin(abs(t - q))) for q in quarters]
+    history = {"times": quarters,
+               "T wall": [float(temperature[i][0]) for i in rows],
+               "Euler T wall": [float(cell_averages(reference["x"], r, edges)[0])
+                                for r in reference["temperature"]],
+               "rho wall": [float(density[i][0]) for i in rows],
+               "Euler rho wall": [float(cell_averages(reference["x"], r, edges)[0])
+                                  for r in reference["density"]],
+               "shock position": [float(positions[i]) for i in rows],
+               "Euler shock position": [shock_position(x, cell_averages(reference["x"], r,
+                                                                        edges))
+                                        for r in reference["density"]]}
     ref_position = shock_position(x, rho_ref)
     behind = x <= 1.2 * max(ref_position, positions[-1])
+    bulk = (x >= 0.15 * ref_position) & (x <= 0.75 * ref_position)
     dx = length / cells
     row = {"U": speed, "e": e, "eps": knudsen, "cells": cells,
            "N": int(ds.sizes["v1"]), "final": float(t[-1]), "steps": int(len(t) - 1),
@@ -233,8 +251,11 @@ def compare(store, speed: float, e: float, knudsen: float, length: float) -> dic
            "T wall": float(temperature[-1][0]), "Euler T wall": float(t_ref[0]),
            "L1 rho": float(numpy.sum(abs(density[-1] - rho_ref)[behind]) * dx),
            "L1 T": float(numpy.sum(abs(temperature[-1] - t_ref)[behind]) * dx),
+           "bulk rho": float(numpy.max(abs(density[-1] / rho_ref - 1.0)[bulk])),
+           "bulk T": float(numpy.max(abs(temperature[-1] / t_ref - 1.0)[bulk])),
            "mass drift": float(abs(ds.mass.values[-1] / ds.mass.values[0] - 1.0)),
-           "largest negative mass share": float(ds.negative_mass_fraction.values.max())}
+           "largest negative mass share": float(ds.negative_mass_fraction.values.max()),
+           "history": history}
     if e == 1.0:
         exact_state = rankine_hugoniot(speed)
         row.update({"rho_2": plateau(x, density[-1], positions[-1]),
