@@ -200,11 +200,10 @@ def plateau(x, values, position: float) -> float:
     return float(numpy.mean(values[inside]))
 
 
-def cell_averages(reference_x, values, edges):
-    """Averages of a fine reference profile over the kinetic cells (each coarse cell a
-    whole number of fine ones)."""
-    ratio = len(reference_x) // (len(edges) - 1)
-    return values.reshape(-1, ratio).mean(axis=1)
+def cell_averages(values, cells: int):
+    """Averages of fine reference profiles (the last axis) over ``cells`` kinetic cells,
+    each a whole number of fine ones."""
+    return values.reshape(*values.shape[:-1], cells, -1).mean(axis=-1)
 
 
 def compare(store, speed: float, e: float, knudsen: float, length: float) -> dict:
@@ -224,21 +223,17 @@ def compare(store, speed: float, e: float, knudsen: float, length: float) -> dic
     quarters = [t[-1] * q for q in (0.25, 0.5, 0.75, 1.0)]
     reference = granular_euler(speed, e, knudsen, length, quarters,
                                cells=cells * max(1, 4000 // cells))
-    edges = numpy.linspace(0.0, length, cells + 1)
-    rho_ref = cell_averages(reference["x"], reference["density"][-1], edges)
-    t_ref = cell_averages(reference["x"], reference["temperature"][-1], edges)
+    rho_coarse = cell_averages(reference["density"], cells)
+    t_coarse = cell_averages(reference["temperature"], cells)
+    rho_ref, t_ref = rho_coarse[-1], t_coarse[-1]
     rows = [int(numpy.argmin(abs(t - q))) for q in quarters]
     history = {"times": quarters,
                "T wall": [float(temperature[i][0]) for i in rows],
-               "Euler T wall": [float(cell_averages(reference["x"], r, edges)[0])
-                                for r in reference["temperature"]],
+               "Euler T wall": [float(v) for v in t_coarse[:, 0]],
                "rho wall": [float(density[i][0]) for i in rows],
-               "Euler rho wall": [float(cell_averages(reference["x"], r, edges)[0])
-                                  for r in reference["density"]],
+               "Euler rho wall": [float(v) for v in rho_coarse[:, 0]],
                "shock position": [float(positions[i]) for i in rows],
-               "Euler shock position": [shock_position(x, cell_averages(reference["x"], r,
-                                                                        edges))
-                                        for r in reference["density"]]}
+               "Euler shock position": [shock_position(x, r) for r in rho_coarse]}
     ref_position = shock_position(x, rho_ref)
     behind = x <= 1.2 * max(ref_position, positions[-1])
     bulk = (x >= 0.15 * ref_position) & (x <= 0.75 * ref_position)
