@@ -67,6 +67,21 @@ def test_the_measured_rate_is_that_of_the_hydrodynamic_regime_past_the_relaxatio
     assert abs(straight - gamma) > 1e-4 and abs(result["late"] - gamma) > 1e-6
 
 
+def test_the_cooling_rate_of_g_is_read_from_the_drift_of_its_temperature():
+    """T_g(s) = exp((2 a_0 - zeta_g) s) in every cell, any density profile: cooling_rate
+    gives zeta_g / 2, not the rescaling rate a_0."""
+    import xarray
+
+    a_0, zeta = 0.2820, 0.5664
+    s = numpy.arange(0.0, 4.0001, 0.05)
+    density = numpy.tile(1.0 + 0.1 * numpy.sin(numpy.arange(8)), (s.size, 1))
+    temperature = numpy.exp((2 * a_0 - zeta) * s)[:, None] * numpy.ones(8)
+    ds = xarray.Dataset({"density": (("time", "x"), density),
+                         "temperature": (("time", "x"), temperature)},
+                        coords={"time": s}, attrs={"rescaling_rate": a_0})
+    assert HCS.cooling_rate(ds, 1.0) == pytest.approx(zeta / 2, rel=1e-12)
+
+
 def test_a_long_shear_mode_of_the_cooling_state_grows_at_the_navier_stokes_rate(tmp_path):
     """e = 0.8, k = k_c/2, 8 cells, N = 16, to s = 3: the mode grows, at the rate a_0 -
     eta k^2 / rho within 15 % (the study's converged runs: docs/granular.md)."""
