@@ -19,7 +19,9 @@ and the mass fixes rho_b: rho_b int_0^1 W^{-2/3} dx = 1. So T_min/T_b and rho_ma
 follow from e and eps alone, whatever the temperature jump T_w - T_b at the walls: those
 are compared with the kinetic run (T_b and rho_b its profiles extrapolated to the walls).
 
-Run: ``python studies/granular_walls.py --out DIR [--restitution 0.9] [--knudsen 0.2]``.
+Run: ``python studies/granular_walls.py --out DIR [--restitution 0.9] [--knudsen 0.2]``;
+a run of hours stores f every ``--snapshot-every STEPS`` steps and continues where it was
+killed with ``--resume`` (bitwise the run that was not killed).
 """
 
 from __future__ import annotations
@@ -29,7 +31,6 @@ import json
 import math
 import pathlib
 import sys
-import time
 
 import numpy
 import scipy.integrate
@@ -38,6 +39,7 @@ import scipy.optimize
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
+from granframe.run.storage import RunStore
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from granular_hcs import output_folder, save_figure, sonine, study_arguments  # noqa: E402
@@ -84,8 +86,11 @@ def navier_stokes(e: float, knudsen: float) -> dict:
 
 
 def description(e: float, knudsen: float, cells: int, n_modes: int, support: float,
-                final: float, time_step: float, quadrature: str = "auto") -> RunDescription:
-    """3D hard spheres between diffuse walls at T_w = 1, from the Maxwellian of T = 1."""
+                final: float, time_step: float, quadrature: str = "auto",
+                snapshot_interval: float | None = None) -> RunDescription:
+    """3D hard spheres between diffuse walls at T_w = 1, from the Maxwellian of T = 1; f is
+    stored every ``snapshot_interval`` (None: at the end only), the points a run can be
+    resumed from."""
     return RunDescription(
         title=f"heated walls, e = {e:g}, Kn = {knudsen:g}, {cells} cells, N = {n_modes}",
         grid={"dimension": 3, "n_modes": n_modes, "support_radius": support},
@@ -93,7 +98,7 @@ def description(e: float, knudsen: float, cells: int, n_modes: int, support: flo
         initial={"name": "maxwellian"}, integrator="ssp_rk2", conservative=True,
         operator={"name": "fast_spectral", "quadrature": quadrature},
         knudsen=math.sqrt(2.0) * knudsen, time_step=time_step, final_time=final,
-        output={"snapshot_interval": final},
+        output={"snapshot_interval": snapshot_interval or final},
         space={"cells": cells, "reconstruction": "muscl",
                "left": {"name": "diffuse", "temperature": 1.0},
                "right": {"name": "diffuse", "temperature": 1.0}})
@@ -163,6 +168,12 @@ def main(argv=None):
     parser.add_argument("--knudsen", type=float, default=0.2)
     parser.add_argument("--steps", type=int, default=None,
                         help="steps to the final time (default: the transport's CFL limit)")
+    parser.add_argument("--snapshot-every", type=int, default=None, metavar="STEPS",
+                        help="store f every STEPS steps (default: at the end only): the "
+                             "points from which --resume continues a killed run")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue the run in OUT's store where it stopped (a new one "
+                             "if there is none) instead of starting it again")
     args = parser.parse_args(argv)
     out = output_folder(args, figure, "walls.png")
     if out is None:
@@ -171,12 +182,22 @@ def main(argv=None):
     grid = {"n_modes": args.n_modes, "support_radius": args.support}
     time_step = (args.final / args.steps if args.steps
                  else cfl_time_step(args.cells, args.final, grid))
-    began = time.perf_counter()
+    if args.snapshot_every is not None and args.snapshot_every < 1:
+        parser.error(f"--snapshot-every: {args.snapshot_every} must be a number of steps >= 1")
+    interval = None if args.snapshot_every is None else args.snapshot_every * time_step
     run = Simulation(description(e, kn, args.cells, args.n_modes, args.support, args.final,
-                                 time_step, args.quadrature))
+                                 time_step, args.quadrature, interval))
     store = out / f"walls_e{e:g}_kn{kn:g}_c{args.cells}_n{args.n_modes}.zarr"
-    result = run.run(store, progress=False, overwrite=True)
-    seconds = time.perf_counter() - began
+    if args.resume:
+        result = run.run(store, progress=False, resume=True)
+    else:
+        result = run.run(store, progress=False, overwrite=True)
+    warnings = result.warnings + result.accuracy_warnings
+    if result.status == "already finished":     # its warnings are those it stored
+        progress = RunStore.open(store, "r").progress
+        warnings = (tuple(progress.get("resolution", {}).get("warnings", ()))
+                    + tuple(progress.get("accuracy", {}).get("warnings", ())))
+    seconds = result.wall_seconds
     ds = granframe.open_run(store, time_axis="steps")
     measured = kinetic(ds, run.problem.operator, kn)
     theory = navier_stokes(e, kn)
@@ -186,7 +207,7 @@ def main(argv=None):
            "steps": int(ds.sizes["time"]) - 1, **measured,
            "NS rho_b": theory["rho_b"], "NS T_min/T_b": theory["T_min/T_b"],
            "NS rho_max/rho_b": theory["rho_max/rho_b"],
-           "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
+           "warnings": [str(w) for w in warnings]}
     print(json.dumps(row))
     (store.with_suffix(".json")).write_text(json.dumps(row, indent=1))
 

@@ -3,6 +3,7 @@ the first-Sonine coefficients of 3D inelastic hard spheres, and a quick variant 
 shear mode of the homogeneous cooling state in the rescaled formulation."""
 
 import importlib.util
+import json
 import math
 import pathlib
 
@@ -122,6 +123,30 @@ def test_the_navier_stokes_profile_between_heated_walls_solves_its_problem():
                                                 abs=dilute["Lambda"] ** 2)
     assert WALLS.navier_stokes(1.0, 0.1)["T_min/T_b"] == 1.0
 
+
+
+def test_a_quick_heated_gas_balances_its_energy_and_resumes_to_the_same_row(tmp_path, capsys):
+    """6 cells, N = 16, to t = 0.3 (13 steps, f stored every 3): the mass to round-off,
+    wall heat + dissipation = the energy's change to 5 % of the heat in the transient
+    (the budget's time error), the gas next to the walls colder than them and denser in
+    the middle; a second call with --resume finds the run finished and gives the same
+    row, its warnings read back from the store."""
+    argv = ["--out", str(tmp_path), "--n-modes", "16", "--cells", "6", "--final", "0.3",
+            "--snapshot-every", "3", "--resume"]
+    rows = []
+    for _ in range(2):
+        WALLS.main(argv)
+        rows.append(json.loads(capsys.readouterr().out.strip().splitlines()[-1]))
+    first, again = rows
+    assert first == again and first["steps"] == 13 and first["warnings"]
+    assert abs(first["residual"]) < 0.05 and first["heat"] > 0 > first["dissipation"]
+    assert 0 < first["jump"] < 0.2 and first["rho_max/rho_b"] > 1 > first["T_min/T_b"]
+    ds = granframe.open_run(tmp_path / "walls_e0.9_kn0.2_c6_n16.zarr", time_axis="steps")
+    assert ds.sizes["snapshot_time"] == 6
+    assert abs(ds.mass.values[-1] / ds.mass.values[0] - 1) < 1e-13
+    with pytest.raises(SystemExit):
+        WALLS.main(argv[:-1] + ["--snapshot-every", "0"])
+    assert "--snapshot-every: 0 must be a number of steps >= 1" in capsys.readouterr().err
 
 def test_longitudinal_modes_of_the_cooling_state_at_long_wavelengths():
     """At k* = 0 the eigenvalues are 0 and +-zeta*/2 (Brey et al. 1998); the heat mode's
