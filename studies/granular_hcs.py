@@ -279,7 +279,8 @@ def figure(stores, path) -> None:
         field = description.initial.params.get("field", "velocity")
         s, amplitude = amplitude_history(ds, length, field)
         label = (f"{'shear' if field == 'velocity' else 'density'}, e = {e:g}, "
-                 f"k = {2 * math.pi / length:.3f}, N = {description.grid.n_modes}")
+                 f"k = {2 * math.pi / length:.3f}, N = {description.grid.n_modes}, "
+                 f"{description.space.cells} cells")
         line, = ax.plot(s, numpy.log(amplitude / amplitude[0]), label=label)
         k = 2 * math.pi / length
         temperature = float(ds.temperature.values.mean())

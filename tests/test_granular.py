@@ -84,8 +84,10 @@ def test_the_cooling_rate_of_g_is_read_from_the_drift_of_its_temperature():
 
 
 def test_a_long_shear_mode_of_the_cooling_state_grows_at_the_navier_stokes_rate(tmp_path):
-    """e = 0.8, k = k_c/2, 8 cells, N = 16, to s = 3: the mode grows, at the rate a_0 -
-    eta k^2 / rho within 15 % (the study's converged runs: docs/granular.md)."""
+    """e = 0.8, k = k_c/2, 8 cells, N = 16, to s = 3: the mode grows, at the rate
+    zeta_g/2 - eta k^2 / rho with the run's own cooling rate zeta_g (its T_g drift) within
+    3 % (measured: 1.3 % below, the damping of 8 cells per wavelength, about 1 %, and
+    N = 16; the study's converged runs: docs/granular.md)."""
     e = 0.8
     k = 0.5 * HCS.theory(e, 1.0, 1.0, 1.0, 1.0)["k_c"]
     length = 2 * math.pi / k
@@ -94,8 +96,8 @@ def test_a_long_shear_mode_of_the_cooling_state_grows_at_the_navier_stokes_rate(
     ds = granframe.open_run(store, time_axis="steps")
     measured = HCS.measured_rate(ds, length, 1.0)["rate"]
     eta = HCS.theory(e, 1.0, 1.0, float(ds.temperature.values[-1].mean()), k)["eta"]
-    predicted = ds.attrs["rescaling_rate"] - eta * k * k
-    assert predicted > 0.05 and measured == pytest.approx(predicted, rel=0.15)
+    predicted = HCS.cooling_rate(ds, 1.0) - eta * k * k
+    assert predicted > 0.05 and measured == pytest.approx(predicted, rel=0.03)
 
 
 WALLS = _study("granular_walls")
