@@ -265,7 +265,8 @@ def save_figure(fig, path) -> None:
 
 def figure(stores, path) -> None:
     """ln(A(s)/A(0)) of each run against s, with the Navier-Stokes prediction (dashed):
-    the shear mode's rate a_0 - eta k^2/rho, the density mode's :func:`density_response`."""
+    the shear mode's rate zeta_g/2 - eta k^2/rho (zeta_g the run's :func:`cooling_rate`)
+    from s = 1 on, the density mode's :func:`density_response`."""
     import matplotlib
 
     matplotlib.use("Agg")
