@@ -11,8 +11,8 @@ with zeta_g the collisional cooling rate of g in its cooling state and eta the s
 viscosity. The rescaling rate a_0 is that of the Maxwellian f0; the cooling state's
 zeta_g differs from 2 a_0 by its a_2 correction (3 a_2 / 16), so T_g drifts slowly and
 zeta_g is measured from it (:func:`cooling_rate`). In granframe's units (B = |g|/(4 pi),
-Q/eps: pi sigma^2 = 1/eps, unit mass) the first Sonine approximation (Brey, Dufty, Kim & Santos, Phys. Rev. E 58 (1998) 4638; Garzo &
-Dufty, Phys. Rev. E 59 (1999) 5895) gives, with eta_0 = (5/16) eps sqrt(pi T) and
+Q/eps: pi sigma^2 = 1/eps, unit mass) the first Sonine approximation (Brey, Dufty, Kim &
+Santos, Phys. Rev. E 58 (1998) 4638; Garzo & Dufty, Phys. Rev. E 59 (1999) 5895) gives, with eta_0 = (5/16) eps sqrt(pi T) and
 nu_0 = rho T / eta_0,
 
     zeta = nu_0 zeta*,   zeta* = (5/12)(1 - e^2)(1 + 3 a_2 / 16),

@@ -39,7 +39,6 @@ import scipy.optimize
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
-from granframe.run.storage import RunStore
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from granular_hcs import output_folder, save_figure, sonine, study_arguments  # noqa: E402
@@ -192,11 +191,6 @@ def main(argv=None):
         result = run.run(store, progress=False, resume=True)
     else:
         result = run.run(store, progress=False, overwrite=True)
-    warnings = result.warnings + result.accuracy_warnings
-    if result.status == "already finished":     # its warnings are those it stored
-        progress = RunStore.open(store, "r").progress
-        warnings = (tuple(progress.get("resolution", {}).get("warnings", ()))
-                    + tuple(progress.get("accuracy", {}).get("warnings", ())))
     seconds = result.wall_seconds
     ds = granframe.open_run(store, time_axis="steps")
     measured = kinetic(ds, run.problem.operator, kn)
@@ -207,7 +201,7 @@ def main(argv=None):
            "steps": int(ds.sizes["time"]) - 1, **measured,
            "NS rho_b": theory["rho_b"], "NS T_min/T_b": theory["T_min/T_b"],
            "NS rho_max/rho_b": theory["rho_max/rho_b"],
-           "warnings": [str(w) for w in warnings]}
+           "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
     print(json.dumps(row))
     (store.with_suffix(".json")).write_text(json.dumps(row, indent=1))
 

@@ -126,7 +126,6 @@ def test_the_navier_stokes_profile_between_heated_walls_solves_its_problem():
     assert WALLS.navier_stokes(1.0, 0.1)["T_min/T_b"] == 1.0
 
 
-
 def test_a_quick_heated_gas_balances_its_energy_and_resumes_to_the_same_row(tmp_path, capsys):
     """6 cells, N = 16, to t = 0.3 (13 steps, f stored every 3): the mass to round-off,
     wall heat + dissipation = the energy's change to 5 % of the heat in the transient
@@ -149,6 +148,7 @@ def test_a_quick_heated_gas_balances_its_energy_and_resumes_to_the_same_row(tmp_
     with pytest.raises(SystemExit):
         WALLS.main(argv[:-1] + ["--snapshot-every", "0"])
     assert "--snapshot-every: 0 must be a number of steps >= 1" in capsys.readouterr().err
+
 
 def test_longitudinal_modes_of_the_cooling_state_at_long_wavelengths():
     """At k* = 0 the eigenvalues are 0 and +-zeta*/2 (Brey et al. 1998); the heat mode's

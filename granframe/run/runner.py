@@ -220,6 +220,13 @@ class RunResult:
     accuracy_warnings: tuple = ()
 
 
+def _stored_warnings(progress: dict) -> dict:
+    """The resolution and the accuracy warnings of the last output point, as a run's
+    progress entry stores them: the two warning fields of :class:`RunResult`."""
+    return {"warnings": tuple(progress.get("resolution", {}).get("warnings", ())),
+            "accuracy_warnings": tuple(progress.get("accuracy", {}).get("warnings", ()))}
+
+
 class Records:
     """Records waiting for the next commit: the step, its time and size, and ``names``
     of each step's record (by default the moments of :data:`RECORDED_MOMENTS`; a
@@ -637,7 +644,8 @@ class Simulation:
             store.close()
             return RunResult(str(out), "already finished", progress_entry["step"],
                              progress_entry["time"], store.snapshot_count,
-                             progress_entry.get("wall_seconds", 0.0))
+                             progress_entry.get("wall_seconds", 0.0),
+                             **_stored_warnings(progress_entry))
         d = self.description
         stepper = Stepper(self.problem, self.output_points(), d.time_step, d.tolerance,
                           d.final_time)
@@ -662,10 +670,8 @@ class Simulation:
         final = communicator.bcast(store.progress)      # process 0's, which wrote it
         return RunResult("memory" if out is None else str(out), "finished", state.step,
                          state.t, int(final["snapshots"]), final["wall_seconds"],
-                         tuple(final.get("resolution", {}).get("warnings", ())),
                          dataset=_dataset(store) if out is None else None,
-                         accuracy_warnings=tuple(
-                             final.get("accuracy", {}).get("warnings", ())))
+                         **_stored_warnings(final))
 
     def _observers(self, store, state, progress) -> list:
         """What the run does besides stepping, in order; the :class:`StorageObserver` last."""
