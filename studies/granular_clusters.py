@@ -31,11 +31,12 @@ import time
 import numpy
 
 import granframe
+from granframe.tools.studykit import finish
 from granframe.run.description import RunDescription
 from granframe.run.runner import HealthError, Simulation
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from granular_hcs import output_folder, save_figure, study_arguments  # noqa: E402
+from granular_hcs import number, output_folder, save_figure, study_arguments  # noqa: E402
 
 DT = 0.05
 
@@ -117,8 +118,8 @@ def figure(stores, path) -> None:
 def main(argv=None):
     parser = study_arguments(__doc__, n_modes=32, cells=32, final=30.0)
     parser.set_defaults(restitution=0.8, support=4.0)
-    parser.add_argument("--length", type=float, default=40.0)
-    parser.add_argument("--amplitude", type=float, default=0.3)
+    parser.add_argument("--length", type=number(0.0), default=40.0)
+    parser.add_argument("--amplitude", type=number(0.0, low_open=False), default=0.3)
     args = parser.parse_args(argv)
     out = output_folder(args, figure, "clusters.png")
     if out is None:
@@ -141,4 +142,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(finish(main))

@@ -43,6 +43,7 @@ import time
 import numpy
 
 import granframe
+from granframe.tools.studykit import finish
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 
@@ -223,17 +224,45 @@ def density_comparison(ds, e: float, length: float, knudsen: float = 1.0) -> dic
             "max difference": float(numpy.abs(measured - predicted).max())}
 
 
+def number(low: float, high: float = math.inf, low_open: bool = True, kind=float):
+    """An argparse type: a finite number of ``kind`` in (low, high] (``low_open``) or
+    [low, high]; anything else is refused with the value and the range allowed."""
+    def parse(text: str):
+        try:
+            value = kind(text)
+        except ValueError:
+            value = math.nan
+        if not (math.isfinite(value) and (value > low if low_open else value >= low)
+                and value <= high):
+            shown = f"({low:g}, " if low_open else f"[{low:g}, "
+            raise argparse.ArgumentTypeError(
+                f"{text!r} is not allowed: must be {'an integer' if kind is int else 'a number'}"
+                f" in {shown}{high:g}]")
+        return value
+    return parse
+
+
+def numbers(low: float, low_open: bool = True):
+    """An argparse type: comma-separated numbers, each as :func:`number` allows."""
+    one = number(low, low_open=low_open)
+
+    def parse(text: str) -> list[float]:
+        return [one(part) for part in text.split(",")]
+    return parse
+
+
 def study_arguments(doc: str, n_modes: int, cells: int, final: float | None):
     """The options the granular studies share (``--final`` only where ``final`` is not
-    None)."""
-    parser = argparse.ArgumentParser(description=doc.splitlines()[0])
+    None); a value outside what the study can run is refused by argparse, by name."""
+    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0].replace("\n", " "))
     parser.add_argument("--out", required=True)
-    parser.add_argument("--restitution", type=float, default=0.9)
-    parser.add_argument("--n-modes", type=int, default=n_modes)
-    parser.add_argument("--support", type=float, default=3.5)
-    parser.add_argument("--cells", type=int, default=cells)
+    parser.add_argument("--restitution", type=number(0.0, 1.0), default=0.9)
+    parser.add_argument("--n-modes", type=number(4, kind=int, low_open=False),
+                        default=n_modes)
+    parser.add_argument("--support", type=number(0.0), default=3.5)
+    parser.add_argument("--cells", type=number(1, kind=int, low_open=False), default=cells)
     if final is not None:
-        parser.add_argument("--final", type=float, default=final)
+        parser.add_argument("--final", type=number(0.0), default=final)
     parser.add_argument("--quadrature", choices=("auto", "review"), default="auto",
                         help="the fast operator's rules (review: a quarter of the cost at "
                              "N = 24 in 3D, but Q differs from the default rules' by 3.7 %% "
@@ -302,8 +331,8 @@ def figure(stores, path) -> None:
 
 def main(argv=None):
     parser = study_arguments(__doc__, n_modes=24, cells=12, final=6.0)
-    parser.add_argument("--skip", type=float, default=1.0)
-    parser.add_argument("--k-over-kc", default="0.5,1,1.5")
+    parser.add_argument("--skip", type=number(0.0, low_open=False), default=1.0)
+    parser.add_argument("--k-over-kc", type=numbers(0.0), default=[0.5, 1.0, 1.5])
     parser.add_argument("--field", choices=("velocity", "density"), default="velocity",
                         help="the shear mode (velocity, u_2) or the density mode")
     args = parser.parse_args(argv)
@@ -312,7 +341,7 @@ def main(argv=None):
         return
     e = args.restitution
     rows = []
-    for ratio in (float(r) for r in args.k_over_kc.split(",")):
+    for ratio in args.k_over_kc:
         k = ratio * theory(e, 1.0, 1.0, 1.0, 1.0)["k_c"]
         length = 2 * math.pi / k
         began = time.perf_counter()
@@ -345,4 +374,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(finish(main))

@@ -31,12 +31,13 @@ import time
 import numpy
 
 import granframe
+from granframe.tools.studykit import finish
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.space import exact
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from granular_hcs import output_folder, save_figure, study_arguments  # noqa: E402
+from granular_hcs import number, output_folder, save_figure, study_arguments  # noqa: E402
 from space import cfl_time_step  # noqa: E402
 
 DIMENSION = 2
@@ -308,10 +309,10 @@ def figure(stores, path) -> None:
 def main(argv=None):
     parser = study_arguments(__doc__, n_modes=48, cells=100, final=0.2)
     parser.set_defaults(restitution=1.0, support=4.5)
-    parser.add_argument("--knudsen", type=float, default=1e-3)
-    parser.add_argument("--mach", type=float, default=1.5,
+    parser.add_argument("--knudsen", type=number(0.0), default=1e-3)
+    parser.add_argument("--mach", type=number(1.0), default=1.5,
                         help="the elastic shock's Mach number, which fixes U")
-    parser.add_argument("--length", type=float, default=1.0)
+    parser.add_argument("--length", type=number(0.0), default=1.0)
     args = parser.parse_args(argv)
     out = output_folder(args, figure, "shock.png")
     if out is None:
@@ -335,4 +336,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(finish(main))

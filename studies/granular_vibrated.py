@@ -32,12 +32,13 @@ import time
 import numpy
 
 import granframe
+from granframe.tools.studykit import finish
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.space import exact
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from granular_hcs import output_folder, save_figure, study_arguments  # noqa: E402
+from granular_hcs import number, numbers, output_folder, save_figure, study_arguments  # noqa: E402
 from space import cfl_time_step  # noqa: E402
 
 DIMENSION = 2
@@ -136,11 +137,12 @@ def figure(stores, path) -> None:
 def main(argv=None):
     parser = study_arguments(__doc__, n_modes=32, cells=16, final=None)
     parser.set_defaults(support=4.0)
-    parser.add_argument("--knudsen", type=float, default=0.1)
-    parser.add_argument("--speeds", default="0,0.5,1", help="A omega values, comma-separated")
-    parser.add_argument("--period", type=float, default=0.25)
-    parser.add_argument("--periods", type=int, default=24)
-    parser.add_argument("--wall-temperature", type=float, default=1.0,
+    parser.add_argument("--knudsen", type=number(0.0), default=0.1)
+    parser.add_argument("--speeds", type=numbers(0.0, low_open=False), default=[0.0, 0.5, 1.0],
+                        help="A omega values, comma-separated")
+    parser.add_argument("--period", type=number(0.0), default=0.25)
+    parser.add_argument("--periods", type=number(1, kind=int, low_open=False), default=24)
+    parser.add_argument("--wall-temperature", type=number(0.0), default=1.0,
                         help="T_w of the vibrating (or resting) wall")
     args = parser.parse_args(argv)
     out = output_folder(args, figure, "vibrated.png")
@@ -150,7 +152,7 @@ def main(argv=None):
     limit = cfl_time_step(args.cells, args.period, grid)
     steps_per_period = SNAPSHOTS * math.ceil(args.period / limit / SNAPSHOTS - 1e-9)
     rows = []
-    for speed in (float(s) for s in args.speeds.split(",")):
+    for speed in args.speeds:
         began = time.perf_counter()
         run = Simulation(description(args.restitution, args.knudsen, speed, args.period,
                                      args.cells, args.n_modes, args.support, args.periods,
@@ -192,4 +194,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(finish(main))

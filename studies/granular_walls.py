@@ -37,11 +37,12 @@ import scipy.integrate
 import scipy.optimize
 
 import granframe
+from granframe.tools.studykit import finish
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from granular_hcs import output_folder, save_figure, sonine, study_arguments  # noqa: E402
+from granular_hcs import number, output_folder, save_figure, sonine, study_arguments  # noqa: E402
 from space import cfl_time_step, energy_balance  # noqa: E402
 
 
@@ -164,10 +165,11 @@ def figure(stores, path) -> None:
 
 def main(argv=None):
     parser = study_arguments(__doc__, n_modes=24, cells=12, final=3.0)
-    parser.add_argument("--knudsen", type=float, default=0.2)
-    parser.add_argument("--steps", type=int, default=None,
+    parser.add_argument("--knudsen", type=number(0.0), default=0.2)
+    parser.add_argument("--steps", type=number(1, kind=int, low_open=False), default=None,
                         help="steps to the final time (default: the transport's CFL limit)")
-    parser.add_argument("--snapshot-every", type=int, default=None, metavar="STEPS",
+    parser.add_argument("--snapshot-every", type=number(1, kind=int, low_open=False),
+                        default=None, metavar="STEPS",
                         help="store f every STEPS steps (default: at the end only): the "
                              "points from which --resume continues a killed run")
     parser.add_argument("--resume", action="store_true",
@@ -181,8 +183,6 @@ def main(argv=None):
     grid = {"n_modes": args.n_modes, "support_radius": args.support}
     time_step = (args.final / args.steps if args.steps
                  else cfl_time_step(args.cells, args.final, grid))
-    if args.snapshot_every is not None and args.snapshot_every < 1:
-        parser.error(f"--snapshot-every: {args.snapshot_every} must be a number of steps >= 1")
     interval = None if args.snapshot_every is None else args.snapshot_every * time_step
     run = Simulation(description(e, kn, args.cells, args.n_modes, args.support, args.final,
                                  time_step, args.quadrature, interval))
@@ -207,4 +207,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(finish(main))

@@ -6,17 +6,22 @@ import importlib.util
 import json
 import math
 import pathlib
+import subprocess
+import sys
 
 import numpy
 import pytest
 import scipy.integrate
 
 import granframe
-from granframe.run.runner import Simulation
+from granframe.run.runner import HealthError, Simulation
+from granframe.tools.studykit import finish
+
+STUDIES = pathlib.Path(__file__).parent.parent / "studies"
 
 
 def _study(name):
-    path = pathlib.Path(__file__).parent.parent / "studies" / f"{name}.py"
+    path = STUDIES / f"{name}.py"
     spec = importlib.util.spec_from_file_location(f"{name}_study", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
@@ -147,7 +152,43 @@ def test_a_quick_heated_gas_balances_its_energy_and_resumes_to_the_same_row(tmp_
     assert abs(ds.mass.values[-1] / ds.mass.values[0] - 1) < 1e-13
     with pytest.raises(SystemExit):
         WALLS.main(argv[:-1] + ["--snapshot-every", "0"])
-    assert "--snapshot-every: 0 must be a number of steps >= 1" in capsys.readouterr().err
+    assert ("argument --snapshot-every: '0' is not allowed: must be an integer in [1, inf]"
+            in capsys.readouterr().err)
+
+
+@pytest.mark.parametrize("study, argv, message", [
+    ("walls", ["--knudsen", "-1"], "argument --knudsen: '-1' is not allowed: must be a number "
+                                   "in (0, inf]"),
+    ("walls", ["--restitution", "1.5"], "argument --restitution: '1.5' is not allowed"),
+    ("hcs", ["--k-over-kc", "0.5,x"], "argument --k-over-kc: 'x' is not allowed"),
+    ("vibrated", ["--speeds", "0,-1"], "argument --speeds: '-1' is not allowed: must be a "
+                                       "number in [0, inf]"),
+    ("shock", ["--mach", "1"], "argument --mach: '1' is not allowed: must be a number in "
+                               "(1, inf]"),
+])
+def test_the_granular_studies_refuse_bad_options_by_name(tmp_path, capsys, study, argv,
+                                                         message):
+    """argparse refuses, with the option, the value and the range, before anything runs."""
+    module = {"walls": WALLS, "hcs": HCS, "vibrated": VIBRATED, "shock": SHOCK}[study]
+    with pytest.raises(SystemExit) as stop:
+        module.main(["--out", str(tmp_path)] + argv)
+    assert stop.value.code == 2 and message in capsys.readouterr().err
+
+
+def test_a_study_command_prints_what_granframe_refuses_without_a_traceback(tmp_path):
+    """An option that argparse lets through but the core refuses (N odd) ends the command
+    with status 2 and granframe's message naming the parameter; a health stop with 3."""
+    command = [sys.executable, str(STUDIES / "granular_walls.py"), "--out", str(tmp_path),
+               "--n-modes", "7", "--cells", "4"]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert done.stderr.startswith("granular_walls.py: error: VelocityGrid: parameter "
+                                  "'n_modes' = 7 is invalid; must be an even integer")
+
+    def stopped(argv):
+        raise HealthError("health check failed at step 3: loss of positivity")
+
+    assert finish(stopped, []) == 3
 
 
 def test_longitudinal_modes_of_the_cooling_state_at_long_wavelengths():

@@ -1,6 +1,5 @@
-"""Small pieces shared by measurement studies (``studies/*.py`` that sweep settings in one
-process instead of writing run stores): their command line, CSV tables, figures and
-``summary.json``."""
+"""Small pieces shared by the studies (``studies/*.py``): their command line and how it
+ends, CSV tables, figures and ``summary.json``."""
 
 from __future__ import annotations
 
@@ -8,6 +7,7 @@ import argparse
 import csv
 import json
 import pathlib
+import sys
 from typing import Callable
 
 import matplotlib
@@ -65,3 +65,22 @@ def command(run: Callable, doc: str, quick_help: str, parts: str | None = None,
         return 0
 
     return main
+
+
+def finish(main: Callable, argv=None) -> int:
+    """Run a study's ``main(argv)`` as a command: what granframe refuses (a
+    :class:`ValueError` or :class:`TypeError` naming the parameter, the value and what is
+    allowed) is printed as ``PROG: error: MESSAGE`` with status 2, a run stopped by its
+    health checks as ``PROG: run stopped: MESSAGE`` with status 3 (its store keeps every
+    snapshot before the stop), neither with a traceback; ``main``'s own status otherwise."""
+    from granframe.run.runner import HealthError
+
+    prog = pathlib.Path(sys.argv[0]).name
+    try:
+        return main(argv) or 0
+    except HealthError as stop:
+        print(f"{prog}: run stopped: {stop}", file=sys.stderr)
+        return 3
+    except (ValueError, TypeError) as refused:
+        print(f"{prog}: error: {refused}", file=sys.stderr)
+        return 2
