@@ -40,6 +40,7 @@ import granframe
 from granframe.tools.studykit import finish
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
+from granframe.velocity.estimators import TAIL_ERROR_FACTOR, spectral_tail
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from granular_hcs import number, output_folder, save_figure, sonine, study_arguments  # noqa: E402
@@ -115,16 +116,23 @@ def at_walls(values, cells: int) -> float:
 
 
 def kinetic(ds, operator, knudsen: float) -> dict:
-    """T_min/T_b, rho_max/rho_b, the jump T_w - T_b and the energy budget of a run."""
+    """T_min/T_b, rho_max/rho_b, the jump T_w - T_b and the energy budget of a run, and
+    ``tail error by cell``: the velocity-resolution indicator of every cell's final f
+    (``TAIL_ERROR_FACTOR`` x :func:`~granframe.velocity.estimators.spectral_tail`), of
+    which the run's report names only the largest."""
     cells = ds.sizes["x"]
     temperature = ds.temperature.values[-1]
     density = ds.density.values[-1]
     t_b, rho_b = at_walls(temperature, cells), at_walls(density, cells)
     budget = energy_balance(ds, operator, math.sqrt(2.0) * knudsen)
+    f = ds.f.values[-1]
+    tails = [float(f"{TAIL_ERROR_FACTOR * spectral_tail(operator.grid, cell):.3g}")
+             for cell in f]
     return {"T_b": t_b, "rho_b": rho_b, "T_min/T_b": float(temperature.min() / t_b),
             "rho_max/rho_b": float(density.max() / rho_b), "jump": 1.0 - t_b,
             "heat": budget["heat"], "dissipation": budget["dissipation"],
-            "unsteadiness": budget["unsteadiness"], "residual": budget["residual"]}
+            "unsteadiness": budget["unsteadiness"], "residual": budget["residual"],
+            "tail error by cell": tails}
 
 
 def figure(stores, path) -> None:

@@ -6,6 +6,7 @@ import importlib.util
 import json
 import math
 import pathlib
+import re
 import subprocess
 import sys
 
@@ -147,6 +148,11 @@ def test_a_quick_heated_gas_balances_its_energy_and_resumes_to_the_same_row(tmp_
     assert first == again and first["steps"] == 13 and first["warnings"]
     assert abs(first["residual"]) < 0.05 and first["heat"] > 0 > first["dissipation"]
     assert 0 < first["jump"] < 0.2 and first["rho_max/rho_b"] > 1 > first["T_min/T_b"]
+    # every cell's tail error; the run's report names the largest
+    tails = first["tail error by cell"]
+    reported = next(re.search(r"estimated error ([0-9.e-]+) ", w) for w in first["warnings"]
+                    if w.startswith("velocity resolution"))
+    assert len(tails) == 6 and max(tails) == pytest.approx(float(reported.group(1)), rel=2e-3)
     ds = granframe.open_run(tmp_path / "walls_e0.9_kn0.2_c6_n16.zarr", time_axis="steps")
     assert ds.sizes["snapshot_time"] == 6
     assert abs(ds.mass.values[-1] / ds.mass.values[0] - 1) < 1e-13
