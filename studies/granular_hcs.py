@@ -82,15 +82,17 @@ def longitudinal(e: float, k_star: float):
 
         d rho'/d tau  = k* w
         d w/d tau     = -k* (rho' + theta) + (zeta*/2 - (4/3) eta* k*^2) w
-        d theta/d tau = -(zeta* + (5/2) mu* k*^2) rho' - (2/3) k* w
+        d theta/d tau = -(zeta* + (5/2) mu* k*^2) rho' + (2/3) k* w
                         - (zeta*/2 + (5/2) kappa* k*^2) theta
 
-    (w = i u_1/sqrt(T) makes the matrix real)."""
+    (w = i u_1/sqrt(T) makes the matrix real; the compression -div u enters rho' and theta
+    with the same sign, as in n and (3/2) n T, so that in the elastic limit the pair of
+    complex eigenvalues is sound, -(k*^2/2)((4/3) eta* + kappa*) +- i sqrt(5/3) k*)."""
     c = sonine(e)
     return numpy.array([
         [0.0, k_star, 0.0],
         [-k_star, c["zeta*"] / 2 - 4 / 3 * c["eta*"] * k_star ** 2, -k_star],
-        [-(c["zeta*"] + 2.5 * c["mu*"] * k_star ** 2), -2 / 3 * k_star,
+        [-(c["zeta*"] + 2.5 * c["mu*"] * k_star ** 2), 2 / 3 * k_star,
          -(c["zeta*"] / 2 + 2.5 * c["kappa*"] * k_star ** 2)]])
 
 

@@ -211,6 +211,21 @@ def test_longitudinal_modes_of_the_cooling_state_at_long_wavelengths():
     assert response[0] == pytest.approx(1.0, abs=1e-12)
 
 
+def test_longitudinal_modes_of_an_elastic_gas_are_sound_and_heat_diffusion():
+    """e = 1 (eta* = kappa* = 1): at small k* the complex pair is sound of speed
+    sqrt(gamma) = sqrt(5/3), attenuated at (k^2/2n)((4/3) eta + kappa (1/c_v - 1/c_p)) =
+    (k*^2/2)((4/3) eta* + kappa*) (c_v = 3/2, c_p = 5/2, kappa/(n nu_0) = (15/4) kappa*
+    in these units; Landau & Lifshitz, Fluid Mechanics, section 79), and the real one is
+    heat diffusion, -kappa k^2/(n c_p) = -(3/2) kappa* k*^2."""
+    k = 1e-3
+    values = numpy.linalg.eigvals(HCS.longitudinal(1.0, k))
+    sound = values[numpy.argmax(values.imag)]
+    assert sound.imag == pytest.approx(math.sqrt(5 / 3) * k, rel=1e-6)
+    assert sound.real == pytest.approx(-k * k / 2 * (4 / 3 + 1), rel=1e-3)
+    heat = values[numpy.argmin(numpy.abs(values.imag))]
+    assert heat.real == pytest.approx(-1.5 * k * k, rel=1e-3)
+
+
 def test_the_heat_mode_stops_growing_where_the_longitudinal_determinant_vanishes():
     """k*_h = sqrt(zeta*/(5 (kappa* - mu*))): det M(k*_h) = 0, one real eigenvalue > 0 just
     below it and none just above; below the shear mode's k*_c = sqrt(zeta*/(2 eta*))."""
