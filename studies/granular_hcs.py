@@ -74,7 +74,7 @@ def theory(e: float, knudsen: float, density: float, temperature: float, k: floa
             "k_c": math.sqrt(density * zeta / (2 * eta))}
 
 
-def longitudinal(e: float, k_star: float):
+def longitudinal(e: float, k_star: float, zeta: float | None = None):
     r"""The linearised Navier-Stokes matrix of the longitudinal modes about the cooling
     state, d/d tau (rho', w, theta) = M (rho', w, theta), for the Fourier amplitudes of
     rho/rho_H - 1, i u_1/sqrt(T_H) and T/T_H - 1 at wavenumber k* = k sqrt(T_H)/nu_0, in
@@ -87,8 +87,11 @@ def longitudinal(e: float, k_star: float):
 
     (w = i u_1/sqrt(T) makes the matrix real; the compression -div u enters rho' and theta
     with the same sign, as in n and (3/2) n T, so that in the elastic limit the pair of
-    complex eigenvalues is sound, -(k*^2/2)((4/3) eta* + kappa*) +- i sqrt(5/3) k*)."""
+    complex eigenvalues is sound, -(k*^2/2)((4/3) eta* + kappa*) +- i sqrt(5/3) k*).
+    ``zeta``: a zeta* to use instead of the first Sonine one (eta*, kappa*, mu* stay)."""
     c = sonine(e)
+    if zeta is not None:
+        c["zeta*"] = zeta
     return numpy.array([
         [0.0, k_star, 0.0],
         [-k_star, c["zeta*"] / 2 - 4 / 3 * c["eta*"] * k_star ** 2, -k_star],
@@ -106,6 +109,32 @@ def heat_critical(e: float) -> float:
     instability; Brey, Dufty, Kim & Santos 1998, in the units k* = k sqrt(T)/nu_0)."""
     c = sonine(e)
     return math.sqrt(c["zeta*"] / (5.0 * (c["kappa*"] - c["mu*"])))
+
+
+def heat_mode(e: float, k_star: float, zeta: float | None = None):
+    """The heat mode of :func:`longitudinal` at k*: its rate (the real eigenvalue with the
+    largest real part, per unit tau) and its eigenvector (rho', w, theta) scaled to
+    rho' = 1; ``zeta``: a zeta* to use instead of the first Sonine one (a run's own)."""
+    values, vectors = numpy.linalg.eig(longitudinal(e, k_star, zeta))
+    real = numpy.flatnonzero(numpy.abs(values.imag) <= 1e-12 * max(1.0, abs(k_star)))
+    index = real[numpy.argmax(values.real[real])]
+    vector = vectors[:, index].real
+    return float(values[index].real), vector / vector[0]
+
+
+def longitudinal_mode(x, v1, v2, v3, k: float, amplitude: float, density: float,
+                      velocity: float, temperature: float):
+    """The local Maxwellian of a longitudinal mode about rho = T = 1, u = 0:
+    rho = 1 + A r sin(k x), u_1 = A w cos(k x), T = 1 + A theta sin(k x), with
+    (r, w, theta) = (``density``, ``velocity``, ``temperature``) in the variables of
+    :func:`longitudinal` (for u_1 = A w cos(k x), the continuity equation d rho/dt =
+    -d u_1/dx gives the eigen-relation lambda r = k* w of its first row)."""
+    phase = k * numpy.asarray(x)
+    rho = 1.0 + amplitude * density * numpy.sin(phase)
+    u1 = amplitude * velocity * numpy.cos(phase)
+    t = 1.0 + amplitude * temperature * numpy.sin(phase)
+    return (rho / (2.0 * math.pi * t) ** 1.5
+            * numpy.exp(-((v1 - u1) ** 2 + v2 ** 2 + v3 ** 2) / (2.0 * t)))
 
 
 def collision_scale(knudsen: float, density: float, temperature: float) -> float:
@@ -131,16 +160,26 @@ def description(e: float, length: float, cells: int, n_modes: int, support: floa
                 field: str = "velocity", quadrature: str = "auto") -> RunDescription:
     """A rescaled 3D hard-sphere gas in a periodic box of ``length`` with the shear mode
     u_2 = amplitude sin(2 pi x / length), or (``field`` 'density') the density mode
-    rho = 1 + amplitude sin(2 pi x / length) at uniform T; ``quadrature`` the fast
-    operator's rules ('auto', the default's, or 'review': a quarter of the cost at N = 24,
-    but 3.7 % of max |Q| from the default's on a near-Maxwellian there)."""
+    rho = 1 + amplitude sin(2 pi x / length) at uniform T, or (``field`` 'heat') the
+    Navier-Stokes heat mode (:func:`heat_mode`, first Sonine) of that wavenumber as a local
+    Maxwellian (:func:`longitudinal_mode`); ``quadrature`` the fast operator's rules
+    ('auto', the default's, or 'review': a quarter of the cost at N = 24, but 3.7 % of
+    max |Q| from the default's on a near-Maxwellian there)."""
     grid = {"dimension": 3, "n_modes": n_modes, "support_radius": support}
-    mode = ({"field": "velocity", "component": 2} if field == "velocity"
-            else {"field": "density"})
+    k = 2 * math.pi / length
+    if field == "heat":
+        _, (r, w, theta) = heat_mode(e, k / collision_scale(knudsen, 1.0, 1.0))
+        initial = {"name": "space_function", "function": "granular_hcs:longitudinal_mode",
+                   "params": {"k": k, "amplitude": amplitude, "density": float(r),
+                              "velocity": float(w), "temperature": float(theta)}}
+    else:
+        initial = {"name": "sinusoidal_mode", "amplitude": amplitude,
+                   **({"field": "velocity", "component": 2} if field == "velocity"
+                      else {"field": "density"})}
     return RunDescription(
         title=f"HCS {field} mode, e = {e:g}, length {length:g}, {cells} cells, N = {n_modes}",
         grid=grid, kernel="hard_spheres", restitution={"name": "constant", "value": e},
-        initial={"name": "sinusoidal_mode", "amplitude": amplitude, **mode},
+        initial=initial,
         operator={"name": "fast_spectral", "quadrature": quadrature},
         integrator="rk4", time_step=DT, final_time=final, rescaled=True, conservative=True,
         knudsen=knudsen, output={"snapshot_interval": final},
@@ -151,7 +190,8 @@ DT = 0.05
 
 
 def amplitude_history(ds, length: float, field: str = "velocity"):
-    """s and the sine amplitude of u_2/sqrt(T) (``velocity``) or of rho - <rho>."""
+    """s and the sine amplitude of u_2/sqrt(T) (``velocity``) or of rho - <rho> (any other
+    ``field``: the density and the heat mode)."""
     x = ds.x.values
     if field == "velocity":
         wave = ds.velocity.values[:, :, 1] / numpy.sqrt(ds.temperature.values)
@@ -166,9 +206,10 @@ def last_quarter(s, skip: float):
     return s >= skip + 0.75 * (s[-1] - skip)
 
 
-def measured_rate(ds, length: float, skip: float) -> dict:
-    """The rate Gamma of the sine amplitude A of u_2 / sqrt(T) (= that of g) in the
-    hydrodynamic regime, after the kinetic relaxation of the Maxwellian f0.
+def measured_rate(ds, length: float, skip: float, field: str = "velocity") -> dict:
+    """The rate Gamma of the sine amplitude A of u_2 / sqrt(T) (= that of g; of the
+    density for any other ``field``) in the hydrodynamic regime, after the kinetic
+    relaxation of the Maxwellian f0.
 
     Past the first collision times the local rate d ln A / ds approaches Gamma
     geometrically, so over s >= ``skip`` the least-squares fit is
@@ -183,7 +224,7 @@ def measured_rate(ds, length: float, skip: float) -> dict:
     """
     import scipy.optimize
 
-    s, amplitude = amplitude_history(ds, length)
+    s, amplitude = amplitude_history(ds, length, field)
     keep = s >= skip
     s, log_a = s[keep], numpy.log(amplitude[keep])
 
@@ -253,6 +294,21 @@ def numbers(low: float, low_open: bool = True):
     return parse
 
 
+def heat_comparison(ds, e: float, length: float, skip: float, knudsen: float = 1.0) -> dict:
+    """The heat mode's rate in s, measured (:func:`measured_rate` of the density) against
+    Navier-Stokes, lambda_h nu_0(T_g) (:func:`heat_mode` at k* = k sqrt(T_g)/nu_0(T_g)),
+    with the first Sonine zeta* and with the run's own zeta_g/nu_0(T_g)
+    (:func:`cooling_rate`), T_g the run's mean temperature at the end."""
+    temperature = float(ds.temperature.values[-1].mean())
+    nu0 = collision_scale(knudsen, 1.0, temperature)
+    k_star = 2 * math.pi / length * math.sqrt(temperature) / nu0
+    zeta_g = 2 * cooling_rate(ds, skip) / nu0
+    return {**{f"measured {key}": value
+               for key, value in measured_rate(ds, length, skip, "heat").items()},
+            "Navier-Stokes rate": heat_mode(e, k_star)[0] * nu0,
+            "Navier-Stokes rate with zeta_g": heat_mode(e, k_star, zeta_g)[0] * nu0}
+
+
 def study_arguments(doc: str, n_modes: int, cells: int, final: float | None):
     """The options the granular studies share (``--final`` only where ``final`` is not
     None); a value outside what the study can run is refused by argparse, by name."""
@@ -297,7 +353,8 @@ def save_figure(fig, path) -> None:
 def figure(stores, path) -> None:
     """ln(A(s)/A(0)) of each run against s, with the Navier-Stokes prediction (dashed):
     the shear mode's rate zeta_g/2 - eta k^2/rho (zeta_g the run's :func:`cooling_rate`)
-    from s = 1 on, the density mode's :func:`density_response`."""
+    and the heat mode's (:func:`heat_comparison`, with zeta_g) from s = 1 on, the density
+    mode's :func:`density_response`."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -308,17 +365,20 @@ def figure(stores, path) -> None:
         ds = granframe.open_run(store, time_axis="steps")
         description = RunDescription.from_toml(ds.attrs["description_toml"])
         length, e = description.space.length, description.restitution.params["value"]
-        field = description.initial.params.get("field", "velocity")
+        field = ("heat" if description.initial.name == "space_function"
+                 else description.initial.params.get("field", "velocity"))
         s, amplitude = amplitude_history(ds, length, field)
-        label = (f"{'shear' if field == 'velocity' else 'density'}, e = {e:g}, "
+        label = (f"{ {'velocity': 'shear'}.get(field, field)}, e = {e:g}, "
                  f"k = {2 * math.pi / length:.3f}, N = {description.grid.n_modes}, "
                  f"{description.space.cells} cells")
         line, = ax.plot(s, numpy.log(amplitude / amplitude[0]), label=label)
         k = 2 * math.pi / length
         temperature = float(ds.temperature.values.mean())
-        if field == "velocity":
-            eta = theory(e, description.knudsen, 1.0, temperature, k)["eta"]
-            rate = cooling_rate(ds, 1.0) - eta * k * k
+        if field in ("velocity", "heat"):
+            rate = (heat_comparison(ds, e, length, 1.0, description.knudsen)
+                    ["Navier-Stokes rate with zeta_g"] if field == "heat" else
+                    cooling_rate(ds, 1.0)
+                    - theory(e, description.knudsen, 1.0, temperature, k)["eta"] * k * k)
             reference = numpy.log(amplitude[s >= 1.0][0] / amplitude[0]) + rate * (s - 1.0)
         else:
             reference = numpy.log(density_response(e, description.knudsen, temperature, k, s))
@@ -334,40 +394,51 @@ def figure(stores, path) -> None:
 def main(argv=None):
     parser = study_arguments(__doc__, n_modes=24, cells=12, final=6.0)
     parser.add_argument("--skip", type=number(0.0, low_open=False), default=1.0)
-    parser.add_argument("--k-over-kc", type=numbers(0.0), default=[0.5, 1.0, 1.5])
-    parser.add_argument("--field", choices=("velocity", "density"), default="velocity",
-                        help="the shear mode (velocity, u_2) or the density mode")
+    parser.add_argument("--k-over-kc", type=numbers(0.0), default=[0.5, 1.0, 1.5],
+                        help="wavenumbers over the shear mode's k_c, comma-separated")
+    parser.add_argument("--k-over-kh", type=numbers(0.0), default=None,
+                        help="wavenumbers over the heat mode's k_h instead")
+    parser.add_argument("--field", choices=("velocity", "density", "heat"),
+                        default="velocity", help="the shear mode (velocity, u_2), the "
+                        "density mode or the heat mode (its Navier-Stokes eigenvector)")
     args = parser.parse_args(argv)
     out = output_folder(args, figure, "modes.png")
     if out is None:
         return
     e = args.restitution
+    if args.k_over_kh:
+        unit, key = "kh", "k/k_h"
+        scale = heat_critical(e) * collision_scale(1.0, 1.0, 1.0)
+    else:
+        unit, key, scale = "k", "k/k_c", theory(e, 1.0, 1.0, 1.0, 1.0)["k_c"]
+    name = {"velocity": "shear"}.get(args.field, args.field)
     rows = []
-    for ratio in args.k_over_kc:
-        k = ratio * theory(e, 1.0, 1.0, 1.0, 1.0)["k_c"]
+    for ratio in args.k_over_kh or args.k_over_kc:
+        k = ratio * scale
         length = 2 * math.pi / k
         began = time.perf_counter()
         run = Simulation(description(e, length, args.cells, args.n_modes, args.support,
                                      args.final, field=args.field,
                                      quadrature=args.quadrature))
-        name = "shear" if args.field == "velocity" else "density"
-        store = out / f"{name}_e{e:g}_k{ratio:g}.zarr"
+        store = out / f"{name}_e{e:g}_{unit}{ratio:g}.zarr"
         result = run.run(store, progress=False, overwrite=True)
         ds = granframe.open_run(store, time_axis="steps")
         seconds = time.perf_counter() - began
         temperature = float(ds.temperature.values[-1].mean())
         predicted = theory(e, 1.0, 1.0, temperature, k)
         half_zeta = cooling_rate(ds, args.skip)
-        row = {"e": e, "k/k_c": ratio, "k": k, "length": length, "cells": args.cells,
+        row = {"e": e, key: ratio, "k": k, "length": length, "cells": args.cells,
                "N": args.n_modes, "S": args.support, "quadrature": args.quadrature,
                "a_0": ds.attrs["rescaling_rate"],
                "zeta/2 Sonine": predicted["zeta"] / 2, "T_g": temperature,
-               **(density_comparison(ds, e, length) if args.field == "density" else
-                  {f"measured {key}": value
-                   for key, value in measured_rate(ds, length, args.skip).items()}),
                "zeta_g/2": half_zeta,
-               "Navier-Stokes rate": predicted["rate"],
-               "Navier-Stokes rate with zeta_g": half_zeta - predicted["eta"] * k * k,
+               **({"Navier-Stokes rate": predicted["rate"],
+                   "Navier-Stokes rate with zeta_g": half_zeta - predicted["eta"] * k * k,
+                   **{f"measured {key}": value
+                      for key, value in measured_rate(ds, length, args.skip).items()}}
+                  if args.field == "velocity" else
+                  density_comparison(ds, e, length) if args.field == "density" else
+                  heat_comparison(ds, e, length, args.skip)),
                "seconds": seconds,
                "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
         rows.append(row)

@@ -242,6 +242,50 @@ def test_the_heat_mode_stops_growing_where_the_longitudinal_determinant_vanishes
         0.23242, abs=1e-5)
 
 
+def test_the_heat_mode_is_an_eigenvector_that_stops_growing_at_k_h():
+    """heat_mode: M v = lambda v with rho' = 1; at k*_h lambda = 0 and v = (1, 0, -1) (an
+    isobaric mode: rho' + theta = 0, no flow), growing below k*_h and decaying above."""
+    for e in (0.9, 0.5):
+        k_h = HCS.heat_critical(e)
+        for ratio in (0.5, 1.2):
+            rate, vector = HCS.heat_mode(e, ratio * k_h)
+            assert numpy.allclose(HCS.longitudinal(e, ratio * k_h) @ vector, rate * vector,
+                                  atol=1e-14)
+            assert vector[0] == 1.0 and (rate > 0) == (ratio < 1)
+        rate, vector = HCS.heat_mode(e, k_h)
+        assert rate == pytest.approx(0.0, abs=1e-14)
+        assert numpy.allclose(vector, [1.0, 0.0, -1.0], atol=1e-12)
+
+
+def test_a_heat_mode_run_starts_on_its_navier_stokes_eigenvector(tmp_path):
+    """e = 0.9, k = k_h/2, 8 cells, N = 16, to s = 0.2: the initial fields are the heat
+    mode's eigenvector (rho' sin, u_1 cos, theta sin with the eigenvector's ratios; theta
+    to 2.5 %, the second-order temperature of a cell's mixture), and the density's first growth is its rate lambda_h nu_0 within 3 %
+    (continuity with the eigenvector's u_1: a wrong sign or phase of the flow fails)."""
+    e = 0.9
+    nu0 = HCS.collision_scale(1.0, 1.0, 1.0)
+    k = 0.5 * HCS.heat_critical(e) * nu0
+    length = 2 * math.pi / k
+    description = HCS.description(e, length, 8, 16, 3.5, 0.2, field="heat")
+    rate, (r, w, theta) = HCS.heat_mode(e, k / nu0)
+    store = tmp_path / "heat.zarr"
+    Simulation(description).run(store, progress=False)
+    ds = granframe.open_run(store, time_axis="steps")
+    x = ds.x.values
+    average = math.sin(k * length / 16) / (k * length / 16)   # a sine's cell average
+    sine, cosine = numpy.sin(k * x) * 2 / 8, numpy.cos(k * x) * 2 / 8
+    density = ds.density.values[0] - 1.0
+    assert (density @ sine) / average == pytest.approx(0.02 * r, rel=1e-5)
+    assert (ds.velocity.values[0, :, 0] @ cosine) / average == pytest.approx(0.02 * w,
+                                                                            rel=1e-4)
+    # T of a cell's mixture of Maxwellians: + its spread of u_1 and rho-T covariance, O(A^2)
+    assert (ds.temperature.values[0] - 1.0) @ sine / average == pytest.approx(0.02 * theta,
+                                                                             rel=3e-2)
+    s, amplitude = HCS.amplitude_history(ds, length, "heat")
+    first = numpy.log(amplitude[2] / amplitude[0]) / s[2]
+    assert first == pytest.approx(rate * nu0, rel=0.03)
+
+
 SHOCK = _study("granular_shock")
 
 
