@@ -132,6 +132,36 @@ def test_the_navier_stokes_profile_between_heated_walls_solves_its_problem():
     assert WALLS.navier_stokes(1.0, 0.1)["T_min/T_b"] == 1.0
 
 
+@pytest.mark.parametrize("e, knudsen", [(0.9, 0.2), (0.7, 0.5)])
+def test_the_reduced_wall_problem_is_the_granular_energy_balance(e, knudsen):
+    """The energy balance before its reduction to W'' = Lambda W^(-1/3): d/dx(kappa_0
+    (kappa* - mu*) dT/dx) = (3/2) nu_0 zeta* rho T with rho = p/T, kappa_0 = (75/64) eps
+    sqrt(pi T), nu_0 = 16 rho sqrt(T)/(5 eps sqrt(pi)), T = 1 at both walls and unit mass,
+    solved as a boundary-value problem for T, the flux and the mass with p unknown, gives
+    navier_stokes's rho_b = p and T_min/T_b (the constant 6.144 and the mu term checked)."""
+    c = HCS.sonine(e)
+    eps = math.sqrt(2.0) * knudsen
+
+    def balance(x, y, p):
+        temperature, flux, _ = y
+        rho = p[0] / temperature
+        kappa = 75 / 64 * eps * numpy.sqrt(math.pi * temperature) * (c["kappa*"] - c["mu*"])
+        nu0 = 16 * rho * numpy.sqrt(temperature) / (5 * eps * math.sqrt(math.pi))
+        return numpy.vstack([flux / kappa, 1.5 * nu0 * c["zeta*"] * rho * temperature, rho])
+
+    def ends(left, right, p):
+        return numpy.array([left[0] - 1.0, right[0] - 1.0, left[2], right[2] - 1.0])
+
+    x = numpy.linspace(0.0, 1.0, 201)
+    guess = numpy.vstack([numpy.ones_like(x), numpy.zeros_like(x), x])
+    solution = scipy.integrate.solve_bvp(balance, ends, x, guess, p=[0.9], tol=1e-10)
+    assert solution.status == 0
+    expected = WALLS.navier_stokes(e, knudsen)
+    assert solution.p[0] == pytest.approx(expected["rho_b"], rel=1e-8)
+    minimum = solution.sol(numpy.linspace(0.0, 1.0, 2001))[0].min()
+    assert minimum == pytest.approx(expected["T_min/T_b"], rel=1e-8)
+
+
 def test_a_quick_heated_gas_balances_its_energy_and_resumes_to_the_same_row(tmp_path, capsys):
     """6 cells, N = 16, to t = 0.3 (13 steps, f stored every 3): the mass to round-off,
     wall heat + dissipation = the energy's change to 5 % of the heat in the transient
