@@ -74,7 +74,8 @@ def theory(e: float, knudsen: float, density: float, temperature: float, k: floa
             "k_c": math.sqrt(density * zeta / (2 * eta))}
 
 
-def longitudinal(e: float, k_star: float, zeta: float | None = None):
+def longitudinal(e: float, k_star: float, zeta: float | None = None,
+                 conduction: float = 1.0):
     r"""The linearised Navier-Stokes matrix of the longitudinal modes about the cooling
     state, d/d tau (rho', w, theta) = M (rho', w, theta), for the Fourier amplitudes of
     rho/rho_H - 1, i u_1/sqrt(T_H) and T/T_H - 1 at wavenumber k* = k sqrt(T_H)/nu_0, in
@@ -88,10 +89,13 @@ def longitudinal(e: float, k_star: float, zeta: float | None = None):
     (w = i u_1/sqrt(T) makes the matrix real; the compression -div u enters rho' and theta
     with the same sign, as in n and (3/2) n T, so that in the elastic limit the pair of
     complex eigenvalues is sound, -(k*^2/2)((4/3) eta* + kappa*) +- i sqrt(5/3) k*).
-    ``zeta``: a zeta* to use instead of the first Sonine one (eta*, kappa*, mu* stay)."""
+    ``zeta``: a zeta* to use instead of the first Sonine one (eta*, kappa*, mu* stay);
+    ``conduction``: a factor on kappa* and mu* (on the heat flux)."""
     c = sonine(e)
     if zeta is not None:
         c["zeta*"] = zeta
+    c["kappa*"] *= conduction
+    c["mu*"] *= conduction
     return numpy.array([
         [0.0, k_star, 0.0],
         [-k_star, c["zeta*"] / 2 - 4 / 3 * c["eta*"] * k_star ** 2, -k_star],
@@ -111,11 +115,11 @@ def heat_critical(e: float) -> float:
     return math.sqrt(c["zeta*"] / (5.0 * (c["kappa*"] - c["mu*"])))
 
 
-def heat_mode(e: float, k_star: float, zeta: float | None = None):
+def heat_mode(e: float, k_star: float, zeta: float | None = None, conduction: float = 1.0):
     """The heat mode of :func:`longitudinal` at k*: its rate (the real eigenvalue with the
     largest real part, per unit tau) and its eigenvector (rho', w, theta) scaled to
-    rho' = 1; ``zeta``: a zeta* to use instead of the first Sonine one (a run's own)."""
-    values, vectors = numpy.linalg.eig(longitudinal(e, k_star, zeta))
+    rho' = 1; ``zeta``, ``conduction`` as for :func:`longitudinal`."""
+    values, vectors = numpy.linalg.eig(longitudinal(e, k_star, zeta, conduction))
     real = numpy.flatnonzero(numpy.abs(values.imag) <= 1e-12 * max(1.0, abs(k_star)))
     index = real[numpy.argmax(values.real[real])]
     vector = vectors[:, index].real
@@ -294,19 +298,67 @@ def numbers(low: float, low_open: bool = True):
     return parse
 
 
+def heat_and_sound(s, amplitude, sound: complex, skip: float) -> dict:
+    r"""The heat mode's rate from a density amplitude that also carries the sound pair.
+
+    A run started on the Navier-Stokes heat mode as a local Maxwellian has no heat flux at
+    s = 0; while the flux builds up over the first collision times it excites the sound
+    pair a little (a per cent of the amplitude), which is damped only over ~10 s, so the
+    slope of ln A is the heat mode's only after several runs' lengths. Over s >= ``skip``
+    the least-squares fit
+
+        A(s) = a exp(lambda s) + exp(sigma s) (b cos(omega s) + c sin(omega s)),
+
+    with sigma + i omega = ``sound`` (the Navier-Stokes sound pair, per unit s), is linear
+    in (a, b, c) for each lambda, and lambda is found by a bounded scalar search. Returns
+    ``rate`` (lambda), ``sound/heat`` (|b + i c|/a) and ``rms`` (the fit's residual over
+    the mean amplitude)."""
+    import scipy.optimize
+
+    keep = numpy.asarray(s) >= skip
+    s, amplitude = numpy.asarray(s)[keep], numpy.asarray(amplitude)[keep]
+    damping = numpy.exp(sound.real * s)
+
+    def fit(rate):
+        basis = numpy.stack([numpy.exp(rate * s), damping * numpy.cos(sound.imag * s),
+                             damping * numpy.sin(sound.imag * s)], axis=1)
+        coefficients, *_ = numpy.linalg.lstsq(basis, amplitude, rcond=None)
+        return coefficients, float(numpy.sum((basis @ coefficients - amplitude) ** 2))
+
+    rate = scipy.optimize.minimize_scalar(lambda r: fit(r)[1], bounds=(-1.0, 1.0),
+                                          method="bounded", options={"xatol": 1e-10}).x
+    (a, b, c), residual = fit(rate)
+    return {"rate": float(rate), "sound/heat": float(math.hypot(b, c) / abs(a)),
+            "rms": math.sqrt(residual / s.size) / float(numpy.mean(numpy.abs(amplitude)))}
+
+
 def heat_comparison(ds, e: float, length: float, skip: float, knudsen: float = 1.0) -> dict:
-    """The heat mode's rate in s, measured (:func:`measured_rate` of the density) against
+    """The heat mode's rate in s, measured (:func:`heat_and_sound` on the density's sine
+    amplitude; ``late``: the straight slope of ln A over the last quarter) against
     Navier-Stokes, lambda_h nu_0(T_g) (:func:`heat_mode` at k* = k sqrt(T_g)/nu_0(T_g)),
     with the first Sonine zeta* and with the run's own zeta_g/nu_0(T_g)
-    (:func:`cooling_rate`), T_g the run's mean temperature at the end."""
+    (:func:`cooling_rate`), T_g the run's mean temperature at the end; and ``conduction``,
+    the factor f on kappa* - mu* (both scaled) that makes the Navier-Stokes rate with
+    zeta_g the measured one, whence the kinetic k_h / k_h(first Sonine) = 1/sqrt(f)
+    (k_h^2 = zeta*/(5 f (kappa* - mu*)), :func:`heat_critical`)."""
+    import scipy.optimize
+
     temperature = float(ds.temperature.values[-1].mean())
     nu0 = collision_scale(knudsen, 1.0, temperature)
     k_star = 2 * math.pi / length * math.sqrt(temperature) / nu0
     zeta_g = 2 * cooling_rate(ds, skip) / nu0
-    return {**{f"measured {key}": value
-               for key, value in measured_rate(ds, length, skip, "heat").items()},
+    values = numpy.linalg.eigvals(longitudinal(e, k_star, zeta_g)) * nu0
+    s, amplitude = amplitude_history(ds, length, "heat")
+    fit = heat_and_sound(s, amplitude, complex(values[numpy.argmax(values.imag)]), skip)
+    late = last_quarter(s, skip)
+    factor = scipy.optimize.brentq(
+        lambda f: heat_mode(e, k_star, zeta_g, f)[0] * nu0 - fit["rate"], 0.25, 4.0)
+    return {"measured rate": fit["rate"],
+            "measured late": float(numpy.polyfit(s[late], numpy.log(amplitude[late]), 1)[0]),
+            "sound/heat": fit["sound/heat"], "fit rms": fit["rms"],
             "Navier-Stokes rate": heat_mode(e, k_star)[0] * nu0,
-            "Navier-Stokes rate with zeta_g": heat_mode(e, k_star, zeta_g)[0] * nu0}
+            "Navier-Stokes rate with zeta_g": heat_mode(e, k_star, zeta_g)[0] * nu0,
+            "conduction": factor, "k_h/k_h Sonine": 1.0 / math.sqrt(factor)}
 
 
 def study_arguments(doc: str, n_modes: int, cells: int, final: float | None):

@@ -287,6 +287,21 @@ def test_the_heat_mode_is_an_eigenvector_that_stops_growing_at_k_h():
         assert numpy.allclose(vector, [1.0, 0.0, -1.0], atol=1e-12)
 
 
+def test_the_heat_rate_is_read_past_the_sound_it_excites():
+    """A(s) = a e^(lambda s) + e^(sigma s)(b cos omega s + c sin omega s): heat_and_sound
+    returns lambda and |b + ic|/a exactly, where the slope of ln A over the window is off by
+    the sound pair's few per cent."""
+    s = numpy.arange(0.0, 4.0001, 0.05)
+    sound, rate = complex(-0.085, 0.41), 0.0148
+    amplitude = 0.02 * numpy.exp(rate * s) + numpy.exp(sound.real * s) * (
+        -3.6e-4 * numpy.cos(sound.imag * s) + 3e-5 * numpy.sin(sound.imag * s))
+    fit = HCS.heat_and_sound(s, amplitude, sound, 1.0)
+    assert fit["rate"] == pytest.approx(rate, abs=1e-9) and fit["rms"] < 1e-12
+    assert fit["sound/heat"] == pytest.approx(math.hypot(3.6e-4, 3e-5) / 0.02, rel=1e-6)
+    keep = s >= 1.0
+    assert abs(numpy.polyfit(s[keep], numpy.log(amplitude[keep]), 1)[0] - rate) > 1e-3
+
+
 def test_a_heat_mode_run_starts_on_its_navier_stokes_eigenvector(tmp_path):
     """e = 0.9, k = k_h/2, 8 cells, N = 16, to s = 0.2: the initial fields are the heat
     mode's eigenvector (rho' sin, u_1 cos, theta sin with the eigenvector's ratios; theta
