@@ -165,7 +165,7 @@ def figure(stores, path) -> None:
     axes[1].set_ylabel("rho / rho_b")
     for ax in axes:
         ax.set_xlabel("x")
-    axes[0].legend(fontsize=7)
+    axes[1].legend(*axes[0].get_legend_handles_labels(), fontsize=7, loc="upper right")
     fig.suptitle("heated walls, 3D hard spheres: granframe (markers), granular "
                  "Navier-Stokes (lines); T_b, rho_b at the walls", fontsize=9)
     save_figure(fig, path)
