@@ -165,6 +165,8 @@ def figure(stores, path) -> None:
     axes[1].set_ylabel("rho / rho_b")
     for ax in axes:
         ax.set_xlabel("x")
+    low, high = axes[1].get_ylim()          # room above the profiles for the legend
+    axes[1].set_ylim(low, high + 0.35 * (high - low))
     axes[1].legend(*axes[0].get_legend_handles_labels(), fontsize=7, loc="upper right")
     fig.suptitle("heated walls, 3D hard spheres: granframe (markers), granular "
                  "Navier-Stokes (lines); T_b, rho_b at the walls", fontsize=9)
