@@ -12,8 +12,8 @@ viscosity. The rescaling rate a_0 is that of the Maxwellian f0; the cooling stat
 zeta_g differs from 2 a_0 by its a_2 correction (3 a_2 / 16), so T_g drifts slowly and
 zeta_g is measured from it (:func:`cooling_rate`). In granframe's units (B = |g|/(4 pi),
 Q/eps: pi sigma^2 = 1/eps, unit mass) the first Sonine approximation (Brey, Dufty, Kim &
-Santos, Phys. Rev. E 58 (1998) 4638; Garzo & Dufty, Phys. Rev. E 59 (1999) 5895) gives, with eta_0 = (5/16) eps sqrt(pi T) and
-nu_0 = rho T / eta_0,
+Santos, Phys. Rev. E 58 (1998) 4638; Garzo & Dufty, Phys. Rev. E 59 (1999) 5895) gives,
+with eta_0 = (5/16) eps sqrt(pi T) and nu_0 = rho T / eta_0,
 
     zeta = nu_0 zeta*,   zeta* = (5/12)(1 - e^2)(1 + 3 a_2 / 16),
     eta  = eta_0 / (nu_eta* - zeta*/2),   nu_eta* = (3 - e)(1 + e)/4 (1 - a_2/32),
@@ -43,9 +43,9 @@ import time
 import numpy
 
 import granframe
-from granframe.tools.studykit import finish
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
+from granframe.tools.studykit import finish
 
 
 def sonine(e: float) -> dict:
@@ -210,10 +210,9 @@ def last_quarter(s, skip: float):
     return s >= skip + 0.75 * (s[-1] - skip)
 
 
-def measured_rate(ds, length: float, skip: float, field: str = "velocity") -> dict:
-    """The rate Gamma of the sine amplitude A of u_2 / sqrt(T) (= that of g; of the
-    density for any other ``field``) in the hydrodynamic regime, after the kinetic
-    relaxation of the Maxwellian f0.
+def measured_rate(ds, length: float, skip: float) -> dict:
+    """The rate Gamma of the sine amplitude A of u_2 / sqrt(T) (= that of g) in the
+    hydrodynamic regime, after the kinetic relaxation of the Maxwellian f0.
 
     Past the first collision times the local rate d ln A / ds approaches Gamma
     geometrically, so over s >= ``skip`` the least-squares fit is
@@ -228,7 +227,7 @@ def measured_rate(ds, length: float, skip: float, field: str = "velocity") -> di
     """
     import scipy.optimize
 
-    s, amplitude = amplitude_history(ds, length, field)
+    s, amplitude = amplitude_history(ds, length)
     keep = s >= skip
     s, log_a = s[keep], numpy.log(amplitude[keep])
 
@@ -426,14 +425,16 @@ def figure(stores, path) -> None:
         line, = ax.plot(s, numpy.log(amplitude / amplitude[0]), label=label)
         k = 2 * math.pi / length
         temperature = float(ds.temperature.values.mean())
-        if field in ("velocity", "heat"):
-            rate = (heat_comparison(ds, e, length, 1.0, description.knudsen)
-                    ["Navier-Stokes rate with zeta_g"] if field == "heat" else
-                    cooling_rate(ds, 1.0)
-                    - theory(e, description.knudsen, 1.0, temperature, k)["eta"] * k * k)
-            reference = numpy.log(amplitude[s >= 1.0][0] / amplitude[0]) + rate * (s - 1.0)
-        else:
+        if field == "density":
             reference = numpy.log(density_response(e, description.knudsen, temperature, k, s))
+        else:
+            if field == "heat":
+                rate = heat_comparison(ds, e, length, 1.0,
+                                       description.knudsen)["Navier-Stokes rate with zeta_g"]
+            else:
+                eta = theory(e, description.knudsen, 1.0, temperature, k)["eta"]
+                rate = cooling_rate(ds, 1.0) - eta * k * k
+            reference = numpy.log(amplitude[s >= 1.0][0] / amplitude[0]) + rate * (s - 1.0)
         ax.plot(s, reference, "--", color=line.get_color(), lw=1)
     ax.set_xlabel("rescaled time s")
     ax.set_ylabel("ln A(s)/A(0)")
@@ -459,10 +460,10 @@ def main(argv=None):
         return
     e = args.restitution
     if args.k_over_kh:
-        unit, key = "kh", "k/k_h"
+        unit, ratio_name = "kh", "k/k_h"
         scale = heat_critical(e) * collision_scale(1.0, 1.0, 1.0)
     else:
-        unit, key, scale = "k", "k/k_c", theory(e, 1.0, 1.0, 1.0, 1.0)["k_c"]
+        unit, ratio_name, scale = "k", "k/k_c", theory(e, 1.0, 1.0, 1.0, 1.0)["k_c"]
     name = {"velocity": "shear"}.get(args.field, args.field)
     rows = []
     for ratio in args.k_over_kh or args.k_over_kc:
@@ -479,18 +480,20 @@ def main(argv=None):
         temperature = float(ds.temperature.values[-1].mean())
         predicted = theory(e, 1.0, 1.0, temperature, k)
         half_zeta = cooling_rate(ds, args.skip)
-        row = {"e": e, key: ratio, "k": k, "length": length, "cells": args.cells,
+        if args.field == "velocity":
+            compared = {"Navier-Stokes rate": predicted["rate"],
+                        "Navier-Stokes rate with zeta_g": half_zeta - predicted["eta"] * k * k,
+                        **{f"measured {key}": value
+                           for key, value in measured_rate(ds, length, args.skip).items()}}
+        elif args.field == "density":
+            compared = density_comparison(ds, e, length)
+        else:
+            compared = heat_comparison(ds, e, length, args.skip)
+        row = {"e": e, ratio_name: ratio, "k": k, "length": length, "cells": args.cells,
                "N": args.n_modes, "S": args.support, "quadrature": args.quadrature,
                "a_0": ds.attrs["rescaling_rate"],
                "zeta/2 Sonine": predicted["zeta"] / 2, "T_g": temperature,
-               "zeta_g/2": half_zeta,
-               **({"Navier-Stokes rate": predicted["rate"],
-                   "Navier-Stokes rate with zeta_g": half_zeta - predicted["eta"] * k * k,
-                   **{f"measured {key}": value
-                      for key, value in measured_rate(ds, length, args.skip).items()}}
-                  if args.field == "velocity" else
-                  density_comparison(ds, e, length) if args.field == "density" else
-                  heat_comparison(ds, e, length, args.skip)),
+               "zeta_g/2": half_zeta, **compared,
                "seconds": seconds,
                "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
         rows.append(row)

@@ -32,10 +32,10 @@ import time
 import numpy
 
 import granframe
-from granframe.tools.studykit import finish
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.space import exact
+from granframe.tools.studykit import finish
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from granular_hcs import number, numbers, output_folder, save_figure, study_arguments  # noqa: E402

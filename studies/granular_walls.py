@@ -37,9 +37,9 @@ import scipy.integrate
 import scipy.optimize
 
 import granframe
-from granframe.tools.studykit import finish
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
+from granframe.tools.studykit import finish
 from granframe.velocity.estimators import TAIL_ERROR_FACTOR, spectral_tail
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))

@@ -305,8 +305,9 @@ def test_the_heat_rate_is_read_past_the_sound_it_excites():
 def test_a_heat_mode_run_starts_on_its_navier_stokes_eigenvector(tmp_path):
     """e = 0.9, k = k_h/2, 8 cells, N = 16, to s = 0.2: the initial fields are the heat
     mode's eigenvector (rho' sin, u_1 cos, theta sin with the eigenvector's ratios; theta
-    to 2.5 %, the second-order temperature of a cell's mixture), and the density's first growth is its rate lambda_h nu_0 within 3 %
-    (continuity with the eigenvector's u_1: a wrong sign or phase of the flow fails)."""
+    to 2.5 %, the second-order temperature of a cell's mixture), and the density's first
+    growth is its rate lambda_h nu_0 within 3 % (continuity with the eigenvector's u_1: a
+    wrong sign or phase of the flow fails)."""
     e = 0.9
     nu0 = HCS.collision_scale(1.0, 1.0, 1.0)
     k = 0.5 * HCS.heat_critical(e) * nu0
