@@ -48,7 +48,7 @@ import granframe as gf  # noqa: E402
 from granframe.backends import preferred_backend
 from granframe.tools.bench import median_time  # noqa: E402
 from granframe.model.exact import bkw  # noqa: E402
-from granframe.tools.studykit import (command, read_summary, save_figure, write_csv,  # noqa: E402
+from granframe.tools.studykit import (command, finish, read_summary, save_figure, write_csv,  # noqa: E402
                                 write_summary)
 from granframe.testing import heated_maxwell_error  # noqa: E402
 
@@ -369,4 +369,4 @@ main = command(run, __doc__, "two small scenes (smoke test)", parts="scene")
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(finish(main))

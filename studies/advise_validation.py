@@ -41,7 +41,7 @@ from granframe.run.description import RunDescription  # noqa: E402
 from granframe.model.exact import bkw, heated_maxwell_law  # noqa: E402
 from granframe.run.runner import Simulation  # noqa: E402
 from granframe.stepping.stability import step_limit  # noqa: E402
-from granframe.tools.studykit import command, save_figure, write_csv, write_summary  # noqa: E402
+from granframe.tools.studykit import command, finish, save_figure, write_csv, write_summary  # noqa: E402
 
 MAXWELLIAN = {"name": "maxwellian", "temperature": 1.0}
 SCENES = {
@@ -326,4 +326,4 @@ main = command(run, __doc__, "one scene (smoke test)", show=_show)
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(finish(main))

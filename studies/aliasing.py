@@ -27,7 +27,7 @@ import granframe as gf  # noqa: E402
 from granframe.backends import preferred_backend  # noqa: E402
 from granframe.model.exact import bkw  # noqa: E402
 from granframe.velocity.grid import ANTI_ALIASING_FACTOR  # noqa: E402
-from granframe.tools.studykit import command, save_figure, write_csv, write_summary  # noqa: E402
+from granframe.tools.studykit import command, finish, save_figure, write_csv, write_summary  # noqa: E402
 
 SUPPORT = 5.0
 SPACING = 0.35
@@ -92,4 +92,4 @@ main = command(run, __doc__, "two points (smoke test)", show=_show)
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(finish(main))

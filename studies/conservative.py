@@ -38,7 +38,7 @@ from granframe.backends import preferred_backend
 from granframe.equations.conservative import WEIGHTS, ConservativeCorrection
 from granframe.equations.homogeneous import HomogeneousBoltzmann
 from granframe.model.exact import bkw, heated_maxwell_temperature, maxwell_energy_dissipation
-from granframe.tools.studykit import command, read_summary, write_csv, write_summary
+from granframe.tools.studykit import command, finish, read_summary, write_csv, write_summary
 
 PARTS = ("constraints", "penalised", "bkw")
 
@@ -288,4 +288,4 @@ main = command(run, __doc__, "small grids and one step size (smoke test)",
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(finish(main))

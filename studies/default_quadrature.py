@@ -43,7 +43,7 @@ import numpy
 
 import granframe as gf
 from granframe.backends import preferred_backend
-from granframe.tools.studykit import command, read_summary, write_csv, write_summary
+from granframe.tools.studykit import command, finish, read_summary, write_csv, write_summary
 from granframe.velocity.estimators import TAIL_ERROR_FACTOR, spectral_tail
 from granframe.velocity.quadratures import CircleTrapezoid, Lebedev
 
@@ -249,4 +249,4 @@ main = command(run, __doc__, "2D N = 16, two rules of each kind (smoke test)",
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(finish(main))

@@ -37,7 +37,7 @@ from granframe.run.runner import Simulation
 from granframe.space.collisions import SplitStep
 from granframe.space.exact import euler_riemann_cell_averages
 from granframe.stepping.integrators import EquilibriumProjection
-from granframe.tools.studykit import write_csv
+from granframe.tools.studykit import finish, number, write_csv
 
 _spec = importlib.util.spec_from_file_location(
     "space_study", pathlib.Path(__file__).resolve().parent / "space.py")
@@ -159,7 +159,7 @@ def _markdown(rows: list[dict], columns) -> str:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", required=True, help="folder of the tables")
-    parser.add_argument("--cells", type=int, default=50)
+    parser.add_argument("--cells", type=number(1, kind=int, low_open=False), default=50)
     args = parser.parse_args(argv)
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -181,4 +181,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(finish(main))

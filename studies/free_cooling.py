@@ -50,7 +50,7 @@ from granframe.equations.rescaled import RescaledBoltzmann  # noqa: E402
 from granframe.errors import NonFiniteError  # noqa: E402
 from granframe.run.runner import moments  # noqa: E402
 from granframe.velocity.grid import ANTI_ALIASING_FACTOR  # noqa: E402
-from granframe.tools.studykit import (command, read_summary, save_figure, write_csv,  # noqa: E402
+from granframe.tools.studykit import (command, finish, read_summary, save_figure, write_csv,  # noqa: E402
                                 write_summary)
 
 PARTS = ("concentration", "hcs", "maxwell")
@@ -573,4 +573,4 @@ main = command(run, __doc__, "short runs at small N (smoke test)", parts="part",
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(finish(main))

@@ -33,10 +33,10 @@ import numpy
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import HealthError, Simulation
-from granframe.tools.studykit import finish
+from granframe.tools.studykit import finish, number
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from granular_hcs import number, output_folder, save_figure, study_arguments  # noqa: E402
+from granular_hcs import output_folder, save_figure, study_arguments  # noqa: E402
 
 DT = 0.05
 

@@ -45,7 +45,7 @@ import numpy
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
-from granframe.tools.studykit import finish
+from granframe.tools.studykit import finish, number, numbers
 
 
 def sonine(e: float) -> dict:
@@ -268,33 +268,6 @@ def density_comparison(ds, e: float, length: float, knudsen: float = 1.0) -> dic
     predicted = density_response(e, knudsen, temperature, 2 * math.pi / length, s)
     return {"A(end)/A(0)": float(measured[-1]), "NS A(end)/A(0)": float(predicted[-1]),
             "max difference": float(numpy.abs(measured - predicted).max())}
-
-
-def number(low: float, high: float = math.inf, low_open: bool = True, kind=float):
-    """An argparse type: a finite number of ``kind`` in (low, high] (``low_open``) or
-    [low, high]; anything else is refused with the value and the range allowed."""
-    def parse(text: str):
-        try:
-            value = kind(text)
-        except ValueError:
-            value = math.nan
-        if not (math.isfinite(value) and (value > low if low_open else value >= low)
-                and value <= high):
-            shown = f"({low:g}, " if low_open else f"[{low:g}, "
-            raise argparse.ArgumentTypeError(
-                f"{text!r} is not allowed: must be {'an integer' if kind is int else 'a number'}"
-                f" in {shown}{high:g}]")
-        return value
-    return parse
-
-
-def numbers(low: float, low_open: bool = True):
-    """An argparse type: comma-separated numbers, each as :func:`number` allows."""
-    one = number(low, low_open=low_open)
-
-    def parse(text: str) -> list[float]:
-        return [one(part) for part in text.split(",")]
-    return parse
 
 
 def heat_and_sound(s, amplitude, sound: complex, skip: float) -> dict:

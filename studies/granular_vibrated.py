@@ -35,10 +35,10 @@ import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.space import exact
-from granframe.tools.studykit import finish
+from granframe.tools.studykit import finish, number, numbers
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from granular_hcs import number, numbers, output_folder, save_figure, study_arguments  # noqa: E402
+from granular_hcs import output_folder, save_figure, study_arguments  # noqa: E402
 from space import cfl_time_step  # noqa: E402
 
 DIMENSION = 2

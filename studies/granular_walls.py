@@ -39,11 +39,11 @@ import scipy.optimize
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
-from granframe.tools.studykit import finish
+from granframe.tools.studykit import finish, number
 from granframe.velocity.estimators import TAIL_ERROR_FACTOR, spectral_tail
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from granular_hcs import number, output_folder, save_figure, sonine, study_arguments  # noqa: E402
+from granular_hcs import output_folder, save_figure, sonine, study_arguments  # noqa: E402
 from space import cfl_time_step, energy_balance  # noqa: E402
 
 

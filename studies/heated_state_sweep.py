@@ -25,7 +25,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
 import tomli_w  # noqa: E402
 
-from granframe.tools.studykit import command, save_figure, write_csv, write_summary  # noqa: E402
+from granframe.tools.studykit import command, finish, save_figure, write_csv, write_summary  # noqa: E402
 from granframe.run.sweep import Sweep, read_table, run_sweep  # noqa: E402
 
 RESTITUTIONS = (0.2, 0.4, 0.6, 0.8, 0.9, 0.95)
@@ -123,4 +123,4 @@ main = command(run, __doc__, "2 restitutions, N = 40, to t = 2 (smoke test)", sh
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(finish(main))

@@ -57,7 +57,7 @@ import time
 
 import numpy
 
-from granframe.tools.studykit import save_figure, write_csv
+from granframe.tools.studykit import finish, name_list, numbers, save_figure, write_csv
 import matplotlib.pyplot as plt  # noqa: E402  (after studykit chose the Agg backend)
 from granframe.run.description import Hierarchy, RunDescription
 from granframe.run.runner import Simulation
@@ -369,8 +369,9 @@ def markdown(rows) -> str:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", required=True, type=pathlib.Path)
-    parser.add_argument("--scenes", default=",".join(DEFAULT_SCENES))
-    parser.add_argument("--thresholds", default="",
+    parser.add_argument("--scenes", type=name_list(tuple(SCENES)), default=list(DEFAULT_SCENES),
+                        help="comma-separated: " + ", ".join(SCENES))
+    parser.add_argument("--thresholds", type=numbers(0.0), default=[],
                         help="middle-level realizability thresholds to calibrate, e.g. "
                              "0.05,0.03,0.01")
     parser.add_argument("--timing3d", action="store_true")
@@ -378,12 +379,11 @@ def main(argv=None) -> int:
     parser.add_argument("--model-error", action="store_true",
                         help="the ES-BGK level everywhere on the shear scene, e = 0.97 and 1")
     args = parser.parse_args(argv)
-    middle = [float(t) for t in args.thresholds.split(",") if t]
     args.out.mkdir(parents=True, exist_ok=True)
     began = time.perf_counter()
     rows, calibration = [], []
-    for name in filter(None, args.scenes.split(",")):
-        row, more = scene_row(name, args.out, middle)
+    for name in args.scenes:
+        row, more = scene_row(name, args.out, args.thresholds)
         rows.append(row)
         calibration += more
     costs = None
@@ -431,4 +431,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(finish(main))

@@ -52,6 +52,8 @@ import time
 
 import numpy
 
+from granframe.tools.studykit import finish, number
+
 #: the configurations: (name, dimension, n_modes, cells on one process)
 STRONG = ("strong", 3, 16, 64)
 #: the cells of each process in the weak scaling
@@ -249,15 +251,15 @@ def table(rows, columns) -> str:
     return "\n".join(lines)
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=pathlib.Path)
-    parser.add_argument("--steps", type=int, default=5)
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--steps", type=number(1, kind=int, low_open=False), default=5)
+    parser.add_argument("--repeats", type=number(1, kind=int, low_open=False), default=3)
     parser.add_argument("--backend", default="numpy", help="array backend of the runs "
                         "(cupy: one GPU per process)")
     parser.add_argument("--worker", help=argparse.SUPPRESS)
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     if args.worker:
         worker(json.loads(args.worker))
         return
@@ -344,4 +346,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(finish(main))

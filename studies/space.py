@@ -54,7 +54,7 @@ from granframe.run.description import RunDescription  # noqa: E402
 from granframe.run.runner import Simulation  # noqa: E402
 from granframe.space.exact import euler_riemann, euler_riemann_cell_averages  # noqa: E402
 from granframe.space.transport import transport_speeds  # noqa: E402
-from granframe.tools.studykit import write_csv, write_summary  # noqa: E402
+from granframe.tools.studykit import finish, write_csv, write_summary  # noqa: E402
 
 #: the velocity grid of the Sod tube: on N = 24 (h = 0.644, h/sqrt(T) = 0.88 in the
 #: rarefaction's T = 0.53) the spectral Q of the grid Maxwellian is 5e-4 of its peak, and the
@@ -417,4 +417,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(finish(main))

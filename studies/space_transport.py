@@ -46,7 +46,7 @@ import numpy
 
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
-from granframe.tools.studykit import write_csv
+from granframe.tools.studykit import finish, number, numbers, write_csv
 
 #: the walls: temperatures and tangential velocities (along v_2)
 WALL_T = (0.9, 1.1)
@@ -180,17 +180,17 @@ def write_table(out: pathlib.Path) -> None:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=pathlib.Path, required=True)
-    parser.add_argument("--modes", default="16,20,24")
-    parser.add_argument("--dt", type=float, default=DT)
+    parser.add_argument("--modes", type=numbers(1, low_open=False, kind=int), default=[16, 20, 24])
+    parser.add_argument("--dt", type=number(0.0), default=DT)
     parser.add_argument("--table", action="store_true", help="only write the table")
     args = parser.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     if not args.table:
-        for modes in map(int, args.modes.split(",")):
+        for modes in args.modes:
             run(args.out, modes, args.dt)
     write_table(args.out)
     return 0
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(finish(main))

@@ -37,6 +37,7 @@ import numpy
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.space import boundaries
+from granframe.tools.studykit import finish, number
 from granframe.velocity.grid import VelocityGrid
 
 GRID = {"dimension": 2, "n_modes": 16, "support_radius": 3.5}
@@ -104,7 +105,7 @@ def wall_cell_row(ds) -> dict:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--cells", type=int, nargs="+", default=list(CELLS))
+    parser.add_argument("--cells", type=number(1, kind=int, low_open=False), nargs="+", default=list(CELLS))
     parser.add_argument("--even", action="store_true",
                         help="the even extension of the arriving values (for comparison)")
     args = parser.parse_args(argv)
@@ -129,4 +130,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(finish(main))

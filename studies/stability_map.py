@@ -39,7 +39,7 @@ import granframe as gf  # noqa: E402
 from granframe.equations.homogeneous import HomogeneousBoltzmann  # noqa: E402
 from granframe.model.exact import heated_maxwell_temperature  # noqa: E402
 from granframe.stepping.stability import step_limit  # noqa: E402
-from granframe.tools.studykit import (command, read_summary, save_figure, write_csv,  # noqa: E402
+from granframe.tools.studykit import (command, finish, read_summary, save_figure, write_csv,  # noqa: E402
                                 write_summary)
 
 STEPS = 200
@@ -193,4 +193,4 @@ main = command(run, __doc__, "four points (smoke test)", parts="map")
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(finish(main))

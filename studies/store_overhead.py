@@ -25,7 +25,7 @@ import zarr
 import granframe.run.storage as storage
 from granframe.velocity.grid import VelocityGrid
 from granframe.run.runner import Simulation, load_description
-from granframe.tools.studykit import command, write_csv, write_summary
+from granframe.tools.studykit import command, finish, write_csv, write_summary
 
 STUDY = pathlib.Path(__file__).with_name("heated_maxwell.py")
 GRIDS = [(2, 64), (3, 32), (3, 64)]
@@ -135,4 +135,4 @@ def show(summary: dict) -> None:
 main = command(run, __doc__, "one grid, 5 repeats, one whole run", show=show)
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(finish(main))

@@ -27,7 +27,7 @@ from granframe.backends import preferred_backend  # noqa: E402
 from granframe.equations.homogeneous import HomogeneousBoltzmann  # noqa: E402
 from granframe.model.exact import heated_maxwell_temperature  # noqa: E402
 from granframe.run.runner import moments  # noqa: E402
-from granframe.tools.studykit import command, save_figure, write_csv, write_summary  # noqa: E402
+from granframe.tools.studykit import command, finish, save_figure, write_csv, write_summary  # noqa: E402
 
 TAU, FINAL, DT = 0.1, 10.0, 0.02
 
@@ -112,4 +112,4 @@ main = command(run, __doc__, "two runs to t = 1 (smoke test)", show=_show)
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(finish(main))

@@ -5,6 +5,8 @@ import csv
 import importlib.util
 import json
 import pathlib
+import subprocess
+import sys
 
 import pytest
 
@@ -181,3 +183,30 @@ def test_heated_state_sweep_quick_runs_on_one_and_two_workers(tmp_path):
     assert summary["maxwell_max_T_error"] < 1e-4
     assert set(summary["wall_seconds"]) == {"1", "2"}
     assert (tmp_path / "sweep.toml").exists() and (tmp_path / "heated_state.png").exists()
+
+
+@pytest.mark.parametrize("study, argv, message", [
+    ("euler_limit.py", ["--cells", "0"],
+     "argument --cells: '0' is not allowed: must be an integer in [1, inf]"),
+    ("euler_limit.py", ["--cells", "3"],
+     "error: RunDescription: parameter 'space.cells' = 3 is invalid; must be >= 5"),
+    ("space_transport.py", ["--dt", "-1"],
+     "argument --dt: '-1' is not allowed: must be a number in (0, inf]"),
+    ("space_transport.py", ["--modes", "16,x"],
+     "argument --modes: 'x' is not allowed: must be an integer in [1, inf]"),
+    ("scaling.py", ["--steps", "0"],
+     "argument --steps: '0' is not allowed: must be an integer in [1, inf]"),
+    ("hierarchy.py", ["--thresholds", "abc"],
+     "argument --thresholds: 'abc' is not allowed: must be a number in (0, inf]"),
+    ("hierarchy.py", ["--scenes", "sod_1e-3,bogus"],
+     "argument --scenes: 'bogus' not allowed: choose from sod_1e-3, sod_1e-2, walls"),
+])
+def test_study_commands_refuse_bad_options_by_name_without_a_traceback(tmp_path, study, argv,
+                                                                      message):
+    """A bad option ends a study's command with status 2 and a message naming the option,
+    the value and what is allowed (argparse's, or granframe's refusal through
+    ``studykit.finish``), never a traceback."""
+    command = [sys.executable, str(STUDIES / study), "--out", str(tmp_path)] + argv
+    done = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert message in done.stderr

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import math
 import pathlib
 import sys
 from typing import Callable
@@ -14,6 +15,45 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+
+def number(low: float, high: float = math.inf, low_open: bool = True, kind=float):
+    """An argparse type: a finite number of ``kind`` in (low, high] (``low_open``) or
+    [low, high]; anything else is refused with the value and the range allowed."""
+    def parse(text: str):
+        try:
+            value = kind(text)
+        except ValueError:
+            value = math.nan
+        if not (math.isfinite(value) and (value > low if low_open else value >= low)
+                and value <= high):
+            shown = f"({low:g}, " if low_open else f"[{low:g}, "
+            raise argparse.ArgumentTypeError(
+                f"{text!r} is not allowed: must be {'an integer' if kind is int else 'a number'}"
+                f" in {shown}{high:g}]")
+        return value
+    return parse
+
+
+def numbers(low: float, low_open: bool = True, kind=float):
+    """An argparse type: comma-separated numbers, each as :func:`number` allows."""
+    one = number(low, low_open=low_open, kind=kind)
+
+    def parse(text: str) -> list:
+        return [one(part) for part in text.split(",")]
+    return parse
+
+
+def name_list(allowed):
+    """An argparse type: comma-separated names, each one of ``allowed``."""
+    def parse(text: str) -> list[str]:
+        chosen = [part for part in text.split(",") if part]
+        unknown = [part for part in chosen if part not in allowed]
+        if unknown:
+            raise argparse.ArgumentTypeError(
+                f"{', '.join(map(repr, unknown))} not allowed: choose from {', '.join(allowed)}")
+        return chosen
+    return parse
 
 
 def write_csv(path, rows: list[dict], fields=None) -> None:
