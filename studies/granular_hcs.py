@@ -304,9 +304,36 @@ def heat_and_sound(s, amplitude, sound: complex, skip: float) -> dict:
             "rms": math.sqrt(residual / s.size) / float(numpy.mean(numpy.abs(amplitude)))}
 
 
+def heat_projection(ds, e: float, length: float, k_star: float, zeta: float):
+    r"""s and the heat mode's amplitude of a longitudinal run, projected on the
+    Navier-Stokes heat mode: with the sine amplitudes of rho/<rho> - 1 and T/<T> - 1 and
+    the cosine amplitude of u_1/sqrt(<T>) (the variables (rho', w, theta) of
+    :func:`longitudinal`, <.> the mean over the cells at each s),
+
+        c_h(s) = l . (rho', w, theta)(s),   l M = lambda_h l,
+
+    l the left eigenvector of M(k*) (``zeta`` = zeta*) of the heat mode's eigenvalue
+    lambda_h. It has no sound in it as far as the kinetic modes are those of
+    Navier-Stokes, so its slope is a check on :func:`heat_and_sound` that assumes nothing
+    about the sound pair's frequency and damping."""
+    x, s = ds.x.values, ds.time.values
+    phase = 2 * math.pi * x[None] / length
+    density, temperature = ds.density.values, ds.temperature.values
+    mean_t = temperature.mean(axis=1, keepdims=True)
+    amplitudes = [2 * numpy.mean(field * wave, axis=1) for field, wave in (
+        (density / density.mean(axis=1, keepdims=True) - 1.0, numpy.sin(phase)),
+        (ds.velocity.values[:, :, 0] / numpy.sqrt(mean_t), numpy.cos(phase)),
+        (temperature / mean_t - 1.0, numpy.sin(phase)))]
+    values, vectors = numpy.linalg.eig(longitudinal(e, k_star, zeta).T)
+    real = numpy.flatnonzero(numpy.abs(values.imag) <= 1e-12 * max(1.0, abs(k_star)))
+    left = vectors[:, real[numpy.argmax(values.real[real])]].real
+    return s, sum(weight * amplitude for weight, amplitude in zip(left, amplitudes))
+
+
 def heat_comparison(ds, e: float, length: float, skip: float, knudsen: float = 1.0) -> dict:
     """The heat mode's rate in s, measured (:func:`heat_and_sound` on the density's sine
-    amplitude; ``late``: the straight slope of ln A over the last quarter) against
+    amplitude; ``late``: the straight slope of ln A over the last quarter; ``projected
+    late``: that of :func:`heat_projection`) against
     Navier-Stokes, lambda_h nu_0(T_g) (:func:`heat_mode` at k* = k sqrt(T_g)/nu_0(T_g)),
     with the first Sonine zeta* and with the run's own zeta_g/nu_0(T_g)
     (:func:`cooling_rate`), T_g the run's mean temperature at the end; and ``conduction``,
@@ -323,10 +350,13 @@ def heat_comparison(ds, e: float, length: float, skip: float, knudsen: float = 1
     s, amplitude = amplitude_history(ds, length, "heat")
     fit = heat_and_sound(s, amplitude, complex(values[numpy.argmax(values.imag)]), skip)
     late = last_quarter(s, skip)
+    _, projected = heat_projection(ds, e, length, k_star, zeta_g)
     factor = scipy.optimize.brentq(
         lambda f: heat_mode(e, k_star, zeta_g, f)[0] * nu0 - fit["rate"], 0.25, 4.0)
     return {"measured rate": fit["rate"],
             "measured late": float(numpy.polyfit(s[late], numpy.log(amplitude[late]), 1)[0]),
+            "projected late": float(numpy.polyfit(s[late], numpy.log(numpy.abs(
+                projected[late])), 1)[0]),
             "sound/heat": fit["sound/heat"], "fit rms": fit["rms"],
             "Navier-Stokes rate": heat_mode(e, k_star)[0] * nu0,
             "Navier-Stokes rate with zeta_g": heat_mode(e, k_star, zeta_g)[0] * nu0,

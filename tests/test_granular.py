@@ -302,6 +302,40 @@ def test_the_heat_rate_is_read_past_the_sound_it_excites():
     assert abs(numpy.polyfit(s[keep], numpy.log(amplitude[keep]), 1)[0] - rate) > 1e-3
 
 
+def test_the_heat_projection_removes_the_sound_pair():
+    """Fields made of the three Navier-Stokes modes of e = 0.8 at k* = 0.15 (the sound pair
+    with 20 % of the heat mode's amplitude, on top of cooling-state fields rho = 2,
+    T = 3): heat_projection's amplitude is the heat mode's alone, c_h(s) = c_h(0)
+    e^(lambda_h s) to 1e-12, while the density amplitude's slope is off by the sound."""
+    import xarray
+
+    e, k_star, length = 0.8, 0.15, 20.0
+    matrix = HCS.longitudinal(e, k_star)
+    values, vectors = numpy.linalg.eig(matrix)
+    heat = int(numpy.argmax(numpy.where(numpy.abs(values.imag) < 1e-12, values.real, -1.0)))
+    weights = numpy.full(3, 0.2 + 0.1j)
+    weights[heat] = 1.0
+    s = numpy.linspace(0.0, 4.0, 41)
+    modes = (vectors[None] * (weights * numpy.exp(values * s[:, None]))[:, None, :]).sum(-1)
+    r, w, theta = (0.01 * modes.real).T
+    x = (numpy.arange(16) + 0.5) * length / 16
+    sine, cosine = numpy.sin(2 * math.pi * x / length), numpy.cos(2 * math.pi * x / length)
+    density = 2.0 * (1.0 + r[:, None] * sine)
+    temperature = 3.0 * (1.0 + theta[:, None] * sine)
+    velocity = numpy.zeros((s.size, x.size, 3))
+    velocity[:, :, 0] = math.sqrt(3.0) * w[:, None] * cosine
+    ds = xarray.Dataset({"density": (("time", "x"), density),
+                         "temperature": (("time", "x"), temperature),
+                         "velocity": (("time", "x", "v"), velocity)},
+                        coords={"time": s, "x": x})
+    _, projected = HCS.heat_projection(ds, e, length, k_star, None)
+    rate = values[heat].real
+    assert numpy.allclose(projected, projected[0] * numpy.exp(rate * s), rtol=1e-12,
+                          atol=1e-15)
+    slope = numpy.polyfit(s, numpy.log(numpy.abs(r)), 1)[0]
+    assert abs(slope - rate) > 1e-2 * abs(rate)
+
+
 def test_a_heat_mode_run_starts_on_its_navier_stokes_eigenvector(tmp_path):
     """e = 0.9, k = k_h/2, 8 cells, N = 16, to s = 0.2: the initial fields are the heat
     mode's eigenvector (rho' sin, u_1 cos, theta sin with the eigenvector's ratios; theta
