@@ -339,7 +339,8 @@ def heat_comparison(ds, e: float, length: float, skip: float, knudsen: float = 1
     (:func:`cooling_rate`), T_g the run's mean temperature at the end; and ``conduction``,
     the factor f on kappa* - mu* (both scaled) that makes the Navier-Stokes rate with
     zeta_g the measured one, whence the kinetic k_h / k_h(first Sonine) = 1/sqrt(f)
-    (k_h^2 = zeta*/(5 f (kappa* - mu*)), :func:`heat_critical`)."""
+    (k_h^2 = zeta*/(5 f (kappa* - mu*)), :func:`heat_critical`); f is NaN where no
+    f in [1/4, 4] gives the measured rate (a run too short or too coarse to measure it)."""
     import scipy.optimize
 
     temperature = float(ds.temperature.values[-1].mean())
@@ -351,8 +352,11 @@ def heat_comparison(ds, e: float, length: float, skip: float, knudsen: float = 1
     fit = heat_and_sound(s, amplitude, complex(values[numpy.argmax(values.imag)]), skip)
     late = last_quarter(s, skip)
     _, projected = heat_projection(ds, e, length, k_star, zeta_g)
-    factor = scipy.optimize.brentq(
-        lambda f: heat_mode(e, k_star, zeta_g, f)[0] * nu0 - fit["rate"], 0.25, 4.0)
+    def excess(factor):
+        return heat_mode(e, k_star, zeta_g, factor)[0] * nu0 - fit["rate"]
+
+    factor = (scipy.optimize.brentq(excess, 0.25, 4.0) if excess(0.25) * excess(4.0) < 0
+              else math.nan)
     return {"measured rate": fit["rate"],
             "measured late": float(numpy.polyfit(s[late], numpy.log(amplitude[late]), 1)[0]),
             "projected late": float(numpy.polyfit(s[late], numpy.log(numpy.abs(
@@ -361,6 +365,36 @@ def heat_comparison(ds, e: float, length: float, skip: float, knudsen: float = 1
             "Navier-Stokes rate": heat_mode(e, k_star)[0] * nu0,
             "Navier-Stokes rate with zeta_g": heat_mode(e, k_star, zeta_g)[0] * nu0,
             "conduction": factor, "k_h/k_h Sonine": 1.0 / math.sqrt(factor)}
+
+
+def heat_critical_between(e: float, rows: list[dict], rate: str = "measured rate") -> float:
+    """The kinetic k_h: the wavenumber where the measured heat-mode rate crosses zero,
+    between two runs of :func:`heat_comparison` on either side (``rows``: their ``k``,
+    ``rate``, ``T_g`` and ``zeta_g/2``). The measured rate is the Navier-Stokes one
+    (with the first run's zeta_g, :func:`heat_mode`) plus a difference interpolated
+    linearly in k^2 between the two runs, so that the curvature of the rate in k is
+    Navier-Stokes' and only the difference is interpolated; the root is found in
+    [k_1, k_2]."""
+    import scipy.optimize
+
+    first, second = sorted(rows, key=lambda row: row["k"])
+    temperature, half_zeta = first["T_g"], first["zeta_g/2"]
+    nu0 = collision_scale(1.0, 1.0, temperature)
+
+    def navier_stokes(k):
+        return heat_mode(e, k * math.sqrt(temperature) / nu0, 2 * half_zeta / nu0)[0] * nu0
+
+    low, high = first["k"], second["k"]
+    below, above = (row[rate] - navier_stokes(row["k"]) for row in (first, second))
+
+    def kinetic(k):
+        return navier_stokes(k) + below + (above - below) * (k * k - low * low) / (
+            high * high - low * low)
+
+    if kinetic(low) * kinetic(high) > 0:
+        raise ValueError(f"heat_critical_between: the rates {first[rate]:.3g} at k = {low:.4g} "
+                         f"and {second[rate]:.3g} at k = {high:.4g} do not change sign")
+    return float(scipy.optimize.brentq(kinetic, low, high, xtol=1e-12))
 
 
 def study_arguments(doc: str, n_modes: int, cells: int, final: float | None):
@@ -502,6 +536,15 @@ def main(argv=None):
         rows.append(row)
         print(json.dumps(row))
     (out / f"{name}_e{e:g}.json").write_text(json.dumps(rows, indent=1))
+    rates = [row["measured rate"] for row in rows] if args.field == "heat" else []
+    if len(rates) == 2 and rates[0] * rates[1] < 0:
+        sonine_k = heat_critical(e) * collision_scale(1.0, 1.0, 1.0)
+        found = {"e": e, "k_h": heat_critical_between(e, rows), "k_h Sonine": sonine_k,
+                 "k_h from the projected late slopes":
+                     heat_critical_between(e, rows, "projected late")}
+        found["k_h/k_h Sonine"] = found["k_h"] / sonine_k
+        print(json.dumps(found))
+        (out / f"{name}_e{e:g}_critical.json").write_text(json.dumps(found, indent=1))
 
 
 if __name__ == "__main__":

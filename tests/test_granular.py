@@ -13,6 +13,7 @@ import sys
 import numpy
 import pytest
 import scipy.integrate
+import scipy.optimize
 
 import granframe
 from granframe.run.runner import HealthError, Simulation
@@ -334,6 +335,36 @@ def test_the_heat_projection_removes_the_sound_pair():
                           atol=1e-15)
     slope = numpy.polyfit(s, numpy.log(numpy.abs(r)), 1)[0]
     assert abs(slope - rate) > 1e-2 * abs(rate)
+
+
+def test_the_kinetic_heat_critical_wavenumber_between_two_runs():
+    """Rates that are Navier-Stokes' give its k_h exactly; rates of Navier-Stokes with the
+    heat-flux coefficient 1.1 times larger give k_h/sqrt(1.1) to 1e-3 (the difference is
+    interpolated linearly in k^2 between 0.8 and 1.2 k_h); rates of one sign are refused."""
+    e, temperature, half_zeta = 0.8, 1.0, 0.1351
+    nu0 = HCS.collision_scale(1.0, 1.0, temperature)
+    k_h = HCS.heat_critical(e) * nu0
+
+    def rows(conduction):
+        return [{"k": k, "T_g": temperature, "zeta_g/2": half_zeta,
+                 "measured rate": HCS.heat_mode(e, k / nu0, 2 * half_zeta / nu0,
+                                                conduction)[0] * nu0}
+                for k in (1.2 * k_h, 0.8 * k_h)]
+
+    exact = scipy.optimize.brentq(
+        lambda k: HCS.heat_mode(e, k / nu0, 2 * half_zeta / nu0)[0], 0.8 * k_h, 1.2 * k_h,
+        xtol=1e-14)
+    assert HCS.heat_critical_between(e, rows(1.0)) == pytest.approx(exact, rel=1e-10)
+    shifted = scipy.optimize.brentq(
+        lambda k: HCS.heat_mode(e, k / nu0, 2 * half_zeta / nu0, 1.1)[0], 0.8 * k_h,
+        1.2 * k_h, xtol=1e-14)
+    assert HCS.heat_critical_between(e, rows(1.1)) == pytest.approx(shifted, rel=1e-3)
+    assert abs(shifted / exact - 1 / math.sqrt(1.1)) < 2e-3
+    same_sign = rows(1.0)
+    same_sign[0]["measured rate"] = abs(same_sign[0]["measured rate"])
+    same_sign[1]["measured rate"] = abs(same_sign[1]["measured rate"])
+    with pytest.raises(ValueError, match="do not change sign"):
+        HCS.heat_critical_between(e, same_sign)
 
 
 def test_a_heat_mode_run_starts_on_its_navier_stokes_eigenvector(tmp_path):
