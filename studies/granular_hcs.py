@@ -120,10 +120,16 @@ def heat_mode(e: float, k_star: float, zeta: float | None = None, conduction: fl
     largest real part, per unit tau) and its eigenvector (rho', w, theta) scaled to
     rho' = 1; ``zeta``, ``conduction`` as for :func:`longitudinal`."""
     values, vectors = numpy.linalg.eig(longitudinal(e, k_star, zeta, conduction))
-    real = numpy.flatnonzero(numpy.abs(values.imag) <= 1e-12 * max(1.0, abs(k_star)))
-    index = real[numpy.argmax(values.real[real])]
+    index = heat_index(values, k_star)
     vector = vectors[:, index].real
     return float(values[index].real), vector / vector[0]
+
+
+def heat_index(values, k_star: float) -> int:
+    """Which of the eigenvalues ``values`` of :func:`longitudinal` at k* is the heat
+    mode's: the real one with the largest real part."""
+    real = numpy.flatnonzero(numpy.abs(values.imag) <= 1e-12 * max(1.0, abs(k_star)))
+    return int(real[numpy.argmax(values.real[real])])
 
 
 def longitudinal_mode(x, v1, v2, v3, k: float, amplitude: float, density: float,
@@ -305,7 +311,7 @@ def heat_and_sound(s, amplitude, sound: complex, skip: float) -> dict:
 
 
 def heat_projection(ds, e: float, length: float, k_star: float, zeta: float):
-    r"""s and the heat mode's amplitude of a longitudinal run, projected on the
+    r"""The heat mode's amplitude of a longitudinal run at each s, projected on the
     Navier-Stokes heat mode: with the sine amplitudes of rho/<rho> - 1 and T/<T> - 1 and
     the cosine amplitude of u_1/sqrt(<T>) (the variables (rho', w, theta) of
     :func:`longitudinal`, <.> the mean over the cells at each s),
@@ -316,8 +322,7 @@ def heat_projection(ds, e: float, length: float, k_star: float, zeta: float):
     lambda_h. It has no sound in it as far as the kinetic modes are those of
     Navier-Stokes, so its slope is a check on :func:`heat_and_sound` that assumes nothing
     about the sound pair's frequency and damping."""
-    x, s = ds.x.values, ds.time.values
-    phase = 2 * math.pi * x[None] / length
+    phase = 2 * math.pi * ds.x.values[None] / length
     density, temperature = ds.density.values, ds.temperature.values
     mean_t = temperature.mean(axis=1, keepdims=True)
     amplitudes = [2 * numpy.mean(field * wave, axis=1) for field, wave in (
@@ -325,9 +330,8 @@ def heat_projection(ds, e: float, length: float, k_star: float, zeta: float):
         (ds.velocity.values[:, :, 0] / numpy.sqrt(mean_t), numpy.cos(phase)),
         (temperature / mean_t - 1.0, numpy.sin(phase)))]
     values, vectors = numpy.linalg.eig(longitudinal(e, k_star, zeta).T)
-    real = numpy.flatnonzero(numpy.abs(values.imag) <= 1e-12 * max(1.0, abs(k_star)))
-    left = vectors[:, real[numpy.argmax(values.real[real])]].real
-    return s, sum(weight * amplitude for weight, amplitude in zip(left, amplitudes))
+    left = vectors[:, heat_index(values, k_star)].real
+    return sum(weight * amplitude for weight, amplitude in zip(left, amplitudes))
 
 
 def heat_comparison(ds, e: float, length: float, skip: float, knudsen: float = 1.0) -> dict:
@@ -351,7 +355,8 @@ def heat_comparison(ds, e: float, length: float, skip: float, knudsen: float = 1
     s, amplitude = amplitude_history(ds, length, "heat")
     fit = heat_and_sound(s, amplitude, complex(values[numpy.argmax(values.imag)]), skip)
     late = last_quarter(s, skip)
-    _, projected = heat_projection(ds, e, length, k_star, zeta_g)
+    projected = heat_projection(ds, e, length, k_star, zeta_g)
+
     def excess(factor):
         return heat_mode(e, k_star, zeta_g, factor)[0] * nu0 - fit["rate"]
 

@@ -329,7 +329,7 @@ def test_the_heat_projection_removes_the_sound_pair():
                          "temperature": (("time", "x"), temperature),
                          "velocity": (("time", "x", "v"), velocity)},
                         coords={"time": s, "x": x})
-    _, projected = HCS.heat_projection(ds, e, length, k_star, None)
+    projected = HCS.heat_projection(ds, e, length, k_star, None)
     rate = values[heat].real
     assert numpy.allclose(projected, projected[0] * numpy.exp(rate * s), rtol=1e-12,
                           atol=1e-15)
