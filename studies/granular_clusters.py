@@ -22,7 +22,6 @@ Run: ``python studies/granular_clusters.py --out DIR [--restitution 0.8] [--fina
 
 from __future__ import annotations
 
-import json
 import math
 import pathlib
 import sys
@@ -33,10 +32,10 @@ import numpy
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import HealthError, Simulation
-from granframe.tools.studykit import finish, number
+from granframe.tools.studykit import finish, json_text, number, save_figure
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from granular_hcs import output_folder, save_figure, study_arguments  # noqa: E402
+from granular_hcs import output_folder, study_arguments  # noqa: E402
 
 DT = 0.05
 
@@ -79,12 +78,10 @@ def figure(stores, path) -> None:
     """The x-s map of rho of each run, with the density contrast, the smallest T/<T> and
     the negative mass share against s below; a red dashed line where the accuracy monitor
     first flagged."""
-    import matplotlib
+    import matplotlib.pyplot as plt  # the Agg backend: studykit chose it on import
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(2, len(stores), figsize=(5 * len(stores), 7), squeeze=False)
+    fig, axes = plt.subplots(2, len(stores), figsize=(5 * len(stores), 7), squeeze=False,
+                             layout="tight")
     for column, store in enumerate(stores):
         ds = granframe.open_run(store, time_axis="steps")
         s, x = ds.time.values, ds.x.values
@@ -112,7 +109,7 @@ def figure(stores, path) -> None:
                      color="r", fontsize=7)
         low.set_xlabel("rescaled time s")
         low.legend(fontsize=7, loc="upper left")
-    save_figure(fig, path)
+    save_figure(fig, path, dpi=120)
 
 
 def main(argv=None):
@@ -137,8 +134,8 @@ def main(argv=None):
     row = {"e": args.restitution, "length": args.length, "cells": args.cells,
            "N": args.n_modes, "S": args.support, "seconds": time.perf_counter() - began,
            **monitors(ds), "warnings": warnings}
-    print(json.dumps(row))
-    store.with_suffix(".json").write_text(json.dumps(row, indent=1))
+    print(json_text(row))
+    store.with_suffix(".json").write_text(json_text(row, indent=1))
 
 
 if __name__ == "__main__":

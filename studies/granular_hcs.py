@@ -35,7 +35,6 @@ Run: ``python studies/granular_hcs.py --out DIR [--restitution 0.9] [--n-modes 2
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import pathlib
 import time
@@ -45,7 +44,7 @@ import numpy
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
-from granframe.tools.studykit import finish, number, numbers
+from granframe.tools.studykit import finish, json_text, number, numbers, save_figure
 
 
 def sonine(e: float) -> dict:
@@ -434,26 +433,14 @@ def output_folder(args, draw, name: str):
     return out
 
 
-def save_figure(fig, path) -> None:
-    """Lay out, write at 120 dpi and close."""
-    import matplotlib.pyplot as plt
-
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-
-
 def figure(stores, path) -> None:
     """ln(A(s)/A(0)) of each run against s, with the Navier-Stokes prediction (dashed):
     the shear mode's rate zeta_g/2 - eta k^2/rho (zeta_g the run's :func:`cooling_rate`)
     and the heat mode's (:func:`heat_comparison`, with zeta_g) from s = 1 on, the density
     mode's :func:`density_response`."""
-    import matplotlib
+    import matplotlib.pyplot as plt  # the Agg backend: studykit chose it on import
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+    fig, ax = plt.subplots(figsize=(7, 4.5), layout="tight")
     for store in stores:
         ds = granframe.open_run(store, time_axis="steps")
         description = RunDescription.from_toml(ds.attrs["description_toml"])
@@ -483,7 +470,7 @@ def figure(stores, path) -> None:
     ax.set_title("modes of the cooling state (3D hard spheres): granframe (solid), "
                  "Navier-Stokes (dashed)", fontsize=9)
     ax.legend(fontsize=7)
-    save_figure(fig, path)
+    save_figure(fig, path, dpi=120)
 
 
 def main(argv=None):
@@ -539,8 +526,8 @@ def main(argv=None):
                "seconds": seconds,
                "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
         rows.append(row)
-        print(json.dumps(row))
-    (out / f"{name}_e{e:g}.json").write_text(json.dumps(rows, indent=1))
+        print(json_text(row))
+    (out / f"{name}_e{e:g}.json").write_text(json_text(rows, indent=1))
     rates = [row["measured rate"] for row in rows] if args.field == "heat" else []
     if len(rates) == 2 and rates[0] * rates[1] < 0:
         sonine_k = heat_critical(e) * collision_scale(1.0, 1.0, 1.0)
@@ -548,8 +535,8 @@ def main(argv=None):
                  "k_h from the projected late slopes":
                      heat_critical_between(e, rows, "projected late")}
         found["k_h/k_h Sonine"] = found["k_h"] / sonine_k
-        print(json.dumps(found))
-        (out / f"{name}_e{e:g}_critical.json").write_text(json.dumps(found, indent=1))
+        print(json_text(found))
+        (out / f"{name}_e{e:g}_critical.json").write_text(json_text(found, indent=1))
 
 
 if __name__ == "__main__":

@@ -22,7 +22,6 @@ Run: ``python studies/granular_shock.py --out DIR [--restitution 1] [--knudsen 1
 
 from __future__ import annotations
 
-import json
 import math
 import pathlib
 import sys
@@ -34,10 +33,10 @@ import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.space import exact
-from granframe.tools.studykit import finish, number
+from granframe.tools.studykit import finish, json_text, number, save_figure
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from granular_hcs import output_folder, save_figure, study_arguments  # noqa: E402
+from granular_hcs import output_folder, study_arguments  # noqa: E402
 from space import cfl_time_step  # noqa: E402
 
 DIMENSION = 2
@@ -264,12 +263,9 @@ def compare(store, speed: float, e: float, knudsen: float, length: float) -> dic
 def figure(stores, path) -> None:
     """rho and T at the last time of each run (lines with markers) against granular Euler
     (black), and the wall cell's T over time."""
-    import matplotlib
+    import matplotlib.pyplot as plt  # the Agg backend: studykit chose it on import
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4))
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4), layout="tight")
     drawn = set()
     for store in stores:
         ds = granframe.open_run(store, time_axis="steps")
@@ -303,7 +299,7 @@ def figure(stores, path) -> None:
     axes[0].legend(fontsize=7)
     fig.suptitle("gas driven into a wall: granframe (colours), granular Euler (black)",
                  fontsize=9)
-    save_figure(fig, path)
+    save_figure(fig, path, dpi=120)
 
 
 def main(argv=None):
@@ -331,8 +327,8 @@ def main(argv=None):
     row = {**compare(store, speed, args.restitution, args.knudsen, args.length),
            "seconds": seconds, "dt": time_step,
            "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
-    print(json.dumps(row))
-    store.with_suffix(".json").write_text(json.dumps(row, indent=1))
+    print(json_text(row))
+    store.with_suffix(".json").write_text(json_text(row, indent=1))
 
 
 if __name__ == "__main__":

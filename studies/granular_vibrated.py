@@ -23,7 +23,6 @@ Run: ``python studies/granular_vibrated.py --out DIR --speeds 0,0.5,1``.
 
 from __future__ import annotations
 
-import json
 import math
 import pathlib
 import sys
@@ -35,10 +34,10 @@ import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.space import exact
-from granframe.tools.studykit import finish, number, numbers
+from granframe.tools.studykit import finish, json_text, number, numbers, save_figure
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from granular_hcs import output_folder, save_figure, study_arguments  # noqa: E402
+from granular_hcs import output_folder, study_arguments  # noqa: E402
 from space import cfl_time_step  # noqa: E402
 
 DIMENSION = 2
@@ -104,12 +103,9 @@ def figure(stores, path) -> None:
     """Period-mean T(x) and rho(x) of each run; T divided by T_eff (dashed; T_eff =
     T_w + 2 c_2 (A omega)^2/(d+1)) lies on the run at rest with T_w = 1 where the wall
     acts as one at rest at T_eff."""
-    import matplotlib
+    import matplotlib.pyplot as plt  # the Agg backend: studykit chose it on import
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), layout="tight")
     for store in stores:
         ds = granframe.open_run(store, time_axis="steps")
         d = RunDescription.from_toml(ds.attrs["description_toml"])
@@ -131,7 +127,7 @@ def figure(stores, path) -> None:
         ax.set_xlabel("x (vibrating wall at 0, specular at 1)")
     axes[0].legend(fontsize=7)
     fig.suptitle("vibrated granular gas, e = 0.9", fontsize=9)
-    save_figure(fig, path)
+    save_figure(fig, path, dpi=120)
 
 
 def main(argv=None):
@@ -176,7 +172,7 @@ def main(argv=None):
                "density profile": balance["density"].tolist(),
                "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
         rows.append(row)
-        print(json.dumps({k: v for k, v in row.items() if "profile" not in k}))
+        print(json_text({k: v for k, v in row.items() if "profile" not in k}))
     base = next((r for r in rows if r["A omega"] == 0.0), None)
     if base is not None:
         for row in rows:
@@ -190,7 +186,7 @@ def main(argv=None):
                   row["T/T(0) spread"], row["rho - rho(0) max"])
     (out / f"vibrated_e{args.restitution:g}_tw{args.wall_temperature:g}_c{args.cells}"
            f"_n{args.n_modes}.json").write_text(
-        json.dumps(rows, indent=1))
+        json_text(rows, indent=1))
 
 
 if __name__ == "__main__":

@@ -27,7 +27,6 @@ killed with ``--resume`` (bitwise the run that was not killed).
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import pathlib
 import sys
@@ -39,11 +38,11 @@ import scipy.optimize
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
-from granframe.tools.studykit import finish, number
+from granframe.tools.studykit import finish, json_text, number, save_figure
 from granframe.velocity.estimators import TAIL_ERROR_FACTOR, spectral_tail
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from granular_hcs import output_folder, save_figure, sonine, study_arguments  # noqa: E402
+from granular_hcs import output_folder, sonine, study_arguments  # noqa: E402
 from space import cfl_time_step, energy_balance  # noqa: E402
 
 
@@ -138,12 +137,9 @@ def kinetic(ds, operator, knudsen: float) -> dict:
 def figure(stores, path) -> None:
     """T/T_b and rho/rho_b of each run (cell averages, markers) against the Navier-Stokes
     profile of its e and Kn (lines)."""
-    import matplotlib
+    import matplotlib.pyplot as plt  # the Agg backend: studykit chose it on import
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), layout="tight")
     for store in stores:
         ds = granframe.open_run(store, time_axis="steps")
         description = RunDescription.from_toml(ds.attrs["description_toml"])
@@ -170,7 +166,7 @@ def figure(stores, path) -> None:
     axes[1].legend(*axes[0].get_legend_handles_labels(), fontsize=7, loc="upper right")
     fig.suptitle("heated walls, 3D hard spheres: granframe (markers), granular "
                  "Navier-Stokes (lines); T_b, rho_b at the walls", fontsize=9)
-    save_figure(fig, path)
+    save_figure(fig, path, dpi=120)
 
 
 def main(argv=None):
@@ -212,8 +208,8 @@ def main(argv=None):
            "NS rho_b": theory["rho_b"], "NS T_min/T_b": theory["T_min/T_b"],
            "NS rho_max/rho_b": theory["rho_max/rho_b"],
            "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
-    print(json.dumps(row))
-    (store.with_suffix(".json")).write_text(json.dumps(row, indent=1))
+    print(json_text(row))
+    (store.with_suffix(".json")).write_text(json_text(row, indent=1))
 
 
 if __name__ == "__main__":

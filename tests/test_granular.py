@@ -17,7 +17,7 @@ import scipy.optimize
 
 import granframe
 from granframe.run.runner import HealthError, Simulation
-from granframe.tools.studykit import finish
+from granframe.tools.studykit import finish, json_text
 
 STUDIES = pathlib.Path(__file__).parent.parent / "studies"
 
@@ -184,6 +184,8 @@ def test_a_quick_heated_gas_balances_its_energy_and_resumes_to_the_same_row(tmp_
     reported = next(re.search(r"estimated error ([0-9.e-]+) ", w) for w in first["warnings"]
                     if w.startswith("velocity resolution"))
     assert len(tails) == 6 and max(tails) == pytest.approx(float(reported.group(1)), rel=2e-3)
+    assert json.loads((tmp_path / "walls_e0.9_kn0.2_c6_n16.json").read_text(),
+                      parse_constant=_refuse_constant) == first
     ds = granframe.open_run(tmp_path / "walls_e0.9_kn0.2_c6_n16.zarr", time_axis="steps")
     assert ds.sizes["snapshot_time"] == 6
     assert abs(ds.mass.values[-1] / ds.mass.values[0] - 1) < 1e-13
@@ -191,6 +193,24 @@ def test_a_quick_heated_gas_balances_its_energy_and_resumes_to_the_same_row(tmp_
         WALLS.main(argv[:-1] + ["--snapshot-every", "0"])
     assert ("argument --snapshot-every: '0' is not allowed: must be an integer in [1, inf]"
             in capsys.readouterr().err)
+
+
+def _refuse_constant(name):
+    """A strict JSON reader's answer to NaN or Infinity."""
+    raise ValueError(f"not JSON: {name}")
+
+
+def test_study_rows_are_strict_json_with_null_for_what_a_run_could_not_measure():
+    """A heat-mode row's conduction factor is NaN where the rate cannot be inverted:
+    the rows are written with null there (and for infinities, nested or in numpy
+    floats), which a strict reader accepts; Python's json.dumps would write NaN."""
+    row = {"e": 0.8, "conduction": math.nan, "rates": [0.02, math.inf, -math.inf],
+           "fit": {"window": (numpy.float64("nan"), 2)}, "warnings": []}
+    with pytest.raises(ValueError, match="NaN"):
+        json.loads(json.dumps(row), parse_constant=_refuse_constant)
+    assert json.loads(json_text(row, indent=1), parse_constant=_refuse_constant) == {
+        "e": 0.8, "conduction": None, "rates": [0.02, None, None],
+        "fit": {"window": [None, 2]}, "warnings": []}
 
 
 @pytest.mark.parametrize("study, argv, message", [

@@ -64,9 +64,24 @@ def write_csv(path, rows: list[dict], fields=None) -> None:
         writer.writerows(rows)
 
 
-def save_figure(fig, path) -> None:
-    """Write ``fig`` as a PNG (100 dpi) and release it."""
-    fig.savefig(path, dpi=100)
+def json_text(data, indent=None) -> str:
+    """``data`` as strict JSON (RFC 8259): a NaN or an infinity, a quantity a run could
+    not measure, is written as ``null``. Python's own ``json`` writes ``NaN``, which
+    strict readers (JavaScript, ``jq``, most other languages' parsers) refuse."""
+    def finite(value):
+        if isinstance(value, dict):
+            return {key: finite(item) for key, item in value.items()}
+        if isinstance(value, (list, tuple)):
+            return [finite(item) for item in value]
+        if isinstance(value, float) and not math.isfinite(value):
+            return None
+        return value
+    return json.dumps(finite(data), indent=indent, allow_nan=False)
+
+
+def save_figure(fig, path, dpi: int = 100) -> None:
+    """Write ``fig`` as a PNG at ``dpi`` and release it."""
+    fig.savefig(path, dpi=dpi)
     plt.close(fig)
 
 
@@ -79,7 +94,7 @@ def read_summary(out, only) -> dict:
 
 def write_summary(out, summary: dict) -> None:
     """``out/summary.json``, indented."""
-    (pathlib.Path(out) / "summary.json").write_text(json.dumps(summary, indent=1))
+    (pathlib.Path(out) / "summary.json").write_text(json_text(summary, indent=1))
 
 
 def command(run: Callable, doc: str, quick_help: str, parts: str | None = None,
