@@ -33,6 +33,12 @@ def _study(name):
 HCS = _study("granular_hcs")
 
 
+def _assert_drawn(study, stores, path):
+    """The study's figure of ``stores`` is written: a PNG with something drawn in it."""
+    study.figure(stores, path)
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and path.stat().st_size > 20_000
+
+
 def test_sonine_coefficients_reduce_to_the_elastic_gas_and_match_the_table():
     elastic = HCS.sonine(1.0)
     assert elastic == {"a2": 0.0, "zeta*": 0.0, "eta*": 1.0, "kappa*": 1.0, "mu*": 0.0}
@@ -105,6 +111,7 @@ def test_a_long_shear_mode_of_the_cooling_state_grows_at_the_navier_stokes_rate(
     eta = HCS.theory(e, 1.0, 1.0, float(ds.temperature.values[-1].mean()), k)["eta"]
     predicted = HCS.cooling_rate(ds, 1.0) - eta * k * k
     assert predicted > 0.05 and measured == pytest.approx(predicted, rel=0.03)
+    _assert_drawn(HCS, [store], tmp_path / "modes.png")
 
 
 WALLS = _study("granular_walls")
@@ -189,6 +196,7 @@ def test_a_quick_heated_gas_balances_its_energy_and_resumes_to_the_same_row(tmp_
     ds = granframe.open_run(tmp_path / "walls_e0.9_kn0.2_c6_n16.zarr", time_axis="steps")
     assert ds.sizes["snapshot_time"] == 6
     assert abs(ds.mass.values[-1] / ds.mass.values[0] - 1) < 1e-13
+    _assert_drawn(WALLS, [tmp_path / "walls_e0.9_kn0.2_c6_n16.zarr"], tmp_path / "walls.png")
     with pytest.raises(SystemExit):
         WALLS.main(argv[:-1] + ["--snapshot-every", "0"])
     assert ("argument --snapshot-every: '0' is not allowed: must be an integer in [1, inf]"
@@ -478,6 +486,7 @@ def test_a_quick_elastic_shock_moves_at_the_rankine_hugoniot_speed(tmp_path):
     assert row["rho_2"] == pytest.approx(row["RH rho_2"], rel=0.02)
     assert row["T_2"] == pytest.approx(row["RH T_2"], rel=0.02)
     assert row["mass drift"] < 1e-13
+    _assert_drawn(SHOCK, [store], tmp_path / "shock.png")
 
 
 VIBRATED = _study("granular_vibrated")
@@ -514,6 +523,7 @@ def test_a_quick_vibrated_gas_balances_its_energy_over_a_period(tmp_path):
         rows[speed] = VIBRATED.period_balance(ds, run.problem.operator, 0.5, 0.25)
         assert abs(rows[speed]["residual"]) < 0.02
     assert rows[1.0]["injected"] > rows[0.0]["injected"]
+    _assert_drawn(VIBRATED, [tmp_path / "v0.zarr", tmp_path / "v1.zarr"], tmp_path / "vib.png")
 
 
 CLUSTERS = _study("granular_clusters")
@@ -530,3 +540,4 @@ def test_a_quick_cluster_run_reports_its_monitors(tmp_path):
     assert row["rho max/min"] > 1.0 + 1e-6
     assert row["status"] == "finished"
     assert row["negative mass share"] < 1e-3
+    _assert_drawn(CLUSTERS, [store], tmp_path / "clusters.png")
