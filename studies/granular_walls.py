@@ -114,11 +114,35 @@ def at_walls(values, cells: int) -> float:
     return float(numpy.mean(ends))
 
 
+def steady_estimate(times, values) -> dict:
+    """The steady value of a ratio that still relaxes when the run ends (at t_f): v(t) =
+    a + b exp(-k t) fitted by least squares to the values over t >= t_f/2 (``steady`` = a)
+    and over t >= t_f/3; ``spread`` = the two fits' difference in a, the estimate's
+    uncertainty. A fitted rate k outside [0.2, 10] (per unit time) is no relaxation the
+    run has followed (a ratio not yet levelling off, or noise): NaN, as for a failed fit."""
+    estimates = []
+    for start in (times[-1] / 2, times[-1] / 3):
+        keep = times >= start
+        t, v = times[keep], values[keep]
+        try:
+            (a, _, rate), _ = scipy.optimize.curve_fit(
+                lambda s, a, b, k: a + b * numpy.exp(-k * (s - t[0])), t, v,
+                p0=(v[-1], v[0] - v[-1], 1.0),
+                bounds=([-numpy.inf, -numpy.inf, 0.1], [numpy.inf, numpy.inf, 20.0]))
+        except (RuntimeError, ValueError):
+            return {"steady": math.nan, "spread": math.nan}
+        if not 0.2 <= rate <= 10.0:
+            return {"steady": math.nan, "spread": math.nan}
+        estimates.append(float(a))
+    return {"steady": estimates[0], "spread": abs(estimates[0] - estimates[1])}
+
+
 def kinetic(ds, operator, knudsen: float) -> dict:
-    """T_min/T_b, rho_max/rho_b, the jump T_w - T_b and the energy budget of a run, and
-    ``tail error by cell``: the velocity-resolution indicator of every cell's final f
-    (``TAIL_ERROR_FACTOR`` x :func:`~granframe.velocity.estimators.spectral_tail`), of
-    which the run's report names only the largest."""
+    """T_min/T_b, rho_max/rho_b (and their :func:`steady_estimate` from their history:
+    the runs end before the gas is steady), the jump T_w - T_b and the energy budget of a
+    run, and ``tail error by cell``: the velocity-resolution indicator of every cell's
+    final f (``TAIL_ERROR_FACTOR`` x :func:`~granframe.velocity.estimators.spectral_tail`),
+    of which the run's report names only the largest."""
     cells = ds.sizes["x"]
     temperature = ds.temperature.values[-1]
     density = ds.density.values[-1]
@@ -127,8 +151,15 @@ def kinetic(ds, operator, knudsen: float) -> dict:
     f = ds.f.values[-1]
     tails = [float(f"{TAIL_ERROR_FACTOR * spectral_tail(operator.grid, cell):.3g}")
              for cell in f]
+    steady = {}
+    for name, profiles, extreme in (("T_min/T_b", ds.temperature.values, numpy.min),
+                                    ("rho_max/rho_b", ds.density.values, numpy.max)):
+        history = numpy.array([extreme(p) / at_walls(p, cells) for p in profiles])
+        estimate = steady_estimate(ds.time.values, history)
+        steady[f"{name} steady"] = estimate["steady"]
+        steady[f"{name} steady spread"] = estimate["spread"]
     return {"T_b": t_b, "rho_b": rho_b, "T_min/T_b": float(temperature.min() / t_b),
-            "rho_max/rho_b": float(density.max() / rho_b), "jump": 1.0 - t_b,
+            "rho_max/rho_b": float(density.max() / rho_b), **steady, "jump": 1.0 - t_b,
             "heat": budget["heat"], "dissipation": budget["dissipation"],
             "unsteadiness": budget["unsteadiness"], "residual": budget["residual"],
             "tail error by cell": tails}

@@ -170,6 +170,19 @@ def test_the_reduced_wall_problem_is_the_granular_energy_balance(e, knudsen):
     assert minimum == pytest.approx(expected["T_min/T_b"], rel=1e-8)
 
 
+def test_the_steady_estimate_extrapolates_a_relaxing_ratio_and_refuses_a_drift():
+    """a + b exp(-k t) sampled as a run's steps (t in [0, 3]) gives a back to 1e-9 with no
+    spread between the two windows; a ratio still falling linearly (no levelling off in
+    the run) and a sampled oscillation give NaN, not a number."""
+    times = numpy.linspace(0.0, 3.0, 262)
+    relaxing = 0.5266 + 0.21 * numpy.exp(-1.05 * times)
+    estimate = WALLS.steady_estimate(times, relaxing)
+    assert estimate["steady"] == pytest.approx(0.5266, abs=1e-9)
+    assert estimate["spread"] < 1e-9
+    for history in (0.9 - 0.02 * times, 1.03 + 0.01 * numpy.sin(4.0 * times)):
+        assert math.isnan(WALLS.steady_estimate(times, history)["steady"])
+
+
 def test_a_quick_heated_gas_balances_its_energy_and_resumes_to_the_same_row(tmp_path, capsys):
     """6 cells, N = 16, to t = 0.3 (13 steps, f stored every 3): the mass to round-off,
     wall heat + dissipation = the energy's change to 5 % of the heat in the transient
