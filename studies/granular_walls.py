@@ -144,22 +144,20 @@ def kinetic(ds, operator, knudsen: float) -> dict:
     final f (``TAIL_ERROR_FACTOR`` x :func:`~granframe.velocity.estimators.spectral_tail`),
     of which the run's report names only the largest."""
     cells = ds.sizes["x"]
-    temperature = ds.temperature.values[-1]
-    density = ds.density.values[-1]
-    t_b, rho_b = at_walls(temperature, cells), at_walls(density, cells)
+    t_b = at_walls(ds.temperature.values[-1], cells)
+    rho_b = at_walls(ds.density.values[-1], cells)
     budget = energy_balance(ds, operator, math.sqrt(2.0) * knudsen)
     f = ds.f.values[-1]
     tails = [float(f"{TAIL_ERROR_FACTOR * spectral_tail(operator.grid, cell):.3g}")
              for cell in f]
-    steady = {}
+    ratios = {}
     for name, profiles, extreme in (("T_min/T_b", ds.temperature.values, numpy.min),
                                     ("rho_max/rho_b", ds.density.values, numpy.max)):
         history = numpy.array([extreme(p) / at_walls(p, cells) for p in profiles])
         estimate = steady_estimate(ds.time.values, history)
-        steady[f"{name} steady"] = estimate["steady"]
-        steady[f"{name} steady spread"] = estimate["spread"]
-    return {"T_b": t_b, "rho_b": rho_b, "T_min/T_b": float(temperature.min() / t_b),
-            "rho_max/rho_b": float(density.max() / rho_b), **steady, "jump": 1.0 - t_b,
+        ratios |= {name: float(history[-1]), f"{name} steady": estimate["steady"],
+                   f"{name} steady spread": estimate["spread"]}
+    return {"T_b": t_b, "rho_b": rho_b, **ratios, "jump": 1.0 - t_b,
             "heat": budget["heat"], "dissipation": budget["dissipation"],
             "unsteadiness": budget["unsteadiness"], "residual": budget["residual"],
             "tail error by cell": tails}
