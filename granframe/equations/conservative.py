@@ -32,7 +32,7 @@ import numpy
 import scipy.special
 
 from granframe import validators as check
-from granframe.abc import CollisionOperator
+from granframe.abc import CollisionOperator, checks_deferred
 from granframe.velocity.quadratures import MAX_GAUSS_POINTS, GaussLegendre
 
 #: The weights w(v) of the correction Q + w (lambda_0 + lambda.v + lambda_{d+1} |v|^2),
@@ -77,8 +77,8 @@ class ConservativeCorrection(CollisionOperator):
     the operator's quadratures.
 
     f may hold a stack (..., *grid.shape); each distribution gets its own weight,
-    dissipation and correction. Every array operation is in the backend's ``xp``; the
-    (d+2) x (d+2) systems are solved on the host.
+    dissipation and correction. Every array operation, the (d+2) x (d+2) solves
+    included, is in the backend's ``xp``: a call copies nothing between host and device.
     """
 
     name = "conservative"
@@ -193,14 +193,16 @@ class ConservativeCorrection(CollisionOperator):
         tabulated once. E(f) = h^d sum |v|^2 f / 2 as in the operators.
         """
         stack, batch_shape = self._stack(f)
-        return self._dissipation(stack, self._raw_moments(stack)).reshape(batch_shape)
+        values = self._dissipation(stack, self._raw_moments(stack))
+        return numpy.asarray(self.backend.to_numpy(values), dtype=float).reshape(batch_shape)
 
     def _dissipation(self, stack, moments):
-        """D for each distribution of ``stack`` (B, *grid.shape), given its raw moments."""
+        """D for each distribution of ``stack`` (B, *grid.shape), given its raw moments
+        (B, d + 2): a backend array (B,), computed on the backend."""
+        xp, grid = self.backend.xp, self.grid
         count = stack.shape[0]
         if self._table is None:
-            return numpy.zeros(count)
-        xp, grid = self.backend.xp, self.grid
+            return xp.zeros(count)
         d, n = grid.dimension, grid.n_modes
         if self._padded_count != count:      # planned once per stack size (FFTW, cuFFT)
             self._padded = self.backend.real_fft((count,) + (2 * n,) * d,
@@ -211,14 +213,22 @@ class ConservativeCorrection(CollisionOperator):
         fft.real[(slice(None),) + (slice(0, n),) * d] = stack
         spectrum = fft.forward()
         power = spectrum.real ** 2 + spectrum.imag ** 2
-        sums = self.backend.to_numpy(xp.sum((power * self._table).reshape(count, -1), axis=1))
+        sums = xp.sum((power * self._table).reshape(count, -1), axis=1)
+        if not self.kernel.energy_exponent:
+            return sums.astype(xp.float64, copy=False)
         energy = 0.5 * grid.cell_volume * moments[:, -1] * grid.half_width ** 2
-        factors = numpy.array([self.kernel.energy_factor(float(e)) for e in energy])
-        return factors * numpy.asarray(sums, dtype=float)
+        if not checks_deferred(self.backend):
+            for value in self.backend.to_numpy(energy):    # refuses E <= 0 by name
+                self.kernel.energy_factor(float(value))
+        return self.kernel.energy_factors(energy) * sums
 
     # -- the correction ------------------------------------------------------------------
     def __call__(self, f):
-        r"""Q^c(f) for each distribution of f, shape (..., *grid.shape) (class notes)."""
+        r"""Q^c(f) for each distribution of f, shape (..., *grid.shape) (class notes).
+
+        Every step is on the backend: the moments, weights, Gram systems, their solution
+        and D(f) make no copy between host and device (a NumPy backend's arrays are the
+        host's)."""
         q = self.operator(f)                        # checks f: shape, dtype, finiteness
         stack, batch_shape = self._stack(f)
         xp, grid = self.backend.xp, self.grid
@@ -226,15 +236,15 @@ class ConservativeCorrection(CollisionOperator):
         moments = self._raw_moments(stack)
         weight = self._weights(stack, moments)                          # (B or 1, N^d)
         flat_q = q.reshape(count, -1)
-        defect = self.backend.to_numpy(flat_q @ self._basis.T)          # (B, d + 2)
+        defect = flat_q @ self._basis.T                                 # (B, d + 2)
         weighted = weight[:, None, :] * self._basis[None]               # (B or 1, d + 2, N^d)
-        gram = self.backend.to_numpy(weighted @ self._basis.T)          # (B or 1, d+2, d+2)
-        target = numpy.zeros_like(defect)
+        gram = weighted @ self._basis.T                                 # (B or 1, d+2, d+2)
+        target = xp.zeros(defect.shape, dtype=xp.float64)
         target[:, -1] = (self._dissipation(stack, moments)
                          / (grid.cell_volume * grid.half_width ** 2))
-        multipliers = _solve_scaled(numpy.broadcast_to(gram, (count,) + gram.shape[1:]),
+        multipliers = _solve_scaled(xp, xp.broadcast_to(gram, (count,) + gram.shape[1:]),
                                     target - defect)
-        correction = xp.matmul(self.backend.asarray(multipliers)[:, None, :],
+        correction = xp.matmul(multipliers[:, None, :],
                                weighted if weighted.shape[0] == count
                                else weighted[0])[:, 0, :]
         result = flat_q + correction.astype(q.dtype, copy=False)
@@ -247,35 +257,37 @@ class ConservativeCorrection(CollisionOperator):
         return f.reshape((math.prod(batch_shape),) + self.grid.shape), batch_shape
 
     def _raw_moments(self, stack):
-        """sum_j f_j p_a(v_j) for each distribution: a NumPy (B, d + 2) array."""
+        """sum_j f_j p_a(v_j) for each distribution: a backend (B, d + 2) float64 array."""
         flat = stack.reshape(stack.shape[0], -1).astype(self.backend.xp.float64, copy=False)
-        return numpy.asarray(self.backend.to_numpy(flat @ self._basis.T), dtype=float)
+        return flat @ self._basis.T
 
     def _weights(self, stack, moments):
-        """w(v_j) for each distribution, (B, N^d); (1, N^d) for the uniform weight."""
+        """w(v_j) for each distribution, (B, N^d); (1, N^d) for the uniform weight.
+
+        The Maxwellian weight of a distribution without positive mass and temperature is
+        |f| (chosen per distribution with ``where``, no copy to the host)."""
         xp, grid = self.backend.xp, self.grid
         if self.weight == "uniform":
             return xp.ones((1, self._basis.shape[1]))
+        magnitude = xp.abs(stack.reshape(stack.shape[0], -1)).astype(xp.float64, copy=False)
         if self.weight == "distribution":
-            return xp.abs(stack.reshape(stack.shape[0], -1)).astype(xp.float64, copy=False)
+            return magnitude
         d, L = grid.dimension, grid.half_width
         mass = moments[:, 0]
         with numpy.errstate(all="ignore"):
             velocity = moments[:, 1:d + 1] * L / mass[:, None]
             temperature = ((moments[:, -1] * L * L / mass
-                            - numpy.sum(velocity * velocity, axis=1)) / d)
-        good = numpy.isfinite(temperature) & (mass > 0.0) & (temperature > 0.0)
-        velocity[~good], temperature[~good] = 0.0, 1.0
-        u = self.backend.asarray(velocity)
-        spread = self.backend.asarray(1.0 / (2.0 * temperature))
+                            - xp.sum(velocity * velocity, axis=1)) / d)
+        good = xp.isfinite(temperature) & (mass > 0.0) & (temperature > 0.0)
+        velocity = xp.where(good[:, None], velocity, 0.0)
+        temperature = xp.where(good, temperature, 1.0)
+        spread = 1.0 / (2.0 * temperature)
         exponent = 0.0
         for axis, c in enumerate(self._mesh):
-            exponent = exponent + (c[None] - u[:, axis].reshape((-1,) + (1,) * d)) ** 2
+            exponent = exponent + (c[None] - velocity[:, axis].reshape((-1,) + (1,) * d)) ** 2
         weights = xp.exp(-exponent * spread.reshape((-1,) + (1,) * d)).reshape(len(mass), -1)
-        if not numpy.all(good):   # a blown-up stage: |f| keeps the constraints well posed
-            bad = self.backend.asarray(numpy.flatnonzero(~good))
-            weights[bad] = xp.abs(stack.reshape(len(mass), -1)[bad])
-        return weights
+        # a blown-up stage: |f| keeps the constraints well posed
+        return xp.where(good[:, None], weights, magnitude)
 
     def close(self):
         """Close the wrapped operator (its worker threads)."""
@@ -284,12 +296,13 @@ class ConservativeCorrection(CollisionOperator):
             close()
 
 
-def _solve_scaled(gram, rhs):
-    """lambda_b solving gram_b lambda_b = rhs_b for each b, after scaling gram_b to a unit
-    diagonal (the basis entries differ in size by powers of T / L^2)."""
-    scale = 1.0 / numpy.sqrt(numpy.einsum("bii->bi", gram))
+def _solve_scaled(xp, gram, rhs):
+    """lambda_b solving gram_b lambda_b = rhs_b for each b, in the array namespace ``xp``,
+    after scaling gram_b to a unit diagonal (the basis entries differ in size by powers of
+    T / L^2)."""
+    scale = 1.0 / xp.sqrt(xp.einsum("bii->bi", gram))
     scaled = gram * scale[:, :, None] * scale[:, None, :]
-    return numpy.linalg.solve(scaled, (rhs * scale)[..., None])[..., 0] * scale
+    return xp.linalg.solve(scaled, (rhs * scale)[..., None])[..., 0] * scale
 
 
 def _radial_points(dimension: int, n_modes: int, spacing: float, radius: float) -> int:

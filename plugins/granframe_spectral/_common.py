@@ -29,21 +29,28 @@ def isotropic_sphere_average(x, dimension: int):
     return numpy.sinc(numpy.asarray(x) / math.pi)
 
 
-def energy_factor(kernel, grid, f, backend) -> numpy.ndarray:
+def energy_factor(kernel, cell_volume: float, squared, f, backend):
     r"""E(f_b)^gamma for each distribution f_b of a stack ``f`` of shape (B, *grid.shape).
 
     .. math:: E(f_b) = \tfrac12 \Delta v \sum_j |v_j|^2 f_b(v_j)
 
-    with Delta v the cell volume. Returns a NumPy array of B factors, all 1 when
-    gamma = 0 (no moment taken).
+    with Delta v the cell volume and ``squared`` the backend array |v_j|^2 (the grid's
+    :meth:`~granframe.velocity.grid.VelocityGrid.speed_squared`, made once by the
+    operator). Returns None when gamma = 0 (no moment taken, every
+    factor 1), else a backend array of B factors computed on the backend: no copy to the
+    host, except for the check that every E is positive, which is made only where checks
+    are not deferred (:func:`granframe.abc.checks_deferred`; within a run's step a
+    non-positive E gives a NaN that the run's health check reports).
     """
-    count = f.shape[0]
     if kernel.energy_exponent == 0.0:
-        return numpy.ones(count)
+        return None
     axes = tuple(range(1, f.ndim))
     xp = backend.xp
-    sums = backend.to_numpy(xp.sum(grid.speed_squared(xp) * f, axis=axes))
-    return numpy.array([kernel.energy_factor(0.5 * float(s) * grid.cell_volume) for s in sums])
+    energy = 0.5 * xp.sum(squared * f, axis=axes) * cell_volume
+    if not checks_deferred(backend):
+        for value in backend.to_numpy(energy):        # refuses E <= 0 by name
+            kernel.energy_factor(float(value))
+    return kernel.energy_factors(energy)
 
 
 def check_operands(owner: str, grid, f, backend):

@@ -167,6 +167,7 @@ class DirectSpectral(CollisionOperator):
         1/48 in 3D), and every other row is the row of its representative gk, read at the
         columns gm."""
         grid, xp = self.grid, self.backend.xp
+        self._speed_squared = grid.speed_squared(xp)
         d, n = grid.dimension, grid.n_modes
         half = n // 2 - 1
         one = numpy.arange(-half, half + 1)
@@ -333,7 +334,8 @@ class DirectSpectral(CollisionOperator):
         out_spectrum = xp.zeros(stack.shape, dtype=xp.complex128)
         out_spectrum[(slice(None),) + self._fft_index] = q_hat * self._sign * total
         q = xp.real(backend.ifftn(out_spectrum, axes=axes))
-        factors = energy_factor(self.kernel, grid, stack, backend)
-        if numpy.any(factors != 1.0):
-            q = q * backend.asarray(factors).reshape((count,) + (1,) * d)
+        factors = energy_factor(self.kernel, grid.cell_volume, self._speed_squared, stack,
+                                backend)
+        if factors is not None:
+            q = q * factors.reshape((count,) + (1,) * d)
         return q.reshape(batch_shape + grid.shape)

@@ -260,6 +260,7 @@ class FastSpectral(CollisionOperator):
         half_shape = self._half_shape = grid.half_shape
         kk = numpy.sqrt(grid.half_wavenumber_squared())
         self._keep = xp.asarray(~grid.nyquist_mask())
+        self._speed_squared = grid.speed_squared(xp)
 
         # Radial weights W_rho(k), one rho at a time into the table (no float64 copy of it).
         weights = numpy.empty((len(rho),) + half_shape, dtype=self._complex_dtype)
@@ -354,12 +355,13 @@ class FastSpectral(CollisionOperator):
         total = gain - fft.forward()
         total *= self._keep
         fft.spectrum[...] = total
-        factors = energy_factor(self.kernel, self.grid, f_n, self.backend) * inverse_count
-        if numpy.all(factors == factors[0]):
+        factors = energy_factor(self.kernel, self.grid.cell_volume, self._speed_squared, f_n,
+                                self.backend)
+        if factors is None:
             # a Python float keeps float32 results in float32 (NumPy's scalar promotion)
-            q = fft.inverse() * float(factors[0])
+            q = fft.inverse() * float(inverse_count)
         else:
-            scale = self.backend.asarray(factors.astype(self._real_dtype))
+            scale = (factors * inverse_count).astype(self._real_dtype)
             q = fft.inverse() * scale.reshape((count,) + (1,) * self.grid.dimension)
         return q.reshape(batch_shape + self.grid.shape)
 
