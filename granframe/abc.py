@@ -828,8 +828,10 @@ class Problem(abc.ABC):
     """What a run is made of: the one contract between a discretised equation and the runner.
 
     The runner (:class:`granframe.run.runner.Simulation`), ``granframe limits``,
-    ``granframe bench`` and resume use a problem through these members only; the
-    space-homogeneous and the space problems implement it (:mod:`granframe.run.problems`).
+    ``granframe bench`` and resume use a problem through these members only, in a
+    space-homogeneous run as in a space run on any number of processes (the communicator
+    and the ranges are always there); the space-homogeneous and the space problems
+    implement it (:mod:`granframe.run.problems`).
 
     A run goes: :attr:`f0` (checked and projected when the problem is built) becomes the
     stepped state by :meth:`state`; each step is :meth:`step`; after it :meth:`record`
@@ -850,6 +852,24 @@ class Problem(abc.ABC):
     #: equation it integrates; :meth:`step` is ``integrator.step(equation, t, state, dt)``
     integrator: "TimeIntegrator"
     equation: object
+    #: the velocity grid and the collision operator (None for a collisionless space run)
+    grid: "Grid"
+    operator: "CollisionOperator | None"
+    #: the processes that run the problem together: a serial communicator (one process)
+    #: for a space-homogeneous run and a serial space run, as in a parallel run's rank 0
+    communicator: "Communicator"
+    #: the cells of every process, ``(start, stop)`` in rank order: ``((0, 1),)`` for a
+    #: space-homogeneous run, one cell in one process
+    ranges: tuple
+    #: the map of a rescaled run to physical variables (kept in the store), or None
+    rescaling: object
+
+    @property
+    @abc.abstractmethod
+    def owned(self) -> "slice | None":
+        """The cells this process steps and commits, as indices of the store's cell axis;
+        None where the store has no cell axis (a space-homogeneous run: its one cell is
+        the whole f)."""
 
     @abc.abstractmethod
     def layout(self):

@@ -32,7 +32,6 @@ import zarr
 from granframe._version import __version__
 from granframe.backends import available_cpus
 from granframe.errors import NonFiniteError
-from granframe.parallel import SerialCommunicator
 from granframe.registry import default_registries
 from granframe.run.description import COMPONENT_FAMILIES, RunDescription, fixed_steps
 from granframe.run.problems import make_problem, moments
@@ -485,18 +484,17 @@ class ProgressObserver(Observer):
 class StorageObserver(Observer):
     """At every output point: a commit of f with the pending moment records.
 
-    ``snapshot(f)`` is the state f as the NumPy array the store holds. It also writes
-    how a run ends otherwise: :meth:`fail` (a health check) and :meth:`interrupt` (a
-    Ctrl-C); :meth:`close` closes the store.
+    The problem's ``snapshot(f)`` is the state f as the NumPy array the store holds; its
+    processes commit together (:func:`_commit`). It also writes how a run ends
+    otherwise: :meth:`fail` (a health check) and :meth:`interrupt` (a Ctrl-C);
+    :meth:`close` closes the store.
     """
 
-    def __init__(self, store: RunStore, records: "Records", snapshot, problem=None):
-        self.store, self.records, self.snapshot = store, records, snapshot
-        #: a space run's problem: its processes commit together (:func:`_commit`)
-        self.problem = problem
+    def __init__(self, store: RunStore, records: "Records", problem):
+        self.store, self.records, self.problem = store, records, problem
 
     def at_output(self, state, final):
-        _commit(self.store, self.problem, [(state.t, self.snapshot(state.f))],
+        _commit(self.store, self.problem, [(state.t, self.problem.snapshot(state.f))],
                 self.records.take(), state.progress("finished" if final else "running"))
 
     def fail(self, state: RunState, stop: Stopped):
@@ -526,10 +524,10 @@ class StorageObserver(Observer):
 
 
 def _commit(store: RunStore, problem, snapshots, records: dict, progress: dict) -> None:
-    """A commit of ``snapshots`` and ``records``: by all the processes of a space run
-    together (:meth:`RunStore.commit_together`, each its owned cells), in one call for a
-    space-homogeneous run (``problem`` None)."""
-    if problem is None:
+    """A commit of ``snapshots`` and ``records``: by all the processes of the run together
+    (:meth:`RunStore.commit_together`, each its owned cells), in one call where the store
+    has no cell axis (a space-homogeneous run, ``problem.owned`` None)."""
+    if problem.owned is None:
         store.commit(snapshots, records, progress)
     else:
         store.commit_together(problem.communicator, problem.owned, snapshots, records, progress)
@@ -540,9 +538,10 @@ class Simulation:
 
     The problem (:func:`~granframe.run.problems.make_problem`: space-homogeneous, or in
     space for a description with a ``space`` section) holds everything the run steps; the
-    simulation drives it through the :class:`granframe.abc.Problem` contract only. Its
-    public members (``grid``, ``backend``, ``operator``, ``f0``, ``equation``,
-    ``integrator``, ``projection``, ...) are read through the simulation. A fixed time
+    simulation drives it through the :class:`granframe.abc.Problem` contract only. The
+    contract's members ``grid``, ``backend``, ``operator``, ``f0``, ``equation``,
+    ``integrator``, ``projection`` and ``communicator`` are read through the simulation;
+    anything else of a problem through ``simulation.problem``. A fixed time
     step above the explicit stability limit at f0 is refused here.
 
     A space run launched on several processes (``mpiexec -n 4 granframe run ...``) is
@@ -563,13 +562,19 @@ class Simulation:
 
     @property
     def communicator(self):
-        """The processes of the run (one for a space-homogeneous run)."""
-        return getattr(self.problem, "communicator", None) or SerialCommunicator()
+        """The processes of the run (a serial communicator for one process)."""
+        return self.problem.communicator
 
-    def __getattr__(self, name):
-        if name.startswith("_") or "problem" not in self.__dict__:
-            raise AttributeError(name)
-        return getattr(self.__dict__["problem"], name)
+    # the members of the problem contract (granframe.abc.Problem), read through the run
+    grid = property(lambda self: self.problem.grid, doc="The velocity grid.")
+    backend = property(lambda self: self.problem.backend, doc="The array backend.")
+    operator = property(lambda self: self.problem.operator, doc="The collision operator.")
+    f0 = property(lambda self: self.problem.f0, doc="f0 on the host, checked and projected.")
+    projection = property(lambda self: self.problem.projection,
+                          doc="The moments of f0 before and after its projection.")
+    integrator = property(lambda self: self.problem.integrator, doc="The time integrator.")
+    equation = property(lambda self: self.problem.equation,
+                        doc="The equation the integrator steps.")
 
     def provenance(self) -> dict:
         """Versions and plugins behind this run (stored with it)."""
@@ -587,8 +592,8 @@ class Simulation:
     def _processes(self) -> dict:
         """The processes of a space run and the cells (start, stop) of each, for the
         provenance (a resumed run may use others); nothing for one process."""
-        ranges = getattr(self.problem, "ranges", None)
-        if ranges is None or len(ranges) == 1:
+        ranges = self.problem.ranges
+        if len(ranges) == 1:
             return {}
         return {"processes": len(ranges), "ranges": [list(r) for r in ranges],
                 "communicator": repr(self.communicator)}
@@ -682,11 +687,7 @@ class Simulation:
         return [RecordObserver(problem, records), HealthObserver(d.health),
                 ProgressObserver(state, d.final_time, progress, problem.progress_text),
                 AccuracyObserver(problem, problem.monitors(store)),
-                StorageObserver(store, records, problem.snapshot, self._space())]
-
-    def _space(self):
-        """The problem of a space run (its processes commit together), else None."""
-        return self.problem if hasattr(self.problem, "owned") else None
+                StorageObserver(store, records, problem)]
 
     def run_in_memory(self, *, progress: bool | None = None):
         """Run to ``final_time`` in memory and return the run as an :class:`xarray.Dataset`.
@@ -749,7 +750,7 @@ class Simulation:
         store = opened[0] if first else RunStore.open(out, "r+", complete=False)
         if entry["status"] == "finished":
             return store, None
-        f_host, t = store.last_snapshot(cells=getattr(problem, "owned", None))
+        f_host, t = store.last_snapshot(cells=problem.owned)
         problem.resume(store, int(entry["step"]))
         return store, RunState(problem.state(f_host), t, int(entry["step"]),
                                float(entry["mass0"]), entry.get("dt_next"),
@@ -761,8 +762,8 @@ class Simulation:
         """Refuse to resume a space run whose store's chunks along x do not fall on the
         boundaries of the processes' cells (a store made with another ``block_cells``),
         before anything is written."""
-        ranges = getattr(self.problem, "ranges", None)
-        if ranges is None or not RunStore.exists(out):
+        ranges = self.problem.ranges
+        if len(ranges) == 1 or not RunStore.exists(out):
             return
         space = RunStore.open(out, complete=False).metadata.get("space") or {}
         chunk = int(space.get("block_cells", 1))
@@ -778,7 +779,6 @@ class Simulation:
         """Commit f0 and its moments to a new store and publish it: the store (opened at its
         final path) and the state at t = 0. Every process commits its cells."""
         d, problem, communicator = self.description, self.problem, self.communicator
-        space = self._space()
         try:
             f = problem.state(problem.f0)
             record = problem.record(f)
@@ -787,8 +787,8 @@ class Simulation:
                              [], [], 0.0, started)
             first = Records(problem.record_names)
             first.add(0, 0.0, 0.0, record)
-            f0 = problem.f0 if space is None else problem.f0[problem.owned]
-            _commit(store, space, [(0.0, f0)], first.columns,
+            f0 = problem.f0 if problem.owned is None else problem.f0[problem.owned]
+            _commit(store, problem, [(0.0, f0)], first.columns,
                     {"status": "running", "step": 0, "time": 0.0, "mass0": state.mass0,
                      "dt_next": state.dt_next, "resumes": state.resumes})
             path = collective(communicator, lambda: (store.publish(), store.path)[1])

@@ -8,6 +8,7 @@ from granframe.equations.conservative import ConservativeCorrection
 from granframe.equations.homogeneous import HomogeneousBoltzmann
 from granframe.equations.rescaled import RescaledBoltzmann
 from granframe.memory import check_run_memory
+from granframe.parallel import SerialCommunicator
 from granframe.model.initial import check_fits, check_projection
 from granframe.run.monitors import AccuracyMonitors
 from granframe.run.problems.parts import build_operator, check_step
@@ -66,10 +67,14 @@ class HomogeneousProblem(Problem):
         else:
             self.equation = HomogeneousBoltzmann(self.operator, d.heat_bath, d.knudsen)
 
+        self.rescaling = self.equation.rescaling if d.rescaled else None
+        self.communicator = SerialCommunicator()
+        self.ranges = ((0, 1),)
+
     @property
-    def rescaling(self):
-        """The map of a rescaled run to physical variables (kept in the store), or None."""
-        return getattr(self.equation, "rescaling", None)
+    def owned(self):
+        """None: the store of a space-homogeneous run has no cell axis."""
+        return None
 
     def layout(self):
         return homogeneous_layout(self.grid)

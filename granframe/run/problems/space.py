@@ -156,7 +156,7 @@ class SpaceProblem(Problem):
         self.equation = (None if not collide else self._rescaled(outline) if d.rescaled
                          else CellCollisions(self.operator, d.heat_bath, d.knudsen))
         #: the map of a rescaled run to physical variables (kept in the store), or None
-        self.rescaling = getattr(self.equation, "rescaling", None)
+        self.rescaling = self.equation.rescaling if collide and d.rescaled else None
         self.fields = FieldMoments(grid, self.domain.dx, xp)
         #: the hierarchy of collision models (None: the full operator in every cell)
         self.hierarchy = None if outline else self._hierarchy()
