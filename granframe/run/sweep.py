@@ -58,9 +58,9 @@ import zarr
 from granframe import validators as check
 from granframe._version import __version__
 from granframe.run.description import RunDescription
-from granframe.run.storage import (_LONG_NAMES, _TRASH, SWEEP_SCHEMA_KEY, StoreDamagedError,
-                                   WriterLock, _differences, _now, _sibling, check_replaceable,
-                                   codecs, recover, store_kind)
+from granframe.run.storage import (LONG_NAMES, SWEEP_SCHEMA_KEY, TRASH, StoreDamagedError,
+                                   WriterLock, check_replaceable, codecs, differences, now,
+                                   recover, sibling, store_kind)
 
 SCHEMA = "granframe.run.sweep/1"
 #: the final moments of a run the table keeps
@@ -428,7 +428,7 @@ def _clear(out: pathlib.Path, protect) -> None:
     check_replaceable(out, protect)              # again, now that no sweep can start
     if store_kind(out) in ("missing", "empty"):
         return
-    trash = _sibling(out, _TRASH, uuid.uuid4().hex[:12])
+    trash = sibling(out, TRASH, uuid.uuid4().hex[:12])
     os.rename(out, trash)
     out.mkdir()
     shutil.rmtree(trash)
@@ -438,7 +438,7 @@ def _check_extension(previous: dict, sweep: Sweep, names, out) -> None:
     """Refuse a sweep that is not the stored one or an extension of it (same base, every
     stored run one of its points)."""
     stored = previous["sweep"]
-    changed = list(_differences(stored.get("base"), json.loads(json.dumps(sweep.base))))
+    changed = list(differences(stored.get("base"), json.loads(json.dumps(sweep.base))))
     advice = "choose a new store, or --overwrite to replace it"
     if changed:
         check.reject("run_sweep", "out", str(out), f"holds another sweep: its base differs at "
@@ -465,8 +465,8 @@ def _drive(sweep, out, points, names, client, scheduler, workers, progress, retr
     paths = {n: str(out / "runs" / n) for n in names}
     refused = {n: m for n, m in previous.get("refused", {}).items() if n in paths}
     meta = {"schema": SCHEMA, "version": __version__, "sweep": sweep.to_dict(),
-            "runs": names, "refused": refused, "created": previous.get("created", _now())}
-    root.attrs[SWEEP_SCHEMA_KEY] = {**meta, "updated": _now()}
+            "runs": names, "refused": refused, "created": previous.get("created", now())}
+    root.attrs[SWEEP_SCHEMA_KEY] = {**meta, "updated": now()}
     rows, todo, kept = {}, [], 0
     for name, point in zip(names, points):
         status = _status(paths[name])
@@ -509,7 +509,7 @@ def _drive(sweep, out, points, names, client, scheduler, workers, progress, retr
                 bar.update(1)
                 bar.set_postfix_str(f"done {counts['finished']}, failed {counts['failed']}, "
                                     f"running {running}", refresh=False)
-                root.attrs[SWEEP_SCHEMA_KEY] = {**meta, "refused": refused, "updated": _now()}
+                root.attrs[SWEEP_SCHEMA_KEY] = {**meta, "refused": refused, "updated": now()}
                 _write_table(root, names, points, rows)
     finished = sum(1 for r in rows.values() if r["status"] == "finished")
     return SweepResult(str(out), finished, len(rows) - finished, skipped, kept,
@@ -525,7 +525,7 @@ _RESULTS = {
     "wall_seconds": {"long_name": "wall-clock time of the run", "units": "s"},
     "steps": {"long_name": "time steps taken", "units": "1"},
     "time": {"long_name": "time reached by the run", "units": "1"},
-    **{name: {"long_name": f"{_LONG_NAMES[name]} at the end of the run (NaN unless "
+    **{name: {"long_name": f"{LONG_NAMES[name]} at the end of the run (NaN unless "
                            "finished)", "units": "1"} for name in TABLE_MOMENTS},
     "tail_error": {"long_name": "error predicted by the spectral tail of f at the last "
                                 "commit (3 max |hat f_k| / |hat f_0| on the outermost shell)",

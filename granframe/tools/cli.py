@@ -558,7 +558,7 @@ def _info_document(path) -> dict:
                          f"run stores, and it is a sweep store (granframe info {path} "
                          "describes it)")
     store = RunStore.open(path)   # refuses what is not a run store
-    problems = store.verify([n for n in store._names() if n != "f"])
+    problems = store.verify([n for n in store.array_names() if n != "f"])
     if problems:
         raise StoreDamagedError(f"store '{path}' is damaged: {summarise(problems)} "
                                 "(granframe check lists every problem)", problems)
