@@ -42,71 +42,18 @@ def open_run(path, *, time_axis: str = "snapshots") -> xarray.Dataset:
     time_axis : {"snapshots", "steps"}
         Which time axis is called ``time``. ``"snapshots"`` (the default): the snapshots
         of f are along ``time`` and the records of every step along ``step_time``, as
-        below. ``"steps"``: the records of every step (the moments, a space run's fields
-        and wall records) are along ``time`` and the snapshots along ``snapshot_time``
-        (:func:`steps_on_time`), so that ``ds.temperature.sel(time=t)`` selects the step
-        at time t; every output time is a step, so ``ds.f.sel(snapshot_time=t)`` is f
-        there.
+        :func:`run_dataset` describes. ``"steps"``: the records of every step (the
+        moments, a space run's fields and wall records) are along ``time`` and the
+        snapshots along ``snapshot_time`` (:func:`steps_on_time`), so that
+        ``ds.temperature.sel(time=t)`` selects the step at time t; every output time is a
+        step, so ``ds.f.sel(snapshot_time=t)`` is f there.
 
     Returns
     -------
     xarray.Dataset
-        The store's arrays under their own names, ``f`` read lazily (a snapshot is
-        read when used):
-
-        - dimensions ``time`` (committed snapshots), ``step_time`` (committed moment
-          records, one per step, t = 0 first), ``v1`` ... ``vd``, ``axis`` (d) and
-          ``axis2`` (d, the second index of ``pressure_tensor``);
-        - coordinates ``time``, ``step_time``, ``v1`` ... ``vd`` (the grid points),
-          ``axis`` (the names ``v1`` ... ``vd``, the components of ``momentum``,
-          ``heat_flux`` and the rows of ``pressure_tensor``) and ``axis2`` (the same names,
-          the columns of ``pressure_tensor``);
-        - the moment records along ``step_time``: the scalars (``mass``, ``temperature``,
-          ...), ``momentum`` and ``heat_flux`` q_i = int (v-u)_i |v-u|^2 f dv / 2
-          (``step_time``, ``axis``) and ``pressure_tensor``
-          P_ij = int (v-u)_i (v-u)_j f dv (``step_time``, ``axis``, ``axis2``); a store
-          written before granframe recorded the last two has neither (nor ``axis2``);
-        - per variable, ``long_name`` and ``units`` ("1": every quantity is
-          dimensionless, the root attribute ``nondimensionalisation`` says in which
-          units);
-        - root attributes ``title``, ``source``, ``history``, ``Conventions``,
-          ``references``, ``nondimensionalisation``, ``granframe_schema``,
-          ``description_toml`` (the run's description as TOML text), the flattened
-          ``provenance_*``, ``rescaling_*`` (rescaled runs) and ``f0_projection_*``,
-          and ``progress_*``, the state of the last commit (``progress_status``:
-          finished, running, interrupted or failed; ``progress_resolution_*`` and
-          ``progress_accuracy_*``, the resolution indicators and the accuracy monitors
-          of :mod:`granframe.run.monitors`: ``progress_accuracy_values_temperature``,
-          ``progress_accuracy_flagged_step``, ``progress_accuracy_warnings``, ...).
-
-        A space run's store (its metadata has a ``space`` entry) has, besides:
-
-        - dimensions ``x`` (the cells) and ``wall`` (2), with coordinates ``x`` (the cell
-          centres (j + 1/2) ell / cells, long name "cell centre") and ``wall``
-          (``"left"``, ``"right"``: the walls at x = 0 and x = ell); ``f`` is
-          (``time``, ``x``, ``v1`` ... ``vd``), the cell averages;
-        - the fields of every cell along (``step_time``, ``x``, ...): ``density``,
-          ``velocity``, ``temperature``, ``pressure_tensor`` and ``heat_flux``;
-        - the totals over the interval: ``mass`` int int f dv dx, ``kinetic_energy``,
-          ``min_f`` and ``negative_mass_fraction``;
-        - ``wall_mass`` and ``wall_energy`` (``step_time``, ``wall``): the mass and the
-          energy that entered the interval through each wall over the step (a
-          time-integrated flux, positive inwards; 0 at t = 0), so that
-          m(t) - m(0) = the sum of ``wall_mass`` up to t;
-        - ``wall_momentum`` (``step_time``, ``wall``, ``axis``): the momentum, components
-          ``v1`` (normal) ... ``vd`` (tangential), that entered through each wall over the
-          step (positive along +v_i; 0 at t = 0). Divided by ``dt`` it is the force per
-          unit area of the wall on the gas; the gas acts on the wall with minus it: the
-          ``v1`` component is the pressure on the left wall and minus the pressure on the
-          right one, the tangential components are minus the shear stress on the wall
-          (docs/space.md, "Wall pressure and shear stress");
-        - with a hierarchy of collision models (``space.hierarchy``), ``level``
-          (``step_time``, ``x``), int64: the collision model of each cell over the step,
-          its index in the hierarchy's levels, whose names are the attribute ``levels``
-          (and, in the CF style, ``flag_values`` 0 ... n-1 and ``flag_meanings``, the
-          names separated by spaces); ``realizability`` and ``distance`` (``step_time``,
-          ``x``): the indicators kappa and delta that chose it, measured after the
-          collision step (NaN at t = 0).
+        The store's arrays under their own names, ``f`` read lazily (a snapshot is read
+        when used), with the dimensions, coordinates and attributes that
+        :func:`run_dataset` lists, and for a space run those of :func:`label_space`.
 
     Raises
     ------
@@ -138,6 +85,13 @@ def open_run(path, *, time_axis: str = "snapshots") -> xarray.Dataset:
     if time_axis not in TIME_AXES:
         check.reject("open_run", "time_axis", time_axis,
                      f"must be one of {', '.join(repr(a) for a in TIME_AXES)}")
+    dataset = run_dataset(_checked_store(path))
+    return steps_on_time(dataset) if time_axis == "steps" else dataset
+
+
+def _checked_store(path) -> RunStore:
+    """The run store ``path`` opened, its small arrays verified and its first commit made:
+    :class:`~granframe.run.storage.StoreDamagedError` otherwise (:func:`open_run`)."""
     store = RunStore.open(path)
     problems = store.verify([name for name in sorted(store.group.array_keys()) if name != "f"])
     if problems:
@@ -147,8 +101,7 @@ def open_run(path, *, time_axis: str = "snapshots") -> xarray.Dataset:
         raise StoreDamagedError(f"open_run: store '{path}' holds no commit: its creation was "
                                 "cut short (a store is put in place with its first commit); "
                                 "run it again")
-    dataset = run_dataset(store)
-    return steps_on_time(dataset) if time_axis == "steps" else dataset
+    return store
 
 
 def steps_on_time(dataset: xarray.Dataset) -> xarray.Dataset:
@@ -171,8 +124,38 @@ def steps_on_time(dataset: xarray.Dataset) -> xarray.Dataset:
 
 
 def run_dataset(store: RunStore) -> xarray.Dataset:
-    """The committed contents of an open :class:`RunStore` (on disk or in memory), labelled
-    as :func:`open_run` describes; ``f`` is read lazily from the store."""
+    """The committed contents of an open :class:`RunStore` (on disk or in memory), labelled;
+    ``f`` is read lazily from the store.
+
+    The dataset (:func:`open_run` gives it) has:
+
+    - dimensions ``time`` (committed snapshots), ``step_time`` (committed moment
+      records, one per step, t = 0 first), ``v1`` ... ``vd``, ``axis`` (d) and
+      ``axis2`` (d, the second index of ``pressure_tensor``);
+    - coordinates ``time``, ``step_time``, ``v1`` ... ``vd`` (the grid points),
+      ``axis`` (the names ``v1`` ... ``vd``, the components of ``momentum``,
+      ``heat_flux`` and the rows of ``pressure_tensor``) and ``axis2`` (the same names,
+      the columns of ``pressure_tensor``);
+    - the moment records along ``step_time``: the scalars (``mass``, ``temperature``,
+      ...), ``momentum`` and ``heat_flux`` q_i = int (v-u)_i |v-u|^2 f dv / 2
+      (``step_time``, ``axis``) and ``pressure_tensor``
+      P_ij = int (v-u)_i (v-u)_j f dv (``step_time``, ``axis``, ``axis2``); a store
+      written before granframe recorded the last two has neither (nor ``axis2``);
+    - per variable, ``long_name`` and ``units`` ("1": every quantity is
+      dimensionless, the root attribute ``nondimensionalisation`` says in which
+      units);
+    - root attributes ``title``, ``source``, ``history``, ``Conventions``,
+      ``references``, ``nondimensionalisation``, ``granframe_schema``,
+      ``description_toml`` (the run's description as TOML text), the flattened
+      ``provenance_*``, ``rescaling_*`` (rescaled runs) and ``f0_projection_*``,
+      and ``progress_*``, the state of the last commit (``progress_status``:
+      finished, running, interrupted or failed; ``progress_resolution_*`` and
+      ``progress_accuracy_*``, the resolution indicators and the accuracy monitors
+      of :mod:`granframe.run.monitors`: ``progress_accuracy_values_temperature``,
+      ``progress_accuracy_flagged_step``, ``progress_accuracy_warnings``, ...).
+
+    A space run's dataset has, besides, what :func:`label_space` describes.
+    """
     meta = store.metadata
     dataset = committed(store).drop_encoding()   # the zarr codecs and chunks: no netCDF encoding
     names = [f"v{i + 1}" for i in range(dataset.sizes["axis"])]
@@ -187,16 +170,53 @@ def run_dataset(store: RunStore) -> xarray.Dataset:
     vector = "the bulk velocity" if space else "momentum"
     dataset["axis"].attrs = {"long_name": f"velocity component of {vector}, heat flux and "
                                           "the first index of the pressure tensor"}
-    if "wall" in dataset.dims:
-        dataset["wall"].attrs = {"long_name": "wall of the interval [0, ell]: left at x = 0, "
-                                              "right at x = ell"}
     if "axis2" in dataset.dims:
         dataset["axis2"].attrs = {"long_name": "velocity component of the second index of "
                                                "the pressure tensor"}
-    if "level" in dataset:
-        label_levels(dataset, meta["description"]["space"]["hierarchy"]["levels"])
+    label_space(dataset, meta)
     dataset.attrs = {**root_attributes(meta), **flat_attributes("progress", meta["progress"])}
     return dataset
+
+
+def label_space(dataset: xarray.Dataset, meta: dict) -> None:
+    """Give the wall coordinate and the hierarchy records of a space run their attributes,
+    in place (nothing for a space-homogeneous run: no ``wall`` and no ``level``).
+
+    A space run's store (its metadata has a ``space`` entry) has, besides what
+    :func:`run_dataset` lists:
+
+    - dimensions ``x`` (the cells) and ``wall`` (2), with coordinates ``x`` (the cell
+      centres (j + 1/2) ell / cells, long name "cell centre") and ``wall``
+      (``"left"``, ``"right"``: the walls at x = 0 and x = ell); ``f`` is
+      (``time``, ``x``, ``v1`` ... ``vd``), the cell averages;
+    - the fields of every cell along (``step_time``, ``x``, ...): ``density``,
+      ``velocity``, ``temperature``, ``pressure_tensor`` and ``heat_flux``;
+    - the totals over the interval: ``mass`` int int f dv dx, ``kinetic_energy``,
+      ``min_f`` and ``negative_mass_fraction``;
+    - ``wall_mass`` and ``wall_energy`` (``step_time``, ``wall``): the mass and the
+      energy that entered the interval through each wall over the step (a
+      time-integrated flux, positive inwards; 0 at t = 0), so that
+      m(t) - m(0) = the sum of ``wall_mass`` up to t;
+    - ``wall_momentum`` (``step_time``, ``wall``, ``axis``): the momentum, components
+      ``v1`` (normal) ... ``vd`` (tangential), that entered through each wall over the
+      step (positive along +v_i; 0 at t = 0). Divided by ``dt`` it is the force per
+      unit area of the wall on the gas; the gas acts on the wall with minus it: the
+      ``v1`` component is the pressure on the left wall and minus the pressure on the
+      right one, the tangential components are minus the shear stress on the wall
+      (docs/space.md, "Wall pressure and shear stress");
+    - with a hierarchy of collision models (``space.hierarchy``), ``level``
+      (``step_time``, ``x``), int64: the collision model of each cell over the step,
+      its index in the hierarchy's levels, whose names are the attribute ``levels``
+      (and, in the CF style, ``flag_values`` 0 ... n-1 and ``flag_meanings``, the
+      names separated by spaces; :func:`label_levels`); ``realizability`` and
+      ``distance`` (``step_time``, ``x``): the indicators kappa and delta that chose
+      it, measured after the collision step (NaN at t = 0).
+    """
+    if "wall" in dataset.dims:
+        dataset["wall"].attrs = {"long_name": "wall of the interval [0, ell]: left at x = 0, "
+                                              "right at x = ell"}
+    if "level" in dataset:
+        label_levels(dataset, meta["description"]["space"]["hierarchy"]["levels"])
 
 
 def label_levels(dataset: xarray.Dataset, levels: list) -> None:
