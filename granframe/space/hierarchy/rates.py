@@ -1,0 +1,170 @@
+r"""The rates of the fluid levels of the hierarchy (:mod:`granframe.space.hierarchy`): the
+granular cooling rate of a Maxwellian (:class:`CoolingRate`), the rates at which the run's
+own collision operator relaxes a shear stress and a heat flux (:func:`relaxation_rate`),
+and how such a rate scales with the state of a cell (:func:`scaled_rates`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy
+import scipy.special
+
+from granframe.backends import to_host
+from granframe.model.restitution import is_elastic
+
+#: Gauss-Laguerre nodes of the averages over the relative speeds of a Maxwellian
+_LAGUERRE = 96
+
+
+def speed_average(function, dimension: int, temperature: float) -> float:
+    r"""<F(s)> over the relative speeds s = |v - v_*| of two particles of a Maxwellian at
+    temperature T (s is the speed of a d-dimensional Maxwellian at 2T):
+
+    .. math:: \langle F\rangle = \frac{\int_0^\infty F(s)\, s^{d-1} e^{-s^2/4T}\,ds}
+                                      {\int_0^\infty s^{d-1} e^{-s^2/4T}\,ds}
+              = \frac{1}{\Gamma(d/2)}\sum_i w_i F\bigl(2\sqrt{T y_i}\bigr),
+
+    with (y_i, w_i) the generalised Gauss-Laguerre rule of weight y^{d/2-1} e^{-y}."""
+    y, w = scipy.special.roots_genlaguerre(_LAGUERRE, dimension / 2 - 1)
+    return float(w @ function(2.0 * numpy.sqrt(temperature * y))) / math.gamma(dimension / 2)
+
+
+class CoolingRate:
+    r"""The granular cooling rate zeta(rho, T, E) of a Maxwellian, d T/dt = -zeta T / eps.
+
+    From the weak form in the sigma-representation, one collision of relative velocity
+    g = v - v_* changes the energy by |v'|^2 + |v'_*|^2 - |v|^2 - |v_*|^2
+    = -(1 - e(|g|)^2)/4 |g|^2 (1 - g.sigma/|g|), so that for B = C |g|^lambda b E^gamma
+
+    .. math:: \int Q(f,f)|v|^2 dv = -\frac{C\beta\,E^\gamma}{8}\iint f f_*
+              |g|^{\lambda+2}\bigl(1 - e(|g|)^2\bigr)\,dv\,dv_*,\qquad
+              \beta = \int_{S^{d-1}} b(\hat g\cdot\sigma)(1 - \hat g\cdot\sigma)\,d\sigma .
+
+    For a Maxwellian of density rho and temperature T, the double integral is rho^2 times
+    the average over its relative speeds (:func:`speed_average`), and with
+    d/dt int |v|^2 f = rho d dT/dt,
+
+    .. math:: \zeta = \frac{C\beta\,E^\gamma \rho}{8 d T}
+              \bigl\langle s^{\lambda+2}(1 - e(s)^2)\bigr\rangle_{2T},
+
+    which for a constant e is C beta E^gamma rho (1 - e^2) (4T)^{lambda/2}
+    Gamma((d + lambda + 2)/2) / (2 d Gamma(d/2)): rho (1 - e^2)/4 for the review's 2D
+    and 3D Maxwell molecules (the rate of
+    :func:`granframe.model.exact.heated_maxwell_temperature`), and
+    4 (1 - e^2) rho sqrt(T) / (3 sqrt(pi)) for the review's 3D hard spheres
+    (C beta = 1: C = 1/(4 pi), beta = 4 pi). For a
+    restitution law that depends on |g| the average is tabulated once in log T over the
+    temperatures the grid holds and interpolated.
+    """
+
+    def __init__(self, kernel, restitution, grid):
+        d = grid.dimension
+        self.kernel, self.dimension = kernel, d
+        self.elastic = is_elastic(restitution, grid)
+        lam = kernel.speed_exponent
+        self.exponent = lam / 2.0
+        beta = kernel.prefactor(d) * kernel.angular_integral(d, lambda t: 1.0 - t)
+        self._constant = beta / (8.0 * d)
+        self.table = None
+        if self.elastic:
+            self.coefficient = 0.0
+        elif restitution.is_constant:
+            e = float(numpy.asarray(restitution(numpy.array([1.0]))).reshape(-1)[0])
+            #: zeta = coefficient rho E^gamma T^(lambda/2) for a constant e
+            self.coefficient = (self._constant * (1.0 - e * e) * 4.0 ** (lam / 2 + 1)
+                                * math.exp(math.lgamma((d + lam + 2) / 2)
+                                           - math.lgamma(d / 2)))
+        else:
+            self.coefficient = None
+            top = float(grid.half_width) ** 2
+            temperatures = top * numpy.logspace(-12.0, 0.0, 241)
+            values = [self._constant * speed_average(
+                lambda s: s ** (lam + 2) * (1.0 - numpy.asarray(restitution(s)) ** 2), d, t) / t
+                for t in temperatures]
+            self.table = (numpy.log(temperatures), numpy.log(numpy.maximum(values, 1e-300)))
+
+    def __call__(self, density, temperature, energy, xp=numpy):
+        """zeta of every cell (arrays in ``xp``)."""
+        factor = self.kernel.energy_factors(energy) if self.kernel.energy_exponent else 1.0
+        if self.coefficient is not None:
+            if self.coefficient == 0.0:
+                return 0.0 * density
+            return self.coefficient * density * factor * temperature ** self.exponent
+        log_t, log_z = (xp.asarray(a) for a in self.table)
+        return density * factor * xp.exp(xp.interp(xp.log(temperature), log_t, log_z))
+
+    def cooled(self, density, temperature, energy, dt: float, knudsen: float,
+               heat_bath: float, xp=numpy):
+        r"""T after dt of dT/dt = -zeta(T) T / eps + 2 tau at fixed rho and E^gamma.
+
+        A constant e without a heat bath has the closed form
+        T (1 + (lambda/2) zeta dt/eps)^(-2/lambda) (T e^{-zeta dt/eps} for lambda = 0);
+        otherwise classical RK4 on ln T with enough substeps that each takes at most a
+        twentieth of the fastest rate's time (relative error below 1e-7)."""
+        if self.elastic and not heat_bath:
+            return temperature
+        zeta = self(density, temperature, energy, xp)
+        if self.coefficient is not None and not heat_bath:
+            x = zeta * (dt / knudsen)
+            if self.exponent == 0.0:
+                return temperature * xp.exp(-x)
+            return temperature * (1.0 + self.exponent * x) ** (-1.0 / self.exponent)
+        rate = float(to_host(xp.max(zeta / knudsen + 2.0 * heat_bath / temperature)))
+        steps = int(min(max(1, math.ceil(20.0 * rate * dt)), 100000))
+        h = dt / steps
+
+        def slope(log_t):
+            t = xp.exp(log_t)
+            return -self(density, t, energy, xp) / knudsen + 2.0 * heat_bath / t
+
+        log_t = xp.log(temperature)
+        for _ in range(steps):
+            k1 = slope(log_t)
+            k2 = slope(log_t + 0.5 * h * k1)
+            k3 = slope(log_t + 0.5 * h * k2)
+            k4 = slope(log_t + h * k3)
+            log_t = log_t + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        return xp.exp(log_t)
+
+
+def relaxation_rate(operator, mode: str, temperature: float, density: float = 1.0,
+                    amplitude: float = 1e-3) -> float:
+    r"""The rate at which the run's collision operator relaxes a small shear stress
+    (``mode`` "shear") or heat flux ("heat") of a Maxwellian of ``density`` and
+    ``temperature`` (eps = 1): the collision frequencies of the shear viscosity and the heat
+    conductivity in the first Sonine approximation, mu = p eps / nu_s and
+    kappa = (d + 2)/2 p eps / nu_q (granframe's q = int c |c|^2 f / 2).
+
+    With h = a M phi / T^k, phi = v_1 v_2 (k = 1) or v_1 (|v|^2 - (d + 2) T) (k = 3/2),
+
+    .. math:: \nu = -\frac{\int \phi\,[Q(M + h) - Q(M - h)]\,dv}{2\int \phi\,h\,dv},
+
+    the linearised operator's eigenvalue on the mode when it is one (Maxwell molecules:
+    -rho a_1 of :func:`granframe.model.exact.maxwell_pressure_rate` for the shear,
+    exactly), its Rayleigh quotient in the Sonine basis otherwise. One call of the operator
+    on a stack of two distributions on the run's backend."""
+    grid, backend = operator.grid, operator.backend
+    d = grid.dimension
+    maxwellian = numpy.asarray(grid.maxwellian(density, None, temperature))
+    mesh = [numpy.broadcast_to(m, grid.shape) for m in grid.mesh()]
+    if mode == "shear":
+        weight = mesh[0] * mesh[1] / temperature
+    else:
+        weight = mesh[0] * (sum(m * m for m in mesh) - (d + 2) * temperature) / temperature ** 1.5
+    perturbation = amplitude * maxwellian * weight
+    stack = backend.asarray(numpy.stack([maxwellian + perturbation, maxwellian - perturbation]))
+    q = backend.to_numpy(operator(stack))
+    change = float(numpy.sum((q[0] - q[1]) * weight))
+    return -change / (2.0 * float(numpy.sum(perturbation * weight)))
+
+
+def scaled_rates(coefficient: float, kernel, density, temperature, energy, xp=numpy):
+    """nu = c rho T^(lambda/2) E^gamma of every cell (arrays in ``xp``; T where it is not
+    positive taken as 1): how a relaxation rate measured at one state
+    (:func:`relaxation_rate`) scales with the cell's state for the kernel
+    C |g|^lambda b E^gamma."""
+    factor = kernel.energy_factors(energy) if kernel.energy_exponent else 1.0
+    return (coefficient * density * factor
+            * xp.where(temperature > 0, temperature, 1.0) ** (kernel.speed_exponent / 2))
