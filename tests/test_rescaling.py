@@ -171,7 +171,8 @@ def test_a_step_above_the_drift_limit_is_refused_and_one_below_runs():
 
 def test_plots_of_a_rescaled_run_are_in_physical_time_and_temperature(tmp_path):
     """granframe plot reads the stored map: Maxwell molecules' T(t) against the exact law."""
-    from granframe.tools.plotting import _Run, plot
+    from granframe.tools.plot_data import RunData as _Run
+    from granframe.tools.plotting import plot
 
     description = _description(kernel="maxwell", final_time=4.0, time_step=0.1,
                                grid=dict(dimension=2, n_modes=48, support_radius=5.0))
