@@ -125,3 +125,34 @@ def test_a_hybrid_step_adds_the_copies_of_the_indicators_and_the_level_indices()
     fluid = len(problem.hierarchy.models) - 1
     assert counts["to_host"] <= baseline["to_host"] + STEPS * (1 + fluid), counts
     assert counts["to_device"] <= baseline["to_device"] + sum(used), counts
+
+
+@pytest.mark.parametrize("heat_bath", [0.0, 0.05])
+def test_a_hybrid_step_brings_one_vector_to_the_host_and_copies_nothing_from_it(heat_bath):
+    """Step by step with a hierarchy (several levels in use): the record's copy, one copy of
+    one vector by the hierarchy (the indicators of every cell and the levels chosen for the
+    next step) and, under a heat bath, one by the euler level when it has cells (the number
+    of substeps of the heated temperature law, read from the device); no copy from the host
+    (the cells of each level are slices of a sort of the levels on the device). Before the
+    choice moved to the device (2df7252, 4b7be5d): the same device->host copies, and one
+    host->device copy of the cell indices per level in use in every step."""
+    toml = HIERARCHY.replace("heat_bath = 0.05", f"heat_bath = {heat_bath}")
+    assert f"heat_bath = {heat_bath}" in toml
+    description = RunDescription.from_toml(toml)
+    problem, backend = counting_problem(description)
+    state = problem.state(problem.f0)
+    dt = description.time_step
+    for k in range(2):                                   # caches fill, levels spread
+        state = problem.step(k * dt, state, dt)
+        problem.record(state)
+    used = set()
+    for k in range(2, 2 + STEPS):
+        before = len(backend.log)
+        state = problem.step(k * dt, state, dt)
+        problem.record(state)
+        levels = problem.hierarchy.owned_levels
+        used.add(len(numpy.unique(levels)))
+        substeps = int(heat_bath > 0 and (levels == 0).any())
+        counts = backend.counts(since=before)
+        assert counts == {"to_host": 2 + substeps, "to_device": 0}, (k, backend.log[before:])
+    assert max(used) >= 2, used

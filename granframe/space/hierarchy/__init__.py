@@ -60,9 +60,10 @@ and delta_inf), :mod:`~granframe.space.hierarchy.choice` (the choice of the leve
 levels' factories).
 """
 
-from granframe.space.hierarchy.choice import choose_levels
+from granframe.space.hierarchy.choice import choose_levels, spread_levels
 from granframe.space.hierarchy.hybrid import HierarchyContext, HybridCollisions
-from granframe.space.hierarchy.indicators import equilibrium_distance, realizability
+from granframe.space.hierarchy.indicators import (CellIndicators, equilibrium_distance,
+                                                  realizability)
 from granframe.space.hierarchy.levels import (BoltzmannLevel, EllipsoidalLevel, EulerLevel,
                                               FluidParts, RelaxationLevel)
 from granframe.space.hierarchy.rates import (CoolingRate, relaxation_rate, scaled_rates,
@@ -70,8 +71,8 @@ from granframe.space.hierarchy.rates import (CoolingRate, relaxation_rate, scale
 from granframe.space.hierarchy.relaxation import (EllipsoidalEquation, RelaxationEquation,
                                                   discrete_gaussians)
 
-__all__ = ["BoltzmannLevel", "CoolingRate", "EllipsoidalEquation",
+__all__ = ["BoltzmannLevel", "CellIndicators", "CoolingRate", "EllipsoidalEquation",
            "EllipsoidalLevel", "EulerLevel", "FluidParts", "HierarchyContext",
            "HybridCollisions", "RelaxationEquation", "RelaxationLevel", "choose_levels",
            "discrete_gaussians", "equilibrium_distance", "realizability", "relaxation_rate",
-           "scaled_rates", "speed_average"]
+           "scaled_rates", "speed_average", "spread_levels"]

@@ -13,9 +13,8 @@ import numpy
 
 from granframe.backends import to_host
 from granframe.space.hierarchy.choice import choose_levels
-from granframe.space.hierarchy.indicators import equilibrium_distance, realizability
-from granframe.space.hierarchy.levels import FluidParts
-from granframe.space.hierarchy.rates import relaxation_rate, scaled_rates
+from granframe.space.hierarchy.indicators import CellIndicators
+from granframe.space.hierarchy.rates import relaxation_rate
 
 
 @attrs.define(slots=False)
@@ -53,103 +52,130 @@ class HierarchyContext:
 class HybridCollisions:
     """The collision step of a space run with a hierarchy (see the package notes).
 
-    Every ``interval`` steps the levels of all cells are chosen (:func:`~granframe.space.hierarchy.choice.choose_levels`)
-    from the indicators of every cell, gathered over the processes (one
+    Every ``interval`` steps the levels of all cells are chosen
+    (:func:`~granframe.space.hierarchy.choice.choose_levels`) from the indicators of every
+    cell (:class:`~granframe.space.hierarchy.indicators.CellIndicators`); then each level
+    advances its own cells of this process, gathered into one batch (one batched call of
+    the full operator per stage on the kinetic cells only).
+
+    Indicators and choice run on the backend. The batches are a host decision (their
+    sizes), so the levels come to the host: with the indicators of the step's result, and
+    the levels of the next step chosen ahead from them when that step chooses, in one
+    device->host copy of one vector per step (:meth:`advance`); that copy also gives
+    :meth:`records`. Nothing is copied to the device: the cells of each level are slices of
+    one stable argsort of the levels on the device. With several processes the rows of
+    indicators are gathered on the host (one
     :meth:`~granframe.abc.Communicator.allgather_object` of a few numbers per cell), so that
-    every process decides the same levels; then each level advances its own cells of this
-    process, gathered into one batch (one batched call of the full operator per stage on
-    the kinetic cells only).
+    every process decides the same levels, and the choice runs there.
 
     Parameters
     ----------
     settings : granframe.run.description.Hierarchy
     models : list of CollisionModel
         The levels, from the cheapest to the full operator.
-    equation : CellCollisions
-    cells, owned : int, slice
-        All cells of the interval, those of this process.
+    context : HierarchyContext
+    cells : int
+        All cells of the interval.
+    owned : slice
+        Those of this process.
     dx : float
     periodic : bool
     communicator : Communicator
+    time_step : float
     """
 
     def __init__(self, settings, models, context, cells: int, owned: slice, dx: float,
                  periodic: bool, communicator, time_step: float):
-        equation = context.equation
-        self.settings, self.models, self.equation = settings, models, equation
-        self.owned, self.dx, self.periodic = owned, float(dx), periodic
-        self.communicator = communicator
-        self.parts = FluidParts(equation)
-        self.kernel = equation.operator.kernel
-        self.shear_coefficient = context.shear_coefficient
-        #: delta_inf, the distance from its Maxwellian of the uniform state the full level
-        #: tends to (:func:`~granframe.space.hierarchy.indicators.equilibrium_distance`): 0 for an elastic gas without heat bath
-        self.floor = (0.0 if self.parts.cooling.elastic and not self.parts.heat_bath
-                      else equilibrium_distance(context, time_step))
-        #: the level of every cell in the last step (all at the top before the first)
-        self.levels = numpy.full(cells, len(models) - 1, dtype=numpy.int64)
+        self.settings, self.models, self.equation = settings, models, context.equation
+        self.owned, self.communicator = owned, communicator
+        #: kappa, delta and the reach of every cell, on the backend
+        self.cells = CellIndicators(settings, context, dx, periodic, time_step)
+        self.xp = self.cells.parts.xp
+        #: where the choice runs: the backend, or the host with several processes
+        self.choice_xp = numpy if communicator.size > 1 else self.xp
+        top = len(models) - 1
+        #: the level of every cell in the last step (all at the top before the first), on
+        #: the host
+        self.levels = numpy.full(cells, top, dtype=numpy.int64)
         #: collision steps taken (decisions fall on multiples of the interval)
         self.steps = 0
         #: the indicators of all cells after the last collision step and the cells each
-        #: one's level reaches (None before)
+        #: one's level reaches, on the host (None before)
         self.kappa = self.delta = self.reach = None
-        #: wall seconds spent choosing the levels, and per level advancing cells
+        #: wall seconds spent measuring the indicators and choosing the levels
         self.choice_seconds = 0.0
+        self._levels = self.choice_xp.full(cells, top, dtype=numpy.int64)
+        self._measured = None       # (kappa, delta, reach) in choice_xp, or None
+        self._next = None           # the levels chosen ahead for the next step, or None
+        self._order = None          # the owned cells sorted by level, on the backend
 
     @property
     def owned_levels(self) -> numpy.ndarray:
         return self.levels[self.owned]
 
-    def indicators(self, f):
-        """(rho, u, T, delta, realizable) of every cell of this process, on the host in one
-        transfer: the moments and delta = sum |f - M[f]| h^d / rho."""
-        xp, d, grid = self.parts.xp, self.parts.grid.dimension, self.parts.grid
-        rho, velocity, temperature, _ = self.parts.moments.primitives(f, node="halves")
-        now, _, ok = self.parts.equilibria(f, None)
-        axes = tuple(range(1, d + 1))
-        distance = xp.abs(f - now).sum(axis=axes) * grid.cell_volume / xp.where(
-            rho > 0, rho, 1.0)
-        return to_host(xp.concatenate([rho[:, None], velocity, temperature[:, None],
-                                       distance[:, None], ok[:, None].astype(float)],
-                                      axis=1))
+    def _measure(self, f):
+        """(kappa, delta, reach) of all cells in :attr:`choice_xp` from f of this process's
+        cells (:class:`~granframe.space.hierarchy.indicators.CellIndicators`), the rows of
+        all processes gathered in rank order."""
+        rows = self.cells.rows(f)
+        if self.communicator.size > 1:
+            rows = numpy.concatenate(self.communicator.allgather_object(to_host(rows)))
+        fluid = self._levels < len(self.models) - 1
+        return self.cells.measure(rows, fluid, self.choice_xp)
+
+    def _choose(self):
+        """The levels chosen from :attr:`_levels` and the measured indicators
+        (:func:`~granframe.space.hierarchy.choice.choose_levels`), in
+        :attr:`choice_xp`."""
+        s, xp = self.settings, self.choice_xp
+        kappa, delta, reach = self._measured
+        realizable = xp.isfinite(kappa) & xp.isfinite(delta)
+        return choose_levels(self._levels, xp.where(realizable, kappa, 0.0),
+                             xp.where(realizable, delta, 0.0), realizable, s.realizability,
+                             s.distance, s.hysteresis, reach, self.cells.periodic, xp)
+
+    def _fetch(self, **arrays) -> dict:
+        """The arrays (in :attr:`choice_xp`) on the host, in one copy of one vector; the
+        integer ones (levels, reach) come back as int64."""
+        xp = self.choice_xp
+        vector = to_host(xp.concatenate([a.astype(float) for a in arrays.values()]))
+        parts = numpy.split(vector, numpy.cumsum([len(a) for a in arrays.values()])[:-1])
+        return {name: part.astype(a.dtype) for (name, a), part in zip(arrays.items(), parts)}
+
+    def _bring(self, measured: bool, chosen=None):
+        """One copy to the host: with ``measured`` the indicators last measured
+        (:attr:`kappa`, :attr:`delta`, :attr:`reach`), and the levels ``chosen`` (in
+        :attr:`choice_xp`), whose host copy is returned (None without)."""
+        arrays = dict(zip(("kappa", "delta", "reach"), self._measured)) if measured else {}
+        if chosen is not None:
+            arrays["levels"] = chosen
+        host = self._fetch(**arrays)
+        if measured:
+            self.kappa, self.delta, self.reach = host["kappa"], host["delta"], host["reach"]
+        return host.get("levels")
+
+    def _adopt(self, levels, host) -> None:
+        """Take ``levels`` (in :attr:`choice_xp`) and their ``host`` copy as the levels of
+        the cells, and the owned cells sorted by level (stable: each level's cells in
+        increasing order) on the backend."""
+        self._levels, self.levels = levels, host
+        owned = levels[self.owned]
+        if self.choice_xp is not self.xp:
+            owned = self.xp.asarray(owned)
+        self._order = self.xp.argsort(owned, kind="stable")
 
     def measure(self, f) -> None:
         """The indicators kappa and delta of all cells (:attr:`kappa`, :attr:`delta`;
-        delta is NaN where there is no equilibrium) from f of this process's cells, the
-        rows of all processes gathered in rank order."""
-        rows = self.indicators(f)
-        if self.communicator.size > 1:
-            rows = numpy.concatenate(self.communicator.allgather_object(rows))
-        d = self.parts.grid.dimension
-        rho, velocity, temperature = rows[:, 0], rows[:, 1:1 + d], rows[:, 1 + d]
-        valid = (rows[:, 3 + d] > 0.5) & (rho > 0) & (temperature > 0)
-        safe_rho = numpy.where(valid, rho, 1.0)
-        safe_t = numpy.where(valid, temperature, 1.0)
-        energy = 0.5 * safe_rho * ((velocity ** 2).sum(axis=1) + d * safe_t)
-        rate = scaled_rates(self.shear_coefficient, self.kernel, safe_rho, safe_t, energy)
-        kappa = realizability(safe_rho, velocity, safe_t, self.dx, self.periodic,
-                              self.equation.knudsen, rate)
-        self.kappa = numpy.where(valid, kappa, numpy.inf)
-        #: the cells each cell's level reaches on each side: the buffer, or the distance
-        #: free_paths x eps sqrt(2T)/nu_s that particles of the thermal speed fly between
-        #: collisions, whichever is larger
-        path = self.settings.free_paths * self.equation.knudsen * numpy.sqrt(2 * safe_t) / rate
-        self.reach = numpy.maximum(self.settings.buffer, numpy.ceil(path / self.dx - 1e-9)
-                                   ).astype(numpy.int64)
-        fluid = self.levels < len(self.models) - 1
-        self.delta = numpy.where(valid, numpy.where(fluid, numpy.maximum(rows[:, 2 + d],
-                                                                          self.floor),
-                                                    rows[:, 2 + d]), numpy.nan)
+        delta is NaN where there is no equilibrium) and the reach of every cell from f of
+        this process's cells, on the host."""
+        self._measured, self._next = self._measure(f), None
+        self._bring(True)
 
     def choose(self) -> None:
-        """The levels of all cells from :attr:`kappa` and :attr:`delta`
-        (:func:`~granframe.space.hierarchy.choice.choose_levels`)."""
-        s = self.settings
-        realizable = numpy.isfinite(self.kappa) & numpy.isfinite(self.delta)
-        self.levels = choose_levels(self.levels, numpy.where(realizable, self.kappa, 0.0),
-                                    numpy.where(realizable, self.delta, 0.0), realizable,
-                                    s.realizability, s.distance, s.hysteresis, self.reach,
-                                    self.periodic)
+        """The levels of all cells (:attr:`levels`) from the indicators of the last
+        :meth:`measure` or step."""
+        levels, self._next = self._choose(), None
+        self._adopt(levels, self._bring(False, levels))
 
     def records(self) -> dict:
         """The level of every owned cell in the last step and its indicators and reach after
@@ -168,40 +194,58 @@ class HybridCollisions:
 
     def take_up(self, steps: int, levels, kappa, delta, reach) -> None:
         """Continue after ``steps`` steps with the recorded levels, indicators and reach of
-        all cells (NaN indicators: none measured yet)."""
+        all cells (NaN indicators: none measured yet), copied to the device at the resume."""
+        xp = self.choice_xp
         self.steps = int(steps)
         self.levels = numpy.asarray(levels, dtype=numpy.int64)
+        self._adopt(xp.asarray(self.levels), self.levels)
         kappa = numpy.asarray(kappa, dtype=float)
         measured = not numpy.isnan(kappa).all()
         self.kappa = kappa if measured else None
         self.delta = numpy.asarray(delta, dtype=float) if measured else None
         self.reach = numpy.asarray(reach, dtype=numpy.int64) if measured else None
+        self._measured = (tuple(xp.asarray(a) for a in (self.kappa, self.delta, self.reach))
+                          if measured else None)
+        self._next = None
 
     def advance(self, f, t: float, dt: float):
         """f (owned cells, *grid.shape) after the collision step: on a multiple of the
-        interval the levels are chosen from the indicators measured after the previous
-        collision step (of f itself before the first), then each level advances its cells,
-        and the indicators of the result are measured for the next choice."""
-        xp = self.parts.xp
+        interval the levels are taken (chosen ahead at the end of the previous step; at the
+        first step, or after :meth:`take_up`, chosen now from the indicators measured after
+        the previous collision step, of f itself before the first), then each level
+        advances its cells, the indicators of the result are measured and, when the next
+        step chooses, its levels chosen from them; all of it comes to the host in one copy.
+        """
         began = time.perf_counter()
         if self.steps % self.settings.interval == 0:
-            if self.kappa is None:
-                self.measure(f)
-            self.choose()
+            if self._next is not None:
+                self._adopt(*self._next)
+            else:
+                if self._measured is None:
+                    self._measured = self._measure(f)
+                self.choose()
         self.choice_seconds += time.perf_counter() - began
         self.steps += 1
+        out = self._advance_levels(f, t, dt)
+        began = time.perf_counter()
+        self._measured = self._measure(out)
+        chosen = self._choose() if self.steps % self.settings.interval == 0 else None
+        host = self._bring(True, chosen)
+        self._next = None if chosen is None else (chosen, host)
+        self.choice_seconds += time.perf_counter() - began
+        return out
+
+    def _advance_levels(self, f, t: float, dt: float):
+        """f after each level has advanced its own cells, gathered into one batch per
+        level in use (all of f when every cell is at the top)."""
         levels = self.owned_levels
         top = len(self.models) - 1
         if (levels == top).all():
-            out = self.models[top].advance(f, t, dt)
-        else:
-            out = f.copy()
-            for k, model in enumerate(self.models):
-                cells = numpy.flatnonzero(levels == k)
-                if cells.size:
-                    index = xp.asarray(cells)
-                    out[index] = model.advance(f[index], t, dt)
-        began = time.perf_counter()
-        self.measure(out)
-        self.choice_seconds += time.perf_counter() - began
+            return self.models[top].advance(f, t, dt)
+        out = f.copy()
+        bounds = numpy.cumsum(numpy.bincount(levels, minlength=len(self.models)))
+        for model, start, stop in zip(self.models, numpy.r_[0, bounds[:-1]], bounds):
+            if stop > start:
+                index = self._order[int(start):int(stop)]
+                out[index] = model.advance(f[index], t, dt)
         return out

@@ -68,6 +68,7 @@ class CoolingRate:
         beta = kernel.prefactor(d) * kernel.angular_integral(d, lambda t: 1.0 - t)
         self._constant = beta / (8.0 * d)
         self.table = None
+        self._tables = {}
         if self.elastic:
             self.coefficient = 0.0
         elif restitution.is_constant:
@@ -92,8 +93,14 @@ class CoolingRate:
             if self.coefficient == 0.0:
                 return 0.0 * density
             return self.coefficient * density * factor * temperature ** self.exponent
-        log_t, log_z = (xp.asarray(a) for a in self.table)
+        log_t, log_z = self._table_in(xp)
         return density * factor * xp.exp(xp.interp(xp.log(temperature), log_t, log_z))
+
+    def _table_in(self, xp):
+        """:attr:`table` in ``xp``, copied there once per namespace."""
+        if xp not in self._tables:
+            self._tables[xp] = tuple(xp.asarray(a) for a in self.table)
+        return self._tables[xp]
 
     def cooled(self, density, temperature, energy, dt: float, knudsen: float,
                heat_bath: float, xp=numpy):
@@ -102,7 +109,9 @@ class CoolingRate:
         A constant e without a heat bath has the closed form
         T (1 + (lambda/2) zeta dt/eps)^(-2/lambda) (T e^{-zeta dt/eps} for lambda = 0);
         otherwise classical RK4 on ln T with enough substeps that each takes at most a
-        twentieth of the fastest rate's time (relative error below 1e-7)."""
+        twentieth of the fastest rate's time (relative error below 1e-7). The number of
+        substeps is a host decision: it takes the fastest rate of the batch to the host,
+        one device->host copy of one number per call (none for the closed form)."""
         if self.elastic and not heat_bath:
             return temperature
         zeta = self(density, temperature, energy, xp)
