@@ -47,7 +47,8 @@ What is stored can be trusted:
   :meth:`~RunStore.write_shared`, :meth:`~RunStore.end_commit`; the notes of
   :class:`~granframe.run.storage.commits.StoreCommits`), so that in a space run, whose f
   and fields are chunked by block of cells, the owner of each block writes its own chunk
-  files.
+  files; :meth:`RunStore.commit` is the one-process case of
+  :meth:`RunStore.commit_together`.
 - **Atomic creation and replacement.** A store is built beside its path, as
   ``.NAME.granframe-new-TOKEN``, up to its first commit, then renamed into place; an
   existing store being replaced is first renamed to ``.NAME.granframe-old-TOKEN`` and

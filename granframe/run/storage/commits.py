@@ -2,9 +2,10 @@
 
 A commit is planned (:class:`CommitPlan`), written block by block and then what no block
 owns, and made visible by one write of ``progress`` (the notes of
-:class:`StoreCommits`). :meth:`StoreCommits.commit` runs the four phases in one process,
-:meth:`StoreCommits.commit_together` with every process of a space run writing its own
-cells (:func:`collective` for what process 0, the holder of the writer lock, does alone).
+:class:`StoreCommits`). :meth:`StoreCommits.commit_together` runs the four phases with
+every process of a space run writing its own cells (:func:`collective` for what process
+0, the holder of the writer lock, does alone); :meth:`StoreCommits.commit` is its
+one-process case.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ import attrs
 import numpy
 import zarr
 
+from granframe.parallel import SerialCommunicator
 from granframe.run.storage.errors import StoreError
 from granframe.run.storage.schema import CELLS, SNAPSHOT_ARRAYS
 from granframe.run.storage.state import StoreState
@@ -131,35 +133,14 @@ class StoreCommits(StoreState):
         ``progress`` (JSON-ready) is stored together with the new counts; the
         store is consistent before and after, whatever happens in between. Each
         snapshot is stored with the step and the proposed next step size of
-        ``progress`` (the state a run continues from). It runs the four phases of the
-        class notes, all cells in one :meth:`write_block`.
+        ``progress`` (the state a run continues from). It is :meth:`commit_together` of
+        one process (:class:`~granframe.parallel.SerialCommunicator`) owning every cell.
         """
-        count, cells, shared = self._split_records(records)
-        fs = [f for _, f in snapshots]
-        plan = self.begin_commit(len(snapshots), count)
-        split = "f" in self.cell_arrays
-        if split:
-            self.write_block(plan, slice(None), f=fs, records=cells)
-        self.write_shared(plan, times=[t for t, _ in snapshots], step=progress.get("step"),
-                          dt_next=progress.get("dt_next"), records=shared,
-                          f=None if split else fs)
-        self.end_commit(plan, progress)
-
-    def _split_records(self, records: dict) -> tuple[int, dict, dict]:
-        """``(count, cells, shared)`` of a commit's ``records``: how many there are, and
-        those of the store's layout (:attr:`record_arrays`) split into the arrays with a
-        cells axis (:attr:`cell_arrays`, :meth:`write_block`'s) and the others
-        (:meth:`write_shared`'s)."""
-        count = len(records["step_time"]) if records else 0
-        layout, split = self.record_arrays, self.cell_arrays
-        given = {name: values for name, values in records.items() if name in layout} \
-            if count else {}
-        return (count, {n: v for n, v in given.items() if n in split},
-                {n: v for n, v in given.items() if n not in split})
+        self.commit_together(SerialCommunicator(), slice(None), snapshots, records, progress)
 
     def commit_together(self, communicator, cells: slice, snapshots, records: dict,
                         progress: dict) -> None:
-        """One commit of a space run written by all its processes
+        """One commit written by all the processes of a run
         (:class:`granframe.abc.Communicator`; a serial run is the case of one): the four
         phases of the class notes, collective.
 
@@ -168,7 +149,9 @@ class StoreCommits(StoreState):
         snapshots of f and of the field records (:meth:`write_block`); once all have
         written, process 0 writes the shared records and ends the commit. A write that
         fails in any process fails the commit in all of them, before it is made visible
-        (:class:`StoreError` naming the process), so the store keeps its last commit.
+        (:class:`StoreError` naming the process), so the store keeps its last one. In a
+        store without a cells axis (a space-homogeneous run) no process writes a block:
+        process 0 writes f with the shared records, and ``cells`` is ``slice(None)``.
 
         Parameters
         ----------
@@ -184,25 +167,49 @@ class StoreCommits(StoreState):
             As for :meth:`end_commit` (process 0's counts).
         """
         count, owned, shared = self._split_records(records)
+        fs = [f for _, f in snapshots]
+        split = "f" in self.cell_arrays
         plan = collective(communicator, lambda: self.begin_commit(len(snapshots), count))
+        self._write_cells(communicator, plan, cells, fs, owned)
+
+        def end():
+            self.write_shared(plan, times=[t for t, _ in snapshots], step=progress.get("step"),
+                              dt_next=progress.get("dt_next"), records=shared,
+                              f=None if split else fs)
+            self.end_commit(plan, progress)
+
+        collective(communicator, end)
+
+    def _write_cells(self, communicator, plan: CommitPlan, cells: slice, f,
+                     records: dict) -> None:
+        """Phase 2 of :meth:`commit_together` in every process: :meth:`write_block` of its
+        ``cells`` of the snapshots ``f`` and of the field ``records``, skipped in a store
+        without a cells axis when ``cells`` is ``slice(None)``. A write that fails in any
+        process raises :class:`StoreError` in all, naming each failure."""
         try:
             if communicator.rank != 0:       # the arrays were resized by process 0
                 self.group = zarr.open_group(str(self.path), mode="r+", use_consolidated=False)
-            self.write_block(plan, cells, f=[f for _, f in snapshots], records=owned)
+            if "f" in self.cell_arrays or cells != slice(None):
+                self.write_block(plan, cells, f=f, records=records)
             failure = None
         except Exception as exc:      # reported to every process below
             failure = f"process {communicator.rank}: {type(exc).__name__}: {exc}"
-        failures = [f for f in communicator.allgather_object(failure) if f]
+        failures = [text for text in communicator.allgather_object(failure) if text]
         if failures:
             raise StoreError(f"store '{self.path}': the commit was not made, the store keeps "
                              f"its last one ({'; '.join(failures)})")
 
-        def end():
-            self.write_shared(plan, times=[t for t, _ in snapshots], step=progress.get("step"),
-                              dt_next=progress.get("dt_next"), records=shared)
-            self.end_commit(plan, progress)
-
-        collective(communicator, end)
+    def _split_records(self, records: dict) -> tuple[int, dict, dict]:
+        """``(count, cells, shared)`` of a commit's ``records``: how many there are, and
+        those of the store's layout (:attr:`record_arrays`) split into the arrays with a
+        cells axis (:attr:`cell_arrays`, :meth:`write_block`'s) and the others
+        (:meth:`write_shared`'s)."""
+        count = len(records["step_time"]) if records else 0
+        layout, split = self.record_arrays, self.cell_arrays
+        given = {name: values for name, values in records.items() if name in layout} \
+            if count else {}
+        return (count, {n: v for n, v in given.items() if n in split},
+                {n: v for n, v in given.items() if n not in split})
 
     def begin_commit(self, snapshot_count: int, record_count: int) -> CommitPlan:
         """Open a commit (phase 1 of the class notes; one writer).

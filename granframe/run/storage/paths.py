@@ -118,7 +118,9 @@ def check_replaceable(path, protect=()) -> None:
 
 
 def check_creatable(path: pathlib.Path, overwrite: bool, protect) -> None:
-    """Refuse a store at ``path`` unless ``overwrite``, and then anything that
+    """Refuse to create a store at ``path`` where a granframe store is
+    (:class:`StoreExistsError`) or a file or non-empty directory of another kind is
+    (:class:`StoreError`), unless ``overwrite``; even then, what
     :func:`check_replaceable` refuses."""
     kind = store_kind(path)
     if kind in ("run", "sweep") and not overwrite:
