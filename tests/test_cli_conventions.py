@@ -14,7 +14,8 @@ import pytest
 import granframe
 from granframe.run.runner import Simulation
 from granframe.run.storage import RunStore, describe
-from granframe.tools.cli import COMMAND_HELP, _with_settings, build_parser, main
+from granframe.tools.cli import COMMAND_HELP, build_parser, main
+from granframe.tools.cli_inputs import with_settings as _with_settings
 
 from conftest import FAKE_SITE
 from test_fault_injection import NEW

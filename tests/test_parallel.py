@@ -476,7 +476,7 @@ def test_an_error_in_one_process_aborts_them_all_and_never_goes_on(error, code, 
     """granframe.tools.cli._together: the error is printed with the process's number and
     ends every process (abort with status 2 for granframe's refusals, 1 otherwise); the
     run does not carry on past it even where abort returns."""
-    from granframe.tools.cli import _together
+    from granframe.tools.cli_run import together as _together
 
     communicator, went_on = Aborting(), []
     with pytest.raises(BaseException):
@@ -490,7 +490,7 @@ def test_an_error_in_one_process_aborts_them_all_and_never_goes_on(error, code, 
 
 def test_health_stops_and_interrupts_pass_through_together():
     from granframe.run.runner import HealthError
-    from granframe.tools.cli import _together
+    from granframe.tools.cli_run import together as _together
 
     for error in (HealthError("stopped"), KeyboardInterrupt()):
         communicator = Aborting()

@@ -1,5 +1,11 @@
 """Command-line interface: ``granframe <command>``.
 
+This module parses the command line (:func:`build_parser`) and runs the command
+(:func:`main`, :func:`entry`). The commands are implemented by concern in
+:mod:`granframe.tools.cli_run` (run, sweep), :mod:`granframe.tools.cli_inspect`
+(plugins, info, check, plot) and :mod:`granframe.tools.cli_plan` (limits, advise,
+bench), over :mod:`granframe.tools.cli_inputs` (what they read).
+
 Commands
 --------
 plugins [--json] [[FAMILY] NAME]
@@ -43,494 +49,13 @@ limits SOURCE [--quick] [--set KEY=VALUE ...] [--json] [--no-cost]
 from __future__ import annotations
 
 import argparse
-import contextlib
-import json
-import pathlib
 import re
 import sys
 
-import attrs
-
 from granframe._version import __version__
-
-
-def _plugins(args) -> int:
-    from granframe.registry import FAMILIES, default_registries
-
-    registries = default_registries()
-    families = list(FAMILIES)
-    if len(args.names) == 1 and args.names[0] in FAMILIES:
-        families = args.names
-    elif args.names:
-        entry = _entry(registries, args.names)
-        if args.json:
-            json.dump(_entry_document(entry), sys.stdout, indent=2)
-            sys.stdout.write("\n")
-        else:
-            print(_entry_text(entry))
-        return 0
-    if args.json:
-        document = registries.to_json()
-        document["families"] = {f: document["families"][f] for f in families}
-        json.dump(document, sys.stdout, indent=2)
-        sys.stdout.write("\n")
-        return 0
-    for family in families:
-        entries = registries.entries(family)
-        print(f"{family} ({len(entries)})")
-        if not entries:
-            print("    (none registered)")
-        width = max((len(e.name) for e in entries), default=0)
-        for e in entries:
-            print(f"    {e.name:<{width}}  {e.description}  [{e.source}]")
-    return 0
-
-
-def _entry(registries, names):
-    """The registered implementation that ``plugins NAME`` or ``plugins FAMILY NAME``
-    means; an unknown one gets the closest name."""
-    from granframe.errors import UnknownNameError
-    from granframe.registry import FAMILIES, did_you_mean
-
-    if len(names) > 2:
-        raise ValueError(f"plugins: parameter 'names' = {' '.join(names)!r} is invalid; give "
-                         "NAME or FAMILY NAME, e.g. granframe plugins collision_kernels vhs")
-    if len(names) == 2:
-        return registries.get(*names)
-    [name] = names
-    found = registries.find(name)
-    if len(found) > 1:
-        raise UnknownNameError(f"plugins: name {name!r} is registered in several families "
-                               f"({', '.join(e.family for e in found)}); give FAMILY NAME, "
-                               f"e.g. granframe plugins {found[0].family} {name}")
-    if not found:
-        known = [n for family in FAMILIES for n in registries.names(family)] + list(FAMILIES)
-        raise UnknownNameError(f"plugins: name {name!r} is not registered in any family"
-                               f"{did_you_mean(name, known)} (granframe plugins lists them)")
-    return found[0]
-
-
-def _entry_document(entry) -> dict:
-    """``granframe plugins NAME --json`` (docs/plugins.md)."""
-    parameters = entry.parameters()
-    return {"schema": "granframe.plugin/1", "granframe_version": __version__,
-            "family": entry.family, **entry.to_dict(), "factory": entry.factory_path,
-            "summary": entry.summary(),
-            "parameters": None if parameters is None else [p.to_dict() for p in parameters]}
-
-
-def _entry_text(entry) -> str:
-    """``granframe plugins NAME``: one implementation in words."""
-    from granframe.registry import OPERATOR_ARGUMENTS
-
-    lines = [f"{entry.name} ({entry.family})",
-             f"  description  {entry.description}",
-             f"  source       {entry.source}",
-             f"  factory      {entry.factory_path}"]
-    summary = entry.summary()
-    if summary and summary != entry.description:
-        lines.append(f"  summary      {summary}")
-    parameters = entry.parameters()
-    after = (f" (after {', '.join(OPERATOR_ARGUMENTS)})"
-             if entry.family == "collision_operators" else "")
-    if parameters is None:
-        lines.append("parameters: not known (the factory has no signature)")
-    elif not parameters:
-        lines.append(f"parameters{after}: none")
-    else:
-        lines.append(f"parameters{after}:")
-        rows = [(p.name, p.type or "-", "required" if p.required else f"default {p.default!r}")
-                for p in parameters]
-        widths = [max(len(row[i]) for row in rows) for i in range(2)]
-        lines.extend(f"  {n:<{widths[0]}}  {t:<{widths[1]}}  {d}" for n, t, d in rows)
-    return "\n".join(lines)
-
-
-def _bench(args) -> int:
-    from granframe.tools import bench
-
-    from granframe.backends import AUTO, resolve_backend
-
-    backend = resolve_backend(AUTO if args.backend is None else args.backend)
-    if args.space is not None:
-        configs = ([bench.parse_space_config(c) for c in args.space] if args.space
-                   else list(bench.DEFAULT_SPACE_CONFIGS))
-        records = bench.run_space(configs, backend, args.threads, args.repeats)
-        heading = (f"space step (Strang: transport, RK4 collisions on all cells, transport), "
-                   f"backend {backend}, {args.threads} threads, median of {args.repeats} "
-                   "rounds after warm-up")
-        table = bench.space_table
-    else:
-        configs = ([bench.parse_config(c) for c in args.config] if args.config
-                   else list(bench.DEFAULT_CONFIGS))
-        records = bench.run(configs, backend, args.threads, args.repeats, args.precision,
-                            batches=args.batch or (1,), quadratures=args.quadrature or (None,))
-        heading = (f"fast_spectral, backend {backend}, {args.threads} threads, "
-                   f"{args.precision}, median of {args.repeats} evaluations after warm-up"
-                   + (", B distributions per evaluation (time and floor per distribution)"
-                      if args.batch else ""))
-        table = bench.table
-    if args.json:
-        json.dump({"schema": "granframe.tools.bench/1", "granframe_version": __version__,
-                   "records": records}, sys.stdout, indent=2)
-        sys.stdout.write("\n")
-    else:
-        print(heading)
-        print(table(records))
-    return 0
-
-
-def _run(args) -> int:
-    from granframe.registry import did_you_mean
-    from granframe.run import storage
-    from granframe.run.runner import check_run_modes
-
-    check_run_modes(args.resume, args.overwrite)   # before the study is loaded
-    if args.rollback and not args.resume:
-        raise ValueError("run: --rollback applies to --resume (it continues from the last "
-                         "intact commit of a damaged store)")
-    study = _load_study(args.source, args.quick)
-    if args.only and list(study.runs) != [""]:
-        unknown = [n for n in args.only.split(",") if n not in study.runs]
-        if unknown:
-            raise ValueError(f"run: parameter 'only' = {args.only!r} is invalid; the study's "
-                             f"runs are {', '.join(study.runs)}"
-                             f"{did_you_mean(unknown[0], study.runs)}")
-    if args.set:
-        study = attrs.evolve(study, runs={name: _with_settings(description, args.set)
-                                          for name, description in study.runs.items()})
-    out = pathlib.Path(args.out)
-    if list(study.runs) == [""]:
-        if args.only:
-            raise ValueError("run: --only applies to studies with several runs")
-        return _run_one(study.runs[""], out, args)
-    names = list(study.runs) if not args.only else args.only.split(",")
-    kind = {"run": "run store", "sweep": "sweep store", "file": "file"}.get(
-        storage.store_kind(out))
-    if kind is not None:
-        raise ValueError(f"run: parameter 'out' = '{out}' is invalid; a study with several "
-                         f"runs writes a folder of stores (OUT/<name>.zarr), and '{out}' is a "
-                         f"{kind}")
-    out.mkdir(parents=True, exist_ok=True)
-    status = 0
-    for name in names:
-        print(f"[{name}] {study.runs[name].title}")
-        code = _run_one(study.runs[name], out / f"{name}.zarr", args)
-        if code == 130:
-            return code
-        status = max(status, code)
-    if study.report is not None and _processes()[1] == 0:   # one process draws the report
-        _report(study, out, args.source)
-    return status
-
-
-def _report(study, out: pathlib.Path, source) -> None:
-    """Write the study's report to ``out/report`` from the runs in ``out`` that ended.
-
-    Runs that finished and runs stopped by a health check (their moments up to the stop
-    are valid data) have ended; missing or interrupted ones have not. The report gets
-    the stores of those that ended, so after ``--only`` it covers the runs made so far;
-    a report that looks up a run that has not ended (a KeyError naming it) waits for it.
-    """
-    from granframe.run import storage
-
-    ended = {}
-    for name in study.runs:
-        store = out / f"{name}.zarr"
-        if storage.store_kind(store) == "run" and storage.RunStore.open(store).progress.get(
-                "status") in ("finished", "failed"):
-            ended[name] = store
-    waiting = [name for name in study.runs if name not in ended]
-    if not ended:
-        print(f"report: waiting for the runs ({len(waiting)} have not ended; run again "
-              "with --resume)")
-        return
-    report = out / "report"
-    try:
-        summary = study.report(ended, report)
-        text = json.dumps(summary, indent=2) + "\n"
-    except KeyError as exc:
-        if not (exc.args and exc.args[0] in waiting):
-            raise _report_failed(exc, source, out) from None
-        print(f"report: waiting for {len(waiting)} of {len(study.runs)} runs (it reads "
-              f"'{exc.args[0]}', which has not ended): run them with --only "
-              f"{','.join(waiting)}, or run again with --resume")
-        return
-    except Exception as exc:   # the study's own code: say where it failed, keep the runs
-        raise _report_failed(exc, source, out) from None
-    (report / "summary.json").write_text(text)
-    print(f"report: {report} (summary.json and figures)"
-          + (f", from {len(ended)} of {len(study.runs)} runs: {', '.join(ended)}"
-             if waiting else ""))
-
-
-def _report_failed(exc, source, out) -> ValueError:
-    return ValueError(f"run: the report of study '{source}' failed: {_where(exc, source)}; "
-                      f"the runs' stores in '{out}' are kept (fix the report, then run again "
-                      "with --resume)")
-
-
-def _read_text(path: pathlib.Path, command: str, parameter: str) -> str:
-    """The text of the file ``path``; a file that is not UTF-8 text refused naming it."""
-    try:
-        return path.read_text()
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"{command}: parameter '{parameter}' = '{path}' is invalid; it is not "
-                         f"UTF-8 text ({exc.reason} at byte {exc.start}): a TOML file is "
-                         "expected") from None
-
-
-def _load_study(source, quick: bool):
-    """:func:`~granframe.run.runner.load_study`, a source that is not text and a study
-    that exits (``sys.exit`` while it is imported or makes its runs) refused naming it."""
-    from granframe.run.runner import load_study
-
-    try:
-        return load_study(source, quick=quick)
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"run: parameter 'source' = '{source}' is invalid; it is not UTF-8 "
-                         f"text ({exc.reason} at byte {exc.start}): a .toml description or a "
-                         ".py study module is expected") from None
-    except SystemExit as exc:
-        raise ValueError(f"run: study '{source}' is invalid; it called sys.exit({exc.code!r}) "
-                         "while granframe loaded it or made its runs, so it gives no run: a "
-                         "study module defines description(quick) or runs(quick) and does "
-                         "not exit") from None
-
-
-def _with_settings(description, settings: list[str]):
-    """``description`` with each ``KEY=VALUE`` of ``run --set`` applied, in order.
-
-    KEY is a dotted key of the description's table (``grid.n_modes``,
-    ``operator.sphere.n_points``, ``kernel.name``); one that the description cannot have
-    is refused with the closest that it can. The grid's half width and truncation radius,
-    when they are the ones its support radius implies, are derived again from the new
-    one. VALUE is read as a TOML value (``64``, ``0.5``, ``true``, ``"rk4"``, ``[1, 2]``,
-    ``{name = "lebedev", order = 7}``), or taken as a string when it is not one
-    (``kernel.name=hard_spheres``).
-    """
-    import tomllib
-
-    from granframe.registry import did_you_mean
-    from granframe.run.description import RunDescription
-
-    data = description.to_dict()
-    derived = attrs.evolve(description.grid, half_width=None, truncation_radius=None)
-    for key in ("half_width", "truncation_radius"):   # they follow --set grid.support_radius
-        if getattr(derived, key) == getattr(description.grid, key):
-            del data["grid"][key]
-    for setting in settings:
-        key, equals, text = setting.partition("=")
-        key = key.strip()
-        if not equals or not key:
-            raise ValueError(f"run: parameter 'set' = {setting!r} is invalid; must be "
-                             "KEY=VALUE, e.g. --set grid.n_modes=64")
-        known = _settable_keys(data)
-        if key not in known:
-            raise ValueError(f"run: parameter 'set' = {setting!r} is invalid; '{key}' is not "
-                             f"a key of the description{did_you_mean(key, known)}")
-        try:
-            value = tomllib.loads(f"value = {text.strip()}")["value"]
-        except tomllib.TOMLDecodeError:
-            value = text.strip()
-        *parents, last = key.split(".")
-        node = data
-        for part in parents:
-            child = node.get(part)
-            node[part] = node = ({"name": child} if isinstance(child, str)
-                                 else child if isinstance(child, dict) else {})
-        node[last] = value
-    return RunDescription.from_dict(data)
-
-
-def _settable_keys(data: dict) -> list[str]:
-    """The dotted keys a description table ``data`` can have: every key it has, every
-    field of RunDescription and of its grid, output, health and space tables, and for each
-    component (and each quadrature among the operator's options, and the reconstruction
-    and walls of the space table) ``name`` and the parameters of the implementation it
-    names."""
-    from granframe.backends import resolve_backend
-    from granframe.registry import default_registries
-    from granframe.run.description import (COMPONENT_FAMILIES, Health, Output,
-                                           RunDescription, Space)
-    from granframe.velocity.grid import VelocityGrid
-
-    def present(table, prefix=""):
-        for key, value in table.items():
-            yield prefix + key
-            if isinstance(value, dict):
-                yield from present(value, f"{prefix}{key}.")
-
-    def parameters(family, table, prefix):
-        name = table.get("name") if isinstance(table, dict) else table
-        yield f"{prefix}name"
-        if not isinstance(name, str):
-            return
-        try:
-            entry = default_registries().get(
-                family, resolve_backend(name) if family == "array_backends" else name)
-        except ValueError:   # an unknown name: the description names the closest
-            return
-        yield from (prefix + p.name for p in entry.parameters() or ())
-
-    keys = set(present(data))
-    tables = {"grid": VelocityGrid, "output": Output, "health": Health, "space": Space}
-    for field in attrs.fields(RunDescription):
-        if field.init:
-            keys.add(field.alias or field.name)
-    for table, cls in tables.items():
-        keys.update(f"{table}.{f.alias or f.name}" for f in attrs.fields(cls) if f.init)
-    for field, family in COMPONENT_FAMILIES.items():
-        keys.update(parameters(family, data.get(field), f"{field}."))
-    operator = data.get("operator")
-    for option, value in (operator.items() if isinstance(operator, dict) else ()):
-        if isinstance(value, dict):
-            keys.update(parameters("quadratures", value, f"operator.{option}."))
-    space = data.get("space") if isinstance(data.get("space"), dict) else {}
-    for field in ("reconstruction", "left", "right"):
-        keys.update(parameters("reconstructions" if field == "reconstruction" else "boundaries",
-                               space.get(field, "muscl" if field == "reconstruction"
-                                         else "periodic"), f"space.{field}."))
-    return sorted(keys)
-
-
-def _where(exc: BaseException, source) -> str:
-    """``Type: message (at file:line)``, the line being the innermost one in ``source``."""
-    from granframe.run.runner import line_in
-
-    line = line_in(exc, source)
-    return f"{type(exc).__name__}: {exc}" + (f" (at {source}:{line})" if line else "")
-
-
-def _run_one(description, out, args) -> int:
-    from granframe.model.initial import projection_note
-    from granframe.run.monitors import cooling_hint
-    from granframe.run.runner import HealthError, Simulation
-    from granframe.run.storage import RunStore, check_replaceable, store_kind
-
-    if args.overwrite:          # refused before the operator is built
-        check_replaceable(out, protect=[args.source])
-    if args.resume and store_kind(out) == "run":
-        # an ended run is reported from its store, without building the operator
-        progress = RunStore.open(out, complete=False).progress
-        if progress.get("status") == "failed":   # resuming would fail again
-            print(f"{out}: stopped earlier by a health check ({progress.get('message')}); "
-                  "not resumed", file=sys.stderr)
-            return 3
-        if progress.get("status") == "finished":
-            if _processes()[1] == 0:   # the lock is one process's
-                RunStore.resume(out, description.to_dict()).close()   # refuses another description
-            print(f"{out}: the run is already finished (t = {progress['time']:g}, "
-                  f"{progress['step']} steps, {progress.get('wall_seconds', 0.0):.1f} s)")
-            return 0
-    try:
-        simulation = Simulation(description, partition=args.partition)
-        # a space run keeps no projection record (None): nothing to note
-        note = projection_note(simulation.projection) if simulation.projection else None
-        if note:
-            print(f"granframe: {note}", file=sys.stderr)
-        hint = cooling_hint(description)
-        if hint:
-            print(f"granframe: hint: {hint}", file=sys.stderr)
-        with _together(simulation.communicator):
-            print(f"granframe: {_cost(simulation.problem, out if args.resume else None)}",
-                  flush=True)
-            result = simulation.run(out, resume=args.resume, overwrite=args.overwrite,
-                                    progress=args.progress, rollback=args.rollback,
-                                    protect=[args.source])
-    except HealthError as exc:
-        print(f"granframe: run stopped: {exc}\nThe store '{out}' keeps every snapshot "
-              "before it and the moments up to it.", file=sys.stderr)
-        return 3
-    except KeyboardInterrupt:
-        print("\ngranframe: interrupted; " + _interrupted(out), file=sys.stderr)
-        return 130
-    print(f"{out}: finished, {result.steps} steps to t = {result.time:g} in "
-          f"{result.wall_seconds:.1f} s, {result.snapshots} snapshots")
-    if args.rollback:
-        from granframe.run.storage import dropped_note
-
-        note = dropped_note(RunStore.open(out, complete=False).metadata)
-        if note:
-            print(f"granframe: the rollback {note}", file=sys.stderr)
-    for warning in result.warnings:
-        print(f"granframe: warning: f at t = {result.time:g} is under-resolved: {warning}",
-              file=sys.stderr)
-    for warning in result.accuracy_warnings:
-        print(f"granframe: warning: at t = {result.time:g}: {warning}", file=sys.stderr)
-    return 0
-
-
-@contextlib.contextmanager
-def _together(communicator):
-    """Around the part of a run that its processes make together (the cost estimate's step
-    and the run): an error in one process is printed with its number and ends them all
-    (:meth:`~granframe.abc.Communicator.abort`, status 2 for granframe's refusals, 1 for
-    anything else), since the others would wait for it for ever. A health stop and a
-    Ctrl-C reach every process at the same step and pass through."""
-    from granframe.run.runner import HealthError
-
-    try:
-        yield
-    except (HealthError, KeyboardInterrupt):
-        raise
-    except BaseException as exc:
-        if communicator.size == 1:
-            raise
-        print(f"granframe: error in process {communicator.rank} of {communicator.size}: "
-              f"{type(exc).__name__}: {exc}", file=sys.__stderr__, flush=True)
-        communicator.abort(2 if isinstance(exc, (ValueError, TypeError, OSError)) else 1)
-        raise         # an abort that returned: the process must not go on either
-
-
-def _cost(problem, resumed=None) -> str:
-    """The run's estimated cost in one line (:func:`~granframe.run.problems.run_cost`);
-    ``resumed``: the store a resumed run continues, whose steps done are left out."""
-    from granframe.run.problems import run_cost
-    from granframe.run.storage import RunStore, store_kind
-
-    cost = run_cost(problem)
-    if resumed is not None and cost.steps is not None and store_kind(resumed) == "run":
-        done = int(RunStore.open(resumed, complete=False).progress.get("step", 0))
-        cost = attrs.evolve(cost, steps=max(cost.steps - done, 0))
-        return cost.text() + f" (the {done} steps done are not counted)"
-    return cost.text()
-
-
-def _interrupted(out) -> str:
-    """What a Ctrl-C left at ``out``, in words."""
-    from granframe.run.storage import RunStore, StoreError
-
-    if not RunStore.exists(out):
-        return f"nothing was written to '{out}'"
-    try:
-        status = RunStore.open(out, complete=False).progress.get("status")
-    except StoreError as exc:
-        return f"the store '{out}' cannot be read: {exc}"
-    if status in ("interrupted", "running"):   # running: cut before the run could mark it
-        return (f"the store '{out}' holds every complete snapshot (status {status}): "
-                "continue with --resume")
-    if status == "finished":
-        return f"the store '{out}' holds the finished run"
-    return f"the store '{out}' is as it was before this run (status {status})"
-
-
-def _check(args) -> int:
-    from granframe.run.storage import check
-
-    intact, lines = check(args.store)
-    print("\n".join(lines))
-    print("intact" if intact else "DAMAGED: the chunks above are missing or fail their "
-          "checksum; granframe run --resume --rollback continues from the last intact commit")
-    return 0 if intact else 3
-
-
-def _plot(args) -> int:
-    from granframe.tools.plotting import plot
-
-    for path in plot(args.store, args.out, format=args.format, dpi=args.dpi):
-        print(path)
-    return 0
+from granframe.tools.cli_inspect import check_command, info_command, plot_command, plugins_command
+from granframe.tools.cli_plan import advise_command, bench_command, limits_command
+from granframe.tools.cli_run import processes, run_command, sweep_command
 
 
 def _dpi(text: str) -> float:
@@ -545,248 +70,6 @@ def _dpi(text: str) -> float:
     if value is None or not low <= value <= high:
         raise argparse.ArgumentTypeError(f"must be a number from {low} to {high}, got {text!r}")
     return value
-
-
-def _info_document(path) -> dict:
-    """``granframe info STORE --json``: what ``info`` says of a run store, as JSON
-    (docs/runner.md): the store's metadata and progress as stored, and the range of its
-    snapshots and moments."""
-    from granframe.run.storage import RunStore, StoreDamagedError, store_kind, summarise
-
-    if store_kind(path) == "sweep":
-        raise ValueError(f"info: parameter 'store' = '{path}' is invalid; --json describes "
-                         f"run stores, and it is a sweep store (granframe info {path} "
-                         "describes it)")
-    store = RunStore.open(path)   # refuses what is not a run store
-    problems = store.verify([n for n in store.array_names() if n != "f"])
-    if problems:
-        raise StoreDamagedError(f"store '{path}' is damaged: {summarise(problems)} "
-                                "(granframe check lists every problem)", problems)
-    group, progress = store.group, store.progress
-    document = {"schema": "granframe.info/1", "store": str(store.path),
-                "metadata": store.metadata, "progress": progress, "snapshots": None,
-                "moments": None}
-    if progress.get("snapshots"):
-        times = group["time"][:int(progress["snapshots"])]
-        document["snapshots"] = {"count": len(times), "shape": list(group["f"].shape[1:]),
-                                 "first_time": float(times[0]), "last_time": float(times[-1])}
-    if progress.get("records"):
-        n = int(progress["records"])
-        # a space run records totals over the interval (no kurtosis; T is per cell)
-        names = (("mass", "kinetic_energy", "min_f") if "space" in store.metadata
-                 else ("mass", "temperature", "kurtosis", "min_f"))
-        document["moments"] = {
-            "records": n, "first_time": float(group["step_time"][0]),
-            "last_time": float(group["step_time"][n - 1]), "steps": int(group["step"][n - 1]),
-            **{name: {"first": float(group[name][0]), "last": float(group[name][n - 1])}
-               for name in names}}
-    return document
-
-
-def _info(args) -> int:
-    if args.json:
-        json.dump(_info_document(args.store), sys.stdout, indent=2)
-        sys.stdout.write("\n")
-        return 0
-    from granframe.run.storage import describe, store_kind
-    from granframe.run.sweep import describe_sweep
-
-    print(describe_sweep(args.store) if store_kind(args.store) == "sweep"
-          else describe(args.store))
-    return 0
-
-
-def _sweep(args) -> int:
-    from granframe.run.sweep import Sweep, run_sweep
-
-    path = pathlib.Path(args.sweep)
-    if not path.is_file():
-        raise ValueError(f"sweep: parameter 'sweep' = '{args.sweep}' is invalid; no such file")
-    try:
-        result = run_sweep(Sweep.from_toml(_read_text(path, "sweep", "sweep")), args.out,
-                           scheduler=args.scheduler, workers=args.workers,
-                           progress=args.progress, overwrite=args.overwrite,
-                           retry_failed=args.retry_failed, protect=(path,))
-    except KeyboardInterrupt:
-        print(f"\ngranframe: interrupted; the sweep store '{args.out}' keeps every ended run "
-              "and every snapshot of the others: run the same sweep again to continue",
-              file=sys.stderr)
-        return 130
-    print(f"{result.store}: {result.finished} finished, {result.failed} failed "
-          f"({result.skipped} ended before, {result.refused} refused before) in "
-          f"{result.wall_seconds:.1f} s; results: "
-          f"granframe.open_sweep('{result.store}')")
-    return 3 if result.failed else 0
-
-
-def _limit_runs(args) -> tuple[dict, bool]:
-    """The runs ``limits`` reports: each description as given (``--set`` applied) but with
-    ``health.step_limit = false``, so that one whose step is above the transport's CFL
-    limit is built and reported rather than refused; and whether ``granframe run`` would
-    check the step limits (the ``health.step_limit`` the description asks for)."""
-    import tomllib
-
-    from granframe.run.description import RunDescription
-
-    path = pathlib.Path(args.source)
-    unchecked = ["health.step_limit=false"]
-    if path.suffix == ".toml" and path.is_file() and not args.quick:
-        try:
-            table = tomllib.loads(_read_text(path, "limits", "source"))
-        except tomllib.TOMLDecodeError as exc:
-            raise ValueError(f"limits: the TOML text of '{path}' is invalid: {exc}") from None
-        health = table.get("health")
-        checked = health.get("step_limit", True) if isinstance(health, dict) else True
-        table["health"] = {**(health if isinstance(health, dict) else {}), "step_limit": False}
-        runs = {"": RunDescription.from_dict(table)}
-    else:
-        runs = _load_study(args.source, args.quick).runs
-        checked = all(d.health.step_limit for d in runs.values())
-    for setting in args.set:
-        key, _, value = setting.partition("=")
-        if key.strip() == "health.step_limit":
-            checked = value.strip() != "false"
-    return ({name: _with_settings(d, args.set + unchecked) for name, d in runs.items()},
-            checked)
-
-
-def _limits(args) -> int:
-    from granframe.run.problems import time_step_limit
-
-    runs, checked = _limit_runs(args)
-    refused = ("granframe run refuses it" if checked else
-               "health.step_limit = false: granframe run does not check it")
-    status, document = 0, {}
-    for name, d in runs.items():
-        limit = time_step_limit(d)
-        adaptive = d.build("integrator").adaptive
-        above = limit is not None and not adaptive and d.time_step > limit.limit
-        transport = None if d.space is None else d.space.transport_limit(d.grid)
-        above_cfl = transport is not None and d.time_step > transport * (1 + 1e-12)
-        status = 3 if above or above_cfl else status
-        document[name] = {
-            "integrator": d.integrator.name, "time_step": d.time_step, "adaptive": adaptive,
-            "limit": None if limit is None or adaptive else limit.limit,
-            "interval": None if limit is None or adaptive else limit.interval,
-            "dominant": None if limit is None else str(limit.dominant),
-            "rates": {} if limit is None else {str(k): v for k, v in limit.rates.items()},
-            "within": None if limit is None or adaptive else not above,
-            **({} if transport is None else {"transport_limit": transport,
-                                             "within_transport_limit": not above_cfl})}
-        cost = None if args.no_cost else _limit_cost(d)
-        document[name]["cost"] = None if cost is None or isinstance(cost, str) else (
-            cost.to_dict())
-        if args.json:
-            continue
-        head = (f"[{name}] " if name else "") + f"'{d.integrator.name}': "
-        if transport is not None:
-            print((f"[{name}] " if name else "") + f"transport ('{d.space.reconstruction.name}',"
-                  f" SSP RK3 half steps): dt <= {transport:.4g}; time_step = "
-                  f"{d.time_step:g} is " + (f"ABOVE it ({refused})" if above_cfl else
-                                            f"within it ({d.time_step / transport:.3g} of it)"))
-        _limit_table(head, d, limit, adaptive, above, refused)
-        if cost is not None:
-            print((f"[{name}] " if name else "") + (cost if isinstance(cost, str)
-                                                    else cost.text()))
-    if args.json:
-        json.dump({"schema": "granframe.limits/1", "runs": document}, sys.stdout, indent=2)
-        sys.stdout.write("\n")
-    return status
-
-
-def _limit_cost(description):
-    """The run's :class:`~granframe.run.problems.RunCost` (its problem built and one step
-    timed), or why it could not be estimated."""
-    from granframe.run.problems import make_problem, run_cost
-
-    try:
-        return run_cost(make_problem(description))
-    except (ValueError, MemoryError, FloatingPointError) as exc:
-        return f"estimated cost: not estimated ({type(exc).__name__}: {exc})"
-
-
-def _limit_table(head, d, limit, adaptive, above, refused) -> None:
-    """The lines of ``granframe limits`` on the collisions' explicit step limit of ``d``."""
-    from granframe.registry import default_registries
-    from granframe.stepping.stability import PART_NAMES
-
-    if limit is None:
-        print(head + "no explicit step limit (the scheme treats none of the equation's "
-              "stiff parts explicitly)")
-        return
-    radii = ", ".join(f"{PART_NAMES.get(part, part)} = {rate:.4g}" for part, rate in
-                      sorted(limit.rates.items(), key=lambda x: -x[1]))
-    if limit.interval == 0.0:
-        registry = default_registries()
-        stable = sorted(n for n in registry.names("time_integrators") if getattr(
-            registry.get("time_integrators", n).factory, "imaginary_interval", 0.0) > 0.0)
-        print(head + f"unstable at any step: {PART_NAMES['drift']} has an imaginary "
-              f"spectrum (radii: {radii}) and the scheme is not stable on the imaginary "
-              f"axis; use one that is: {', '.join(stable)}")
-        return
-    if adaptive:
-        print(head + f"adaptive: its error control keeps the steps stable (spectral "
-              f"radii: {radii})")
-        return
-    print(head + f"dt <= {limit.limit:.4g}, set by {PART_NAMES.get(limit.dominant)} "
-          f"(spectral radii: {radii}; stable for dt * (sum of radii) <= "
-          f"{limit.interval:g})")
-    if above:
-        print(f"  time_step = {d.time_step:g}: ABOVE the limit ({refused})")
-    else:
-        print(f"  time_step = {d.time_step:g}: within it ({d.time_step / limit.limit:.3g} "
-              "of the limit)")
-
-
-def _advise(args) -> int:
-    """``granframe advise``: a scene (no ``grid``) gets the advice of
-    :func:`~granframe.tools.advise.advise`; a run description with a ``[space]`` table (it
-    has a ``grid``) is priced as it is, all-kinetic and with a hierarchy of collision models
-    (:func:`~granframe.tools.advise.price_hierarchy`)."""
-    import tomllib
-
-    from granframe.run.description import RunDescription
-    from granframe.tools.advise import Scene, advise, price_hierarchy
-
-    path = pathlib.Path(args.scene)
-    if not path.is_file():
-        raise ValueError(f"advise: parameter 'scene' = '{args.scene}' is invalid; no such file")
-    try:
-        data = tomllib.loads(_read_text(path, "advise", "scene"))
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"advise: the TOML text of '{path}' is invalid: {exc}") from None
-    if "grid" in data:
-        if args.out:
-            raise ValueError(f"advise: parameter '--out' = '{args.out}' is invalid; it writes "
-                             f"the description advised for a scene, and '{path}' is a run "
-                             "description (it has a grid), priced as it is: add the "
-                             "fragment the report shows to it instead")
-        price = price_hierarchy(RunDescription.from_dict(data))
-        if args.json:
-            json.dump({"schema": "granframe.hierarchy_price/1", **price.to_dict()}, sys.stdout,
-                      indent=2)
-            sys.stdout.write("\n")
-        else:
-            print(price.report())
-        return 0
-    advice = advise(Scene.from_dict(data))
-    if args.json:
-        json.dump({"schema": "granframe.advice/1", "closed_form": advice.closed_form,
-                   "errors": advice.errors, "predicted_seconds": advice.predicted_seconds,
-                   "evaluation_seconds": advice.evaluation_seconds,
-                   "evaluations": advice.evaluations, "reasons": list(advice.reasons),
-                   "description": None if advice.description is None
-                   else advice.description.to_dict(),
-                   "space": None if advice.space is None else advice.space.to_dict()},
-                  sys.stdout, indent=2)
-        sys.stdout.write("\n")
-    else:
-        print(advice.report())
-    if args.out and advice.description is not None:
-        pathlib.Path(args.out).write_text(advice.description.to_toml())
-        if not args.json:
-            print(f"description: {args.out} (granframe run {args.out} --out STORE)")
-    return 0
 
 
 class Parser(argparse.ArgumentParser):
@@ -939,6 +222,8 @@ is above a limit; the table is printed all the same.""",
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The parser of ``granframe``: a subcommand per command with its ``handler``, and
+    the description and examples of :data:`COMMAND_HELP`."""
     parser = Parser(
         prog="granframe", formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Fourier spectral solvers for the inelastic Boltzmann equation.",
@@ -950,7 +235,7 @@ def build_parser() -> argparse.ArgumentParser:
     plugins.add_argument("names", nargs="*", metavar="[FAMILY] NAME",
                          help="show this implementation (or this family)")
     plugins.add_argument("--json", action="store_true", help="machine-readable output")
-    plugins.set_defaults(handler=_plugins)
+    plugins.set_defaults(handler=plugins_command)
     bench = commands.add_parser("bench", help="time the fast operator against the FFT floor")
     bench.add_argument("--json", action="store_true", help="machine-readable output")
     bench.add_argument("--backend", default=None, help="array backend (default: pyfftw if "
@@ -974,7 +259,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--space", nargs="*", metavar="D:N:CELLS[:N_RHO:M]", default=None,
                        help="time one step of a space run and its parts instead (default "
                             "configurations: 3:32:64 and 2:64:256, the review's rules)")
-    bench.set_defaults(handler=_bench)
+    bench.set_defaults(handler=bench_command)
     run = commands.add_parser("run", help="run a description (TOML or study module) into a store")
     run.add_argument("source", metavar="STUDY_OR_TOML",
                      help="a .toml run description or a .py study defining description(quick)")
@@ -1000,7 +285,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="under mpiexec: the cells of each process, in rank order, whole "
                           "chunks of space.block_cells (default: as even as the chunks "
                           "allow)")
-    run.set_defaults(handler=_run)
+    run.set_defaults(handler=run_command)
     plot = commands.add_parser("plot", help="draw the figures of a run store (PNG, PDF or SVG)")
     plot.add_argument("store", metavar="STORE")
     plot.add_argument("--out", required=True, metavar="DIR", help="folder for the figures")
@@ -1009,16 +294,16 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("--dpi", type=_dpi, default=110,
                       help="resolution of the raster parts in dots per inch, 10 to 600 "
                            "(default 110)")
-    plot.set_defaults(handler=_plot)
+    plot.set_defaults(handler=plot_command)
     info = commands.add_parser("info", help="say what is in a run or sweep store")
     info.add_argument("store", metavar="STORE")
     info.add_argument("--json", action="store_true",
                       help="a run store's content as a JSON document")
-    info.set_defaults(handler=_info)
+    info.set_defaults(handler=info_command)
     check = commands.add_parser("check", help="read every committed chunk of a store and "
                                 "report missing or damaged ones (exit 3 if any)")
     check.add_argument("store", metavar="STORE")
-    check.set_defaults(handler=_check)
+    check.set_defaults(handler=check_command)
     sweep = commands.add_parser("sweep", help="run a parameter sweep on Dask into one store")
     sweep.add_argument("sweep", metavar="SWEEP.toml",
                        help="a base description ([base]) and axes ([product], [zip])")
@@ -1034,7 +319,7 @@ def build_parser() -> argparse.ArgumentParser:
                             "stopped by a health check (default: keep them failed)")
     sweep.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                        help="progress bar (default: only on a terminal)")
-    sweep.set_defaults(handler=_sweep)
+    sweep.set_defaults(handler=sweep_command)
     advise = commands.add_parser("advise", help="the cheapest configuration for a scene and "
                                  "tolerance")
     advise.add_argument("scene", metavar="SCENE.toml",
@@ -1044,7 +329,7 @@ def build_parser() -> argparse.ArgumentParser:
     advise.add_argument("--out", metavar="DESCRIPTION.toml",
                         help="write the proposed run description")
     advise.add_argument("--json", action="store_true", help="machine-readable output")
-    advise.set_defaults(handler=_advise)
+    advise.set_defaults(handler=advise_command)
     limits = commands.add_parser("limits", help="the explicit time-step limit of a run "
                                  "and its estimated cost")
     limits.add_argument("source", metavar="STUDY_OR_TOML",
@@ -1057,7 +342,7 @@ def build_parser() -> argparse.ArgumentParser:
     limits.add_argument("--no-cost", action="store_true",
                         help="leave out the cost estimate (which builds the operator and "
                              "times one step)")
-    limits.set_defaults(handler=_limits)
+    limits.set_defaults(handler=limits_command)
     for name, command in commands.choices.items():
         command.description, examples = COMMAND_HELP[name]
         command.epilog = f"examples:\n{examples}"
@@ -1075,19 +360,12 @@ def _partition(text: str) -> list[int]:
     return counts
 
 
-def _processes():
-    """(size, rank) of the processes a launcher started (:func:`granframe.parallel.launched`,
-    read from the environment: nothing is imported)."""
-    from granframe.parallel import launched
-
-    size, rank, _ = launched()
-    return size, rank
-
-
 def main(argv: list[str] | None = None) -> int:
+    """Run the command ``argv`` (the process's arguments when None); the exit status, 2
+    for a refusal and 130 when interrupted."""
     args = build_parser().parse_args(argv)
     try:      # the imports made here are inside the handling of a Ctrl-C too
-        size, rank = _processes()
+        size, rank = processes()
         if size > 1 and args.command != "run":
             if rank == 0:
                 print(f"granframe: error: granframe {args.command} runs in one process; "
