@@ -866,10 +866,10 @@ class Problem(abc.ABC):
 
     @property
     @abc.abstractmethod
-    def owned(self) -> "slice | None":
+    def owned(self) -> slice:
         """The cells this process steps and commits, as indices of the store's cell axis;
-        None where the store has no cell axis (a space-homogeneous run: its one cell is
-        the whole f)."""
+        ``slice(None)``, the whole f, where the store has no cell axis (a
+        space-homogeneous run: its one cell is f)."""
 
     @abc.abstractmethod
     def layout(self):

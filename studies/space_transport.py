@@ -28,7 +28,7 @@ jumps at the walls guessed (:func:`initial_profile`). At the last step, in the b
 centred differences, each against its CE value at the cell's T. The steady state is checked
 by the uniformity of the energy flux q_1 + P_12 u_2 and of P_12 over the bulk, and by their
 change over the last half of the run. The resolution indicators of the last snapshot
-(:meth:`granframe.space.fields.FieldMoments.resolution`) come with each row.
+(:meth:`granframe.velocity.moments.FieldMoments.resolution`) come with each row.
 
 ``python studies/space_transport.py --out DIR --modes 16,20,24 [--dt 0.01]`` runs (one N
 at a time, each writing ``DIR/run_N{N}_dt{dt}.npz``) and writes ``DIR/transport.csv`` and
@@ -129,7 +129,7 @@ def table(out: pathlib.Path) -> list[dict]:
     """The rows of transport.csv and transport.md from the runs in ``out``."""
     from granframe.backends import NumpyBackend
     from granframe.run.monitors import cell_resolution_report
-    from granframe.space.fields import FieldMoments
+    from granframe.velocity.moments import FieldMoments
     from granframe.velocity.grid import VelocityGrid
 
     rows = []

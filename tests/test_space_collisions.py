@@ -8,7 +8,7 @@ import pytest
 import granframe as gf
 from granframe.equations.homogeneous import HomogeneousBoltzmann
 from granframe.space.collisions import CellCollisions
-from granframe.space.fields import FieldMoments
+from granframe.velocity.moments import FieldMoments
 
 GRID = gf.VelocityGrid(2, 16, 3.5)
 

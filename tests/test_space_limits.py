@@ -113,7 +113,7 @@ def test_uniform_granular_gas_cools_by_the_homogeneous_law_in_every_cell():
     homogeneous = Simulation(_cooling(False)).run(None, progress=False).dataset
     assert numpy.abs(ds.f.values[-1] - homogeneous.f.values[-1][None]).max() <= 1e-14 * \
         numpy.abs(homogeneous.f.values[-1]).max()
-    # the recorded T counts the node v_1 = -L as +-L (granframe.space.fields), the
+    # the recorded T counts the node v_1 = -L as +-L (granframe.velocity.moments), the
     # homogeneous one as -L: they differ by that node's momentum, 8e-11 here
     assert numpy.abs(T / homogeneous.temperature.values[:, None] - 1).max() < 1e-9
 

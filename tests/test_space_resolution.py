@@ -14,7 +14,7 @@ from granframe.backends import NumpyBackend
 from granframe.run.description import RunDescription
 from granframe.run.runner import RunState, Simulation
 from granframe.run.storage import RunStore, describe
-from granframe.space.fields import FieldMoments
+from granframe.velocity.moments import FieldMoments
 from granframe.velocity.estimators import pair_share_beyond, spectral_tail
 
 

@@ -32,7 +32,7 @@ refused.
 
 A space run takes one scale for the whole interval, f(t, x, v) = \omega^d g(s, x, \omega v)
 about a gas at rest along x: the transport becomes \omega^{\kappa - 1} \xi_1 \partial_x g
-(:meth:`Rescaling.transport_time`; :class:`~granframe.space.collisions.RescaledCellCollisions`).
+(:meth:`Rescaling.transport_time`; :class:`RescaledBoltzmann` with ``transport_axes``).
 
 References: F. Filbet, T. Rey, "A rescaling velocity method for dissipative kinetic
 equations. Applications to granular media", J. Comput. Phys. 248 (2013) 177-199;
@@ -48,6 +48,7 @@ import numpy
 
 from granframe import validators as check
 from granframe.abc import Part
+from granframe.backends import to_host
 from granframe.equations.homogeneous import HomogeneousBoltzmann
 from granframe.model.restitution import is_elastic
 
@@ -238,12 +239,34 @@ class SelfSimilarDrift:
         return fft.inverse().copy()
 
 
+#: Largest mean velocity along a space axis, relative to the thermal speed, of the cells of
+#: a rescaled space run: 1e-10 admits the round-off of f0's samples (a sine's mean) and
+#: refuses any flow, whose transport would not scale with the velocities.
+DRIFT_TOLERANCE = 1e-10
+
+
 class RescaledBoltzmann(HomogeneousBoltzmann):
-    r"""d_s g = Q(g, g)/eps - a_0 div((xi - u) chi g): free cooling in self-similar variables.
+    r"""d_s g = Q(g, g)/eps - a_0 div((xi - u) chi g): free cooling in self-similar
+    variables, for one distribution or a batch (the cells of a space run).
 
     See the module notes for the formulation and :class:`SelfSimilarDrift` for the
-    tapered drift chi. Mass is conserved exactly, and momentum and energy to the
-    accuracy of the collision operator.
+    tapered drift chi. One scale \omega(s) = e^{a_0 s} for the whole batch, about the mean
+    velocity u of all its distributions, and a_0 the rate that keeps the total energy of
+    g stationary at s = 0,
+
+    .. math:: a_0 = \frac{\sum_c \int Q(g_c, g_c) |\xi - u|^2 d\xi / \varepsilon}
+                         {\sum_c \int \nabla_\xi\cdot((\xi - u)\chi g_c) |\xi - u|^2 d\xi},
+
+    each sum over every distribution in order (the cells of every process in rank order:
+    the same a_0 on any number of processes). u is the mean velocity with the node -L at
+    -L, except along the ``transport_axes`` first axes of a space run, where it must
+    vanish (to :data:`DRIFT_TOLERANCE` of the thermal speed, the node -L as its halves,
+    as the transport carries it), so that the transport stays
+    \omega^{\kappa - 1} \xi \cdot \nabla_x g (:meth:`Rescaling.transport_time`). Mass is
+    conserved exactly, momentum and energy to the accuracy of the collision operator;
+    the drift moves a distribution's momentum towards (1 - a_0 ds) of its deviation from
+    u, so a collision step keeps only the mass (with the conservative correction,
+    :attr:`invariants`) against round-off.
 
     Parameters
     ----------
@@ -251,32 +274,73 @@ class RescaledBoltzmann(HomogeneousBoltzmann):
         Its restitution law must not depend on the relative speed (e is the same at
         every scale), and its kernel must have lambda + 2 gamma >= 0.
     initial : array
-        g(0) = f0 (backend array): fixes u and a_0.
+        g(0) = f0 (backend array), one distribution or a batch (..., *grid.shape): the
+        owned cells of a space run; fixes u and a_0.
     knudsen, penalty : float
         As for :class:`~granframe.equations.homogeneous.HomogeneousBoltzmann`.
-    dissipation : float or None
-        int Q(g0, g0) |xi - u|^2 dxi, the numerator of a_0 (before the 1/eps); None: from
-        the operator, one evaluation of Q. :func:`granframe.run.problems.time_step_limit`
-        gives an estimate in closed form, to have the step limit without the operator.
+    dissipation : float, array or None
+        int Q(g0, g0) |xi - u|^2 dxi (before the 1/eps) of each distribution of
+        ``initial``; None: from the operator, one batched evaluation of Q.
+        :func:`granframe.run.problems.time_step_limit` gives it in closed form, to have
+        the step limit without the operator.
+    communicator : Communicator or None
+        The processes whose batches together are all the cells (None: this batch alone).
+    transport_axes : int
+        The space dimensions of the run (0: space-homogeneous), the velocity axes along
+        which u must vanish.
     """
 
     def __init__(self, operator, initial, knudsen: float = 1.0, penalty: float = 2.0,
-                 dissipation: float | None = None):
-        kernel = operator.kernel
-        degree = check_rescalable(kernel, operator.restitution, 0.0, "RescaledBoltzmann")
+                 dissipation=None, communicator=None, transport_axes: int = 0):
+        owner = "RescaledBoltzmann"
+        degree = check_rescalable(operator.kernel, operator.restitution, 0.0, owner)
         super().__init__(operator, 0.0, knudsen, penalty)
-        grid, backend = operator.grid, operator.backend
-        xp = backend.xp
-        velocity = tuple(float(c) for c in grid.bulk_velocity(initial, xp))
-        check_drift_velocity(kernel, velocity, "RescaledBoltzmann", "initial")
-        self.drift = SelfSimilarDrift(grid, backend, velocity)
-        if dissipation is None:
-            dissipation = float(xp.sum(operator(initial) * self.drift.energy_weight))
-        transport = float(xp.sum(self.drift(initial) * self.drift.energy_weight))
-        rate = cooling_rate(dissipation / self.knudsen, transport,
-                            is_elastic(operator.restitution, grid), "RescaledBoltzmann")
-        self.rescaling = Rescaling(rate, degree, velocity)
+        grid = operator.grid
+        gather = ((lambda part: [part]) if communicator is None
+                  else communicator.allgather_object)
+        flat = initial.reshape((-1,) + tuple(grid.shape))
+        mean = self._mean_velocity(flat, gather, transport_axes, owner)
+        check_drift_velocity(operator.kernel, mean, owner, "initial")
+        self.drift = SelfSimilarDrift(grid, operator.backend, mean)
+        dissipation = (self._weighted(operator(flat)) if dissipation is None
+                       else numpy.asarray(dissipation, dtype=float).reshape(-1))
+        transport = self._weighted(self.drift(flat))
+        dissipation = numpy.concatenate(gather(dissipation))
+        transport = numpy.concatenate(gather(transport))
+        rate = cooling_rate(float(dissipation.sum()) / self.knudsen, float(transport.sum()),
+                            is_elastic(operator.restitution, grid), owner)
+        self.rescaling = Rescaling(rate, degree, mean)
         self._drift_radius = rate * self.drift.unit_radius
+        self.invariants = ("mass",) if self.invariants else ()
+
+    def _mean_velocity(self, flat, gather, transport_axes: int, owner: str) -> tuple:
+        """u of all the distributions (the class notes), refused where it does not vanish
+        along the transport axes."""
+        halves, periodic = (
+            [to_host(a) for a in self.moments.primitives(flat, node=node)[:3]]
+            for node in ("halves", "periodic"))
+        rho = numpy.concatenate(gather(halves[0]))
+        along, across = (numpy.concatenate(gather(part[0][:, None] * part[1]))
+                         for part in (halves, periodic))
+        heat = numpy.concatenate(gather(halves[0] * halves[2]))
+        thermal = math.sqrt(float(heat.sum() / rho.sum()))
+        for axis in range(transport_axes):
+            value = float(along[:, axis].sum() / rho.sum())
+            if not abs(value) <= DRIFT_TOLERANCE * thermal:
+                name = "u_1" if axis == 0 else f"u_{axis + 1}"
+                check.reject(owner, "initial", f"f0 with mean velocity {name} = {value:.6g}",
+                             f"must have mean velocity 0 along x (to {DRIFT_TOLERANCE:g} of "
+                             f"the thermal speed {thermal:.6g}) in a rescaled space run: the "
+                             "transport of g is then omega^(kappa - 1) xi_1 d_x g; take the "
+                             "frame that moves with the gas")
+        return ((0.0,) * transport_axes
+                + tuple(float(m) for m in across[:, transport_axes:].sum(axis=0) / rho.sum()))
+
+    def _weighted(self, f):
+        """int f |xi - u|^2 dxi of every distribution of f (B, *grid.shape), on the host."""
+        d = self.operator.grid.dimension
+        axes = tuple(range(f.ndim - d, f.ndim))
+        return to_host(self.operator.backend.xp.sum(f * self.drift.energy_weight, axis=axes))
 
     def divergence(self, g):
         r"""div((xi - u) chi g) (:class:`SelfSimilarDrift`)."""

@@ -339,7 +339,7 @@ def describe(entry: dict, time: float) -> list[str]:
     return lines
 
 
-#: The per-cell indicators of :meth:`granframe.space.fields.FieldMoments.resolution`, in
+#: The per-cell indicators of :meth:`granframe.velocity.moments.FieldMoments.resolution`, in
 #: its column order.
 CELL_INDICATORS = ("spectral_tail", "pairs_beyond_support", "negative_mass_fraction",
                    "heat_flux_shell")
@@ -354,7 +354,7 @@ def cell_resolution_report(grid, indicators, centres, tolerance: float) -> dict:
     r"""The resolution report of a space run from the indicators of every cell.
 
     ``indicators`` (cells, 4), the columns of :data:`CELL_INDICATORS`
-    (:meth:`~granframe.space.fields.FieldMoments.resolution`); ``centres`` the cell centres.
+    (:meth:`~granframe.velocity.moments.FieldMoments.resolution`); ``centres`` the cell centres.
     The report of a space-homogeneous run
     (:func:`~granframe.velocity.estimators.resolution_entry`) is made from the largest
     value of each indicator over the cells, and each warning names the cell it comes from.
@@ -409,7 +409,7 @@ class CellEdgeMonitors(AccuracyMonitors):
     def shape(self, shares, resolution: dict | None = None) -> dict:
         """The largest ``edge_mass`` and ``edge_energy`` over the cells from ``shares``
         (cells, 2), each cell's about its own bulk velocity (computed for every cell at
-        once on the backend, :meth:`granframe.space.fields.FieldMoments.edge_shares`;
+        once on the backend, :meth:`granframe.velocity.moments.FieldMoments.edge_shares`;
         none when r_e <= 0, ``shares`` None), and ``spectral_tail``, the tail error of the
         worst cell of ``resolution`` (:func:`cell_resolution_report`)."""
         values = {}

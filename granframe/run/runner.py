@@ -524,13 +524,10 @@ class StorageObserver(Observer):
 
 
 def _commit(store: RunStore, problem, snapshots, records: dict, progress: dict) -> None:
-    """A commit of ``snapshots`` and ``records``: by all the processes of the run together
-    (:meth:`RunStore.commit_together`, each its owned cells), in one call where the store
-    has no cell axis (a space-homogeneous run, ``problem.owned`` None)."""
-    if problem.owned is None:
-        store.commit(snapshots, records, progress)
-    else:
-        store.commit_together(problem.communicator, problem.owned, snapshots, records, progress)
+    """A commit of ``snapshots`` and ``records`` by all the processes of the run together,
+    each its owned cells (:meth:`RunStore.commit_together`; a serial run is the case of
+    one process, a space-homogeneous run that of one process owning all of f)."""
+    store.commit_together(problem.communicator, problem.owned, snapshots, records, progress)
 
 
 class Simulation:
@@ -787,7 +784,7 @@ class Simulation:
                              [], [], 0.0, started)
             first = Records(problem.record_names)
             first.add(0, 0.0, 0.0, record)
-            f0 = problem.f0 if problem.owned is None else problem.f0[problem.owned]
+            f0 = problem.f0[problem.owned]
             _commit(store, problem, [(0.0, f0)], first.columns,
                     {"status": "running", "step": 0, "time": 0.0, "mass0": state.mass0,
                      "dt_next": state.dt_next, "resumes": state.resumes})

@@ -84,7 +84,7 @@ from granframe.velocity.estimators import (TAIL_ERROR_FACTOR, mass_beyond, pair_
 from granframe.model.exact import heated_maxwell_law
 from granframe.velocity.grid import VelocityGrid
 from granframe.model.initial import check_fits, face_share
-from granframe.space.fields import FieldMoments
+from granframe.velocity.moments import FieldMoments
 from granframe.space.exact import euler_riemann_star
 from granframe.space.initial import RiemannProblem, SpaceCondition
 from granframe.velocity.quadratures import LEBEDEV_ORDERS, CircleTrapezoid, Lebedev

@@ -23,7 +23,7 @@ import numpy
 
 from granframe import validators as check
 from granframe.abc import Grid
-from granframe.backends import to_host
+from granframe.velocity.moments import FieldMoments
 from granframe.errors import AliasingWarning
 
 #: Factor c in the anti-aliasing bound L >= c S of the review, c = (3 + sqrt 2)/2.
@@ -295,23 +295,10 @@ class VelocityGrid(Grid):
         return 0.5 * numpy.array([float(xp.sum(ci * c2f)) for ci in c]) * self.cell_volume
 
     def moments(self, f, xp=numpy) -> dict:
-        """Every moment the runner records, from one pass over f and one transfer to the host.
-
-        The raw moments M_a = h^d sum_j v_j^a f_j for all exponents a = (a_1, ..., a_d) with
-        each a_i <= 4 are d contractions of f with the power matrix (v_j / L)^k, k = 0..4
-        (:meth:`power_matrix`; one N x 5 matrix per axis, the velocities scaled by L so no
-        power overflows); stacked with min f, sum |f| and sum max(-f, 0), they reach the
-        host as one array. The central moments C_a = h^d sum_j (v_j - u)^a f_j follow on
-        the host from the raw ones by the binomial shift of each axis,
-
-            C_a = sum_{b <= a} prod_i binom(a_i, b_i) (-u_i)^{a_i - b_i} M_b,
-
-        and from them, with e_i the unit exponent of axis i,
-
-            T = sum_i C_{2 e_i} / (d rho),
-            kappa = rho sum_{i,k} C_{2 e_i + 2 e_k} / (sum_i C_{2 e_i})^2,
-            P_ij = C_{e_i + e_j}                  (the pressure tensor),
-            q_i = (1/2) sum_k C_{e_i + 2 e_k}     (the heat flux).
+        """Every moment the runner records of f, from one pass over f and one transfer to
+        the host: :meth:`granframe.velocity.moments.FieldMoments.distribution` (the moment
+        service of every run, its basis made once per grid and namespace), with the node
+        -L at -L as in :meth:`momentum`.
 
         Returns
         -------
@@ -331,54 +318,7 @@ class VelocityGrid(Grid):
         accuracy to cancellation, nothing at u = 0.
         """
         self.check_shape(f)
-        d = self.dimension
-        powers = self.power_matrix(xp)
-        raw = f
-        for _ in range(d):    # contract the leading axis; its exponent index goes last
-            raw = xp.tensordot(raw, powers, axes=([0], [0]))
-        extremes = xp.stack([xp.min(f), xp.sum(xp.abs(f)), xp.sum(xp.maximum(-f, 0.0))])
-        stacked = xp.concatenate([xp.reshape(raw, (-1,)),
-                                  xp.asarray(extremes, dtype=raw.dtype)])
-        host = numpy.asarray(to_host(stacked), dtype=numpy.float64)
-        scales = self.half_width ** numpy.arange(5.0)
-        M = host[:5 ** d].reshape((5,) * d) * self.cell_volume
-        for axis in range(d):
-            M = M * numpy.reshape(scales, [5 if a == axis else 1 for a in range(d)])
-        min_f, absolute, negative = (float(x) for x in host[5 ** d:])
-
-        with numpy.errstate(all="ignore"):
-            rho = float(M[(0,) * d])
-            unit = numpy.eye(d, dtype=int)
-            momentum = numpy.array([M[tuple(unit[i])] for i in range(d)])
-            u = momentum / rho if rho != 0.0 else numpy.full(d, math.nan)
-            C = _binomial_shift(M, u)
-
-            def central(exponent):
-                return float(C[tuple(exponent)])
-
-            second = sum(float(M[tuple(2 * unit[i])]) for i in range(d))      # int |v|^2 f
-            central2 = sum(central(2 * unit[i]) for i in range(d))
-            central4 = sum(central(2 * unit[i] + 2 * unit[k]) for i in range(d)
-                           for k in range(d))
-            pressure = numpy.array([[central(unit[i] + unit[j]) for j in range(d)]
-                                    for i in range(d)])
-            flux = numpy.array([0.5 * sum(central(unit[i] + 2 * unit[k]) for k in range(d))
-                                for i in range(d)])
-            kurtosis = (rho * central4 / (central2 * central2)
-                        if rho != 0.0 and central2 != 0.0 else math.nan)
-        return {"mass": rho, "momentum": momentum, "bulk_velocity": u,
-                "kinetic_energy": 0.5 * second,
-                "temperature": central2 / (d * rho) if rho != 0.0 else math.nan,
-                "kurtosis": float(kurtosis),
-                "sonine_a2": float(d / (d + 2.0) * kurtosis - 1.0),
-                "min_f": min_f,
-                "negative_mass_fraction": negative / absolute if absolute != 0.0 else math.nan,
-                "pressure_tensor": pressure, "heat_flux": flux}
-
-    def power_matrix(self, xp=numpy):
-        """(v_j / L)^k for j = 0..N-1 and k = 0..4, an N x 5 array in ``xp`` (computed once
-        per grid and namespace): the weights of the raw moments of :meth:`moments`."""
-        return _power_matrix(self, xp)
+        return _moment_service(self, xp).distribution(f)
 
     def maxwellian(self, density=1.0, velocity=None, temperature=1.0, xp=numpy):
         """M(v) = rho (2 pi T)^{-d/2} exp(-|v-u|^2/(2T)) sampled on the grid."""
@@ -396,20 +336,6 @@ class VelocityGrid(Grid):
 
 
 @functools.lru_cache(maxsize=16)
-def _power_matrix(grid: VelocityGrid, xp):
-    x = grid.points(numpy) / grid.half_width
-    return xp.asarray(x[:, None] ** numpy.arange(5.0))
-
-
-def _binomial_shift(raw, shift):
-    """Central moments C_a = sum_{b <= a} prod_i binom(a_i, b_i) (-s_i)^{a_i - b_i} M_b
-    from the raw moments ``raw`` (M_a, a 5 x ... x 5 NumPy array) about the point ``shift``
-    (s, length d): one 5 x 5 lower-triangular matrix per axis."""
-    k = numpy.arange(5)
-    binomial = numpy.array([[math.comb(a, b) for b in k] for a in k], dtype=float)
-    central = raw
-    for axis, s in enumerate(shift):
-        exponents = numpy.clip(k[:, None] - k[None, :], 0, None)
-        matrix = numpy.where(k[:, None] >= k[None, :], binomial * (-s) ** exponents, 0.0)
-        central = numpy.moveaxis(numpy.tensordot(matrix, central, axes=([1], [axis])), 0, axis)
-    return central
+def _moment_service(grid: VelocityGrid, xp) -> FieldMoments:
+    """The moment service of ``grid`` in the namespace ``xp``, its basis made once."""
+    return FieldMoments(grid, 1.0, xp)

@@ -72,9 +72,10 @@ class HomogeneousProblem(Problem):
         self.ranges = ((0, 1),)
 
     @property
-    def owned(self):
-        """None: the store of a space-homogeneous run has no cell axis."""
-        return None
+    def owned(self) -> slice:
+        """slice(None): the store of a space-homogeneous run has no cell axis, its one
+        cell is the whole f."""
+        return slice(None)
 
     def layout(self):
         return homogeneous_layout(self.grid)

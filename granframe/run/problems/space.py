@@ -9,7 +9,7 @@
   cells in one batched call per stage, transport);
 - after every step the fields of every cell, the totals, and the mass, momentum and
   energy that entered through each wall over the step are recorded (:func:`space_layout`), all from
-  one device vector (:class:`~granframe.space.fields.FieldMoments`) and one transfer;
+  one device vector (:class:`~granframe.velocity.moments.FieldMoments`) and one transfer;
 - a snapshot is f(x, v) of every cell, chunked by block;
 - at each output point the resolution indicators of every cell (those of a homogeneous
   run and the heat flux of the outermost shell of modes) and the accuracy monitors (the
@@ -28,6 +28,7 @@ import numpy
 from granframe.abc import Problem, deferred_checks
 from granframe.backends import NumpyBackend, to_host
 from granframe.equations.conservative import ConservativeCorrection
+from granframe.equations.rescaled import RescaledBoltzmann
 from granframe.memory import check_run_memory
 from granframe.model.initial import check_fits, check_projection
 from granframe.parallel import Halo, SerialCommunicator, partition, world
@@ -35,10 +36,11 @@ from granframe.run.description import cell_divisors
 from granframe.run.monitors import CELL_INDICATORS, CellEdgeMonitors, cell_resolution_report
 from granframe.run.problems.parts import build_operator, check_step
 from granframe.run.storage import STEP_RECORDS, Layout, RecordArray
-from granframe.space.collisions import CellCollisions, RescaledCellCollisions, SplitStep
+from granframe.space.collisions import (CellCollisions, FreeFlight, LevelledModels,
+                                         SingleModel, SplitStep)
 from granframe.space.domain import Domain
 from granframe.registry import default_registries
-from granframe.space.fields import FIELDS, TOTALS, FieldMoments
+from granframe.velocity.moments import FIELDS, TOTALS, FieldMoments
 from granframe.space.hierarchy import HierarchyContext, HybridCollisions
 from granframe.space.initial import initial_cells
 from granframe.space.transport import Transport
@@ -160,12 +162,14 @@ class SpaceProblem(Problem):
         self.fields = FieldMoments(grid, self.domain.dx, xp)
         #: the hierarchy of collision models (None: the full operator in every cell)
         self.hierarchy = None if outline else self._hierarchy()
-        self.integrator = SplitStep(self.collision_integrator, self.transport, self.hierarchy,
-                                    self.rescaling)
+        collide = (FreeFlight() if not collide else SingleModel(self.collision_integrator,
+                                                                self.equation)
+                   if self.hierarchy is None else LevelledModels(self.hierarchy))
+        self.integrator = SplitStep(collide, self.transport, self.rescaling)
 
     def _rescaled(self, outline: bool):
-        """The :class:`~granframe.space.collisions.RescaledCellCollisions` of the owned
-        cells of f0; with ``outline`` its a_0 from the closed-form dissipation of every cell
+        """The :class:`~granframe.equations.rescaled.RescaledBoltzmann` of the owned cells of
+        f0 (u = 0 along x); with ``outline`` its a_0 from the closed-form dissipation of every cell
         (:meth:`~granframe.equations.conservative.ConservativeCorrection.dissipation` of the
         :class:`~granframe.stepping.stability.OperatorOutline`)."""
         d, xp = self.description, self.backend.xp
@@ -174,8 +178,9 @@ class SpaceProblem(Problem):
         if outline:
             correction = ConservativeCorrection(self.operator)
             dissipation = numpy.array([float(correction.dissipation(f)) for f in cells])
-        return RescaledCellCollisions(self.operator, xp.asarray(cells), d.knudsen,
-                                      communicator=self.communicator, dissipation=dissipation)
+        return RescaledBoltzmann(self.operator, xp.asarray(cells), d.knudsen,
+                                 dissipation=dissipation, communicator=self.communicator,
+                                 transport_axes=1)
 
     def _hierarchy(self):
         """The :class:`~granframe.space.hierarchy.HybridCollisions` of ``space.hierarchy``,
@@ -320,7 +325,7 @@ class SpaceProblem(Problem):
 
     def report(self, state, record, monitors):
         """The resolution indicators of every cell
-        (:meth:`~granframe.space.fields.FieldMoments.resolution`) and the edge shares of
+        (:meth:`~granframe.velocity.moments.FieldMoments.resolution`) and the edge shares of
         every cell about its own velocity, computed on the backend and taken to the host in
         one transfer; the report names the worst cells
         (:func:`~granframe.run.monitors.cell_resolution_report`), the largest values go into

@@ -1,29 +1,33 @@
-r"""The reductions of a space run: the moments of every cell in one pass on the backend.
+r"""The moment service: the moments of a batch of distributions in one pass on the backend.
 
-For f of shape (cells, *grid.shape) the raw moments of each cell are one matrix product
-f (cells x N^d) times the basis (N^d x m) of 1, v_i, v_i v_j (i <= j), v_i |v|^2 and the
-indicator of the node v_1 = -L, weighted by the cell volume of the velocity grid; from them,
-with rho u = J,
+For f of shape (cells, *grid.shape) (a space run's cells; a space-homogeneous run or a
+single distribution is a batch of one) the raw moments of each are one matrix product
+f (cells x N^d) times the basis (N^d x m) of 1, v_i, v_i v_j (i <= j), v_i |v|^2, |v|^4
+and the indicator of the node v_1 = -L, weighted by the cell volume of the velocity grid;
+from them, with rho u = J,
 
 .. math:: P_{ij} = M_{ij} - \rho u_i u_j,\qquad T = \frac{\operatorname{tr} P}{d\,\rho},\qquad
           q_i = \tfrac12\bigl(M^{(3)}_i - 2 u_j M_{ij} - u_i \operatorname{tr} M
           + 2 \rho u_i |u|^2\bigr),
 
-the central moments of granframe's conventions (the homogeneous ones of
-:meth:`~granframe.velocity.grid.VelocityGrid.moments`, cell by cell), with one convention
-for the node v_1 = -L, which the periodic grid shares between -L and +L and whose content
-the transport moves half each way (:func:`~granframe.space.transport.upwind_speeds`): it
-counts as its two halves, v_1 = 0 in the odd powers of v_1 (momentum, P_1j for j != 1,
-q_i) and v_1^2 = L^2 in the even ones. The fields are then those of what the transport
-carries; as -L (the homogeneous convention) that node's content, which the collision
-operator's ringing puts there next to walls, would show as a bulk velocity and a heat flux.
-The BGK penalisation alone takes the momentum with the node as -L, in which the collision
-operator conserves it; the last basis column, the node's content, turns one into the other.
+the central moments of granframe's conventions. The node v_1 = -L, which the periodic
+grid shares between -L and +L, has one documented rule, with two readings of the same
+raw moments (the last basis column, the node's content, turns one into the other):
 
-:class:`FieldMoments` is the one place a space run takes moments: the recorded fields and
-totals (with the wall totals, one device->host transfer per step), the density, velocity,
-temperature and energy of every cell on the device for the BGK penalisation, and the edge
-shares of every cell at output points.
+- ``"halves"``, the fields of a space run: the node counts as its two halves, v_1 = 0 in
+  the odd powers of v_1 (momentum, P_1j for j != 1, q_i) and v_1^2 = L^2 in the even ones,
+  as the transport carries it (half each way, :func:`~granframe.space.transport.upwind_speeds`);
+  as -L, that node's content, which the collision operator's ringing puts there next to
+  walls, would show as a bulk velocity and a heat flux;
+- ``"periodic"``, what the collision operator conserves: the node at -L (the grid's own
+  :meth:`~granframe.velocity.grid.VelocityGrid.momentum`); the BGK penalisation, the
+  restoration of the conserved moments and the conservative correction take it.
+
+:class:`FieldMoments` is the one place a run takes moments of a batch: the recorded fields
+and totals (with the wall totals, one device->host transfer per step), the density,
+velocity, temperature and energy of every cell on the device for the penalisation, the
+hierarchy and the collision step, the edge shares and the resolution indicators of every
+cell at output points.
 """
 
 from __future__ import annotations
@@ -64,7 +68,15 @@ class FieldMoments:
         columns = ([numpy.ones_like(odd)] + mesh
                    + [squared - sum(m * m for m in mesh[1:]) if (i, j) == (0, 0)
                       else mesh[i] * mesh[j] for i, j in self.pairs]
-                   + [m * squared for m in mesh] + [edge.astype(float)])
+                   + [m * squared for m in mesh] + [squared * squared]
+                   + [edge.astype(float)] + [edge * m for m in mesh[1:]] + [edge * squared])
+        count = len(self.pairs)
+        #: the columns of the raw moments: J_i, M_ij (pairs), M3_i = int v_i |v|^2 f, M4 =
+        #: int |v|^4 f, and the node -L's content times 1, v_2..v_d and |v|^2
+        self.columns = {"momentum": slice(1, 1 + d), "second": slice(1 + d, 1 + d + count),
+                        "third": slice(1 + d + count, 1 + 2 * d + count),
+                        "fourth": 1 + 2 * d + count,
+                        "edge": slice(2 + 2 * d + count, 3 + 3 * d + count)}
         self.basis = xp.asarray(numpy.stack(columns, axis=1) * grid.cell_volume)
         #: the nodes v (d, N^d) with v_1 = -L at the node -L, and |v|^2 (N^d), for the
         #: edge shares (where the collision operator sees that node)
@@ -95,7 +107,7 @@ class FieldMoments:
         rho = raw[:, 0]
         momentum = raw[:, 1:1 + d]
         if node == "periodic":
-            shift = -self.grid.half_width * raw[:, -1]
+            shift = -self.grid.half_width * raw[:, self.columns["edge"].start]
             momentum = self.xp.concatenate([(momentum[:, 0] + shift)[:, None],
                                             momentum[:, 1:]], axis=1)
         trace = raw[:, self._diagonal].sum(axis=1)
@@ -119,23 +131,10 @@ class FieldMoments:
     def unpack(self, vector, cells: int) -> dict:
         """The fields and totals (:data:`FIELDS`, :data:`TOTALS`) from :meth:`packed`'s vector
         on the host; the values beyond them as ``extra``."""
-        d, m = self.d, self.basis.shape[1]
-        raw = vector[:cells * m].reshape(cells, m)
+        m = self.basis.shape[1]
         minimum, negative, absolute = vector[cells * m:cells * m + 3]
-        rho = raw[:, 0]
-        momentum = raw[:, 1:1 + d]
-        second = numpy.zeros((cells, d, d))
-        for k, (i, j) in enumerate(self.pairs):
-            second[:, i, j] = second[:, j, i] = raw[:, 1 + d + k]
-        third = raw[:, 1 + d + len(self.pairs):-1]
-        with numpy.errstate(divide="ignore", invalid="ignore"):
-            u = momentum / rho[:, None]
-            pressure = second - rho[:, None, None] * u[:, :, None] * u[:, None, :]
-            trace = numpy.trace(second, axis1=1, axis2=2)
-            temperature = numpy.trace(pressure, axis1=1, axis2=2) / (d * rho)
-            heat = 0.5 * (third - 2.0 * numpy.einsum("cj,cij->ci", u, second)
-                          - u * trace[:, None]
-                          + 2.0 * rho[:, None] * u * (u * u).sum(axis=1)[:, None])
+        rho, u, pressure, temperature, heat, trace = self._fields(
+            self.central(vector[:cells * m].reshape(cells, m), "halves"))
         return {"density": rho, "velocity": u, "temperature": temperature,
                 "pressure_tensor": pressure, "heat_flux": heat,
                 "mass": float(rho.sum() * self.dx),
@@ -143,6 +142,89 @@ class FieldMoments:
                 "min_f": float(minimum),
                 "negative_mass_fraction": float(negative / absolute) if absolute > 0 else 0.0,
                 "extra": vector[cells * m + 3:]}
+
+    def central(self, raw, node: str) -> dict:
+        r"""The raw moments of every cell in the reading ``node`` of the node -L (module
+        notes), on the host: ``density`` (cells,), ``momentum`` (cells, d), ``second``
+        M_ij (cells, d, d), ``third`` M3_i (cells, d) and ``fourth`` M4 (cells,), from the
+        raw moments ``raw`` (cells, m) on the host.
+
+        "periodic" takes the node at v_1 = -L: with E_a the node's content times
+        a = 1, v_j (j > 1), |v|^2, J_1 - L E_1, M_1j - L E_{v_j} (j > 1) and
+        M3_1 - L E_{|v|^2}; the even powers of v_1 are the same in both readings."""
+        d, columns, cells = self.d, self.columns, raw.shape[0]
+        momentum = numpy.array(raw[:, columns["momentum"]], dtype=float)
+        second = numpy.zeros((cells, d, d))
+        for k, (i, j) in enumerate(self.pairs):
+            second[:, i, j] = second[:, j, i] = raw[:, columns["second"].start + k]
+        third = numpy.array(raw[:, columns["third"]], dtype=float)
+        if node == "periodic":
+            edge = raw[:, columns["edge"]]
+            L = self.grid.half_width
+            momentum[:, 0] -= L * edge[:, 0]
+            for j in range(1, d):
+                second[:, 0, j] -= L * edge[:, j]
+                second[:, j, 0] = second[:, 0, j]
+            third[:, 0] -= L * edge[:, -1]
+        return {"density": raw[:, 0], "momentum": momentum, "second": second,
+                "third": third, "fourth": raw[:, columns["fourth"]]}
+
+    @staticmethod
+    def _fields(moments: dict) -> tuple:
+        """rho, u, P, T, q and tr M of every cell from :meth:`central`'s moments (host)."""
+        rho, second = moments["density"], moments["second"]
+        d = second.shape[1]
+        with numpy.errstate(divide="ignore", invalid="ignore"):
+            u = moments["momentum"] / rho[:, None]
+            pressure = second - rho[:, None, None] * u[:, :, None] * u[:, None, :]
+            trace = numpy.trace(second, axis1=1, axis2=2)
+            temperature = numpy.trace(pressure, axis1=1, axis2=2) / (d * rho)
+            heat = 0.5 * (moments["third"] - 2.0 * numpy.einsum("cj,cij->ci", u, second)
+                          - u * trace[:, None]
+                          + 2.0 * rho[:, None] * u * (u * u).sum(axis=1)[:, None])
+        return rho, u, pressure, temperature, heat, trace
+
+    def distribution(self, f) -> dict:
+        r"""Every moment the record of a space-homogeneous run holds, of one distribution f
+        (*grid.shape), with the node -L at -L ("periodic", the grid's own convention):
+        one pass over f and one device->host transfer (:meth:`packed`).
+
+        Returns ``mass``, ``momentum`` and ``bulk_velocity`` (length d), ``kinetic_energy``,
+        ``temperature``, ``kurtosis``, ``sonine_a2``, ``min_f``, ``negative_mass_fraction``
+        (int max(-f, 0) / int |f|) as floats, ``pressure_tensor`` (d x d) and
+        ``heat_flux`` (d); NaN where a moment is undefined (a zero mass, a zero second
+        central moment). The central fourth moment is
+
+        .. math:: \int |v - u|^4 f = M_4 - 4 u_i M^{(3)}_i + 4 u_i u_j M_{ij}
+                  + 2 |u|^2 \operatorname{tr} M - 4 |u|^2 u\cdot J + |u|^4 \rho,
+
+        and kappa = rho int |v-u|^4 f / (int |v-u|^2 f)^2; a central moment of order n
+        loses about (|u|^2/T)^{n/2} of relative accuracy to cancellation, nothing at u = 0.
+        """
+        m = self.basis.shape[1]
+        vector = numpy.asarray(to_host(self.packed(f[None])), dtype=float)
+        minimum, negative, absolute = vector[m:m + 3]
+        moments = self.central(vector[:m].reshape(1, m), "periodic")
+        rho, u, pressure, temperature, heat, trace = (a[0] for a in self._fields(moments))
+        if rho == 0.0:          # no mass: no velocity, nor any central moment
+            u, pressure, temperature, heat = (numpy.full_like(a, numpy.nan) for a in
+                                              (u, pressure, temperature, heat))
+        with numpy.errstate(divide="ignore", invalid="ignore"):
+            speed = float(u @ u)
+            central2 = float(numpy.trace(pressure))
+            central4 = (moments["fourth"][0] - 4.0 * u @ moments["third"][0]
+                        + 4.0 * u @ moments["second"][0] @ u + 2.0 * speed * trace
+                        - 4.0 * speed * (u @ moments["momentum"][0]) + speed * speed * rho)
+            kurtosis = (rho * central4 / (central2 * central2)
+                        if rho != 0.0 and central2 != 0.0 else numpy.nan)
+        d = self.d
+        return {"mass": float(rho), "momentum": moments["momentum"][0], "bulk_velocity": u,
+                "kinetic_energy": 0.5 * float(trace), "temperature": float(temperature),
+                "kurtosis": float(kurtosis), "sonine_a2": float(d / (d + 2.0) * kurtosis - 1.0),
+                "min_f": float(minimum),
+                "negative_mass_fraction": (float(negative / absolute) if absolute != 0.0
+                                           else numpy.nan),
+                "pressure_tensor": pressure, "heat_flux": heat}
 
     def partial_totals(self, vector, fields: dict) -> numpy.ndarray:
         """What the cells of one process add to the totals: the host vector
@@ -280,7 +362,7 @@ class FieldMoments:
         for k, (i, j) in enumerate(self.pairs):
             second[i][j] = second[j][i] = raw[:, 1 + d + k]
         trace = raw[:, self._diagonal].sum(axis=1)
-        third = raw[:, 1 + d + len(self.pairs):-1]
+        third = raw[:, self.columns["third"]]
         speed = (velocity * velocity).sum(axis=1)
         contracted = xp.stack([sum(velocity[:, j] * second[i][j] for j in range(d))
                                for i in range(d)], axis=1)
