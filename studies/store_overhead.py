@@ -23,6 +23,7 @@ import numpy
 import zarr
 
 import granframe.run.storage as storage
+import granframe.run.storage.layout as layout
 from granframe.velocity.grid import VelocityGrid
 from granframe.run.runner import Simulation, load_description
 from granframe.tools.studykit import command, finish, write_csv, write_summary
@@ -33,15 +34,16 @@ GRIDS = [(2, 64), (3, 32), (3, 64)]
 
 @contextlib.contextmanager
 def codecs(checksum: bool):
-    """Stores created inside use the shipped codecs, or zstd alone."""
-    shipped = storage.codecs
+    """Stores created inside use the shipped codecs, or zstd alone (the codecs of every
+    array the store layout creates, :func:`granframe.run.storage.layout.codecs`)."""
+    shipped = layout.codecs
     if not checksum:
-        storage.codecs = lambda: {"compressors": (zarr.codecs.ZstdCodec(level=0),),
+        layout.codecs = lambda: {"compressors": (zarr.codecs.ZstdCodec(level=0),),
                                   "config": {"write_empty_chunks": True}}
     try:
         yield
     finally:
-        storage.codecs = shipped
+        layout.codecs = shipped
 
 
 def records(n: int) -> dict:
