@@ -57,6 +57,7 @@ from granframe.registry import default_registries
 from granframe.equations.rescaled import check_rescalable
 from granframe.equations.conservative import WEIGHTS as CONSERVATIVE_WEIGHTS
 from granframe.space.initial import SpaceCondition
+from granframe.space.transport import step_limit
 from granframe.velocity.grid import SCALE_RANGE
 
 #: Tolerance on "final_time and snapshot_interval are whole multiples of time_step".
@@ -542,10 +543,9 @@ class Space:
     def transport_limit(self, grid, reconstruction=None) -> float:
         """The largest time step of the transport: each half step dt/2 moves the fastest
         node (max|v_1| = L - h) at most the reconstruction's ``cfl`` cells,
-        dt <= 2 cfl dx / (L - h)."""
+        dt <= 2 cfl dx / (L - h) (:func:`granframe.space.transport.step_limit`)."""
         reconstruction = reconstruction or self.build("reconstruction")
-        return (2.0 * reconstruction.cfl * (self.length / self.cells)
-                / (grid.half_width - grid.spacing))
+        return step_limit(grid, self.length / self.cells, reconstruction.cfl)
 
     def to_dict(self) -> dict:
         return {"cells": self.cells, "length": self.length, "block_cells": self.block_cells,

@@ -56,12 +56,24 @@ def upwind_speeds(grid, xp=numpy):
     return xp.asarray(positive.reshape(shape)), xp.asarray(negative.reshape(shape))
 
 
+def step_limit(grid, dx: float, cfl: float) -> float:
+    r"""The transport's CFL limit on a run's time step: each half step dt/2 (the Strang
+    splitting's transport sub-step, :class:`~granframe.space.collisions.SplitStep`) moves
+    the fastest node, max|c| = L - h (module notes), at most ``cfl`` cells of width dx,
+
+    .. math:: \Delta t \le \frac{2\,\mathrm{cfl}\,\Delta x}{L - h}
+
+    (Courant, Friedrichs & Lewy, Math. Ann. 100 (1928) 32; ``cfl`` the reconstruction's
+    SSP RK3 limit: 1 upwind, 1/2 MUSCL and WENO5)."""
+    return 2.0 * cfl * dx / (grid.half_width - grid.spacing)
+
+
 def wall_weights(grid):
     r"""The weights w (d + 2, *grid.shape) of the wall totals sum_v w F Delta v of a face
     flux F = c^+ f^- + c^- f^+: 1 (mass), v_1 .. v_d (momentum) and |v|^2/2 (energy),
     times Delta v = h^d.
 
-    The node -L counts as in the recorded fields (:mod:`granframe.space.fields`): v_1 = 0
+    The node -L counts as in the recorded fields (:mod:`granframe.velocity.moments`): v_1 = 0
     in the momentum along x (its content moves half each way and carries no net v_1) and
     v_1^2 = L^2 in the energy. With these weights the fluxes through the faces are those of
     the cells' mass, momentum and energy, so the change of the totals over a step equals
@@ -106,8 +118,9 @@ class Transport:
         return float(self.grid.half_width - self.grid.spacing)
 
     def time_step_limit(self) -> float:
-        """The largest sub-step tau with max|c| tau / dx <= the reconstruction's cfl."""
-        return self.reconstruction.cfl * self.dx / self.max_speed
+        """The largest sub-step tau with max|c| tau / dx <= the reconstruction's cfl: half
+        the run's step limit (:func:`step_limit`)."""
+        return 0.5 * step_limit(self.grid, self.dx, self.reconstruction.cfl)
 
     def rate(self, array, t: float):
         """-(F_{j+1/2} - F_{j-1/2}) / dx on the owned cells after filling the ghosts of
