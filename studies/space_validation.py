@@ -1,4 +1,5 @@
-"""The validation tables of docs/space.md, from the functions of tests/test_space_validation.py.
+"""The validation tables of docs/space.md, from the functions of tests/test_space_validation.py
+(:mod:`granframe.testing.space_validation`).
 
     python studies/space_validation.py --out docs/figures/space
 
@@ -6,13 +7,12 @@ writes space_validation.md there (about a minute on 2 cores) and prints it.
 """
 import argparse
 import pathlib
-import sys
 import time
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "tests"))
-import numpy  # noqa: E402
-import test_space_validation as T  # noqa: E402
-from granframe.velocity.grid import VelocityGrid  # noqa: E402
+import numpy
+
+from granframe.testing import space_validation as T
+from granframe.velocity.grid import VelocityGrid
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 parser.add_argument("--out", required=True, help="folder of space_validation.md")
@@ -26,7 +26,7 @@ w("## Validation of the space solver (tests/test_space_validation.py)\n")
 w("### 1. Data uniform in x against the space-homogeneous run\n")
 w("2D velocity grid N = 24, S = 3 (L = 6.62, h = 0.552); Maxwell molecules, e = 0.5, "
   "knudsen 0.5; 8 cells in blocks of 4; dt = 0.004, 10 steps to t = 0.04; f compared at "
-  "t = 0, 0.02, 0.04 and the fields at those times (the homogeneous snapshots' fields as a space run counts them, granframe.space.fields). Periodic runs: fast_spectral, data "
+  "t = 0, 0.02, 0.04 and the fields at those times (the homogeneous snapshots' fields as a space run counts them, granframe.velocity.moments). Periodic runs: fast_spectral, data "
   "two Maxwellians moving apart; specular runs: direct_spectral, data even in "
   "v_1 (an anisotropic Gaussian and a Maxwellian; fast_spectral's Q commutes with v_1 -> -v_1 only to its quadrature error, 2.6e-6 of max |Q| at this resolution, and makes an odd part of 2e-8 of max f by t = 0.02, which a specular wall reflects). The penalised specular run differs by 4e-10: the penalisation's Maxwellian has the grid momentum of f, which for f even in v_1 is -L h^2 sum f(-L, v_2) (the node -L has no mirror), and the projection onto the Nyquist-free modes leaves f(-L, .) at about 1e-5 of max f here (u_1 = 1.7e-4). Differences: max over "
   "cells and times, f relative to max f, rho, T, P relative to their largest value, u "
@@ -63,11 +63,11 @@ for ends in ("periodic", "specular"):
     fixed = []
     for n in (20, 40, 80, 160):
         grid = g
-        dt = T._steps(0.2, 0.8 * 2 * 0.5 * (1 / n) / (grid.half_width - grid.spacing))
+        dt = T.dividing_step(0.2, 0.8 * 2 * 0.5 * (1 / n) / (grid.half_width - grid.spacing))
         initial = ({"name": "sinusoidal_mode", "field": "density", "amplitude": T.AMPLITUDE,
                     "temperature": T.T0} if ends == "periodic" else
                    {"name": "space_function", "function": T.walls_function})
-        ds = T.run(final_time=0.2, time_step=dt, grid=T.TRANSPORT_GRID, **T.COLLISIONS,
+        ds = T.run_dataset(final_time=0.2, time_step=dt, grid=T.TRANSPORT_GRID, **T.COLLISIONS,
                    initial=initial, output={"snapshot_interval": 0.2},
                    space={"cells": n, "reconstruction": "weno5", "left": ends, "right": ends,
                           "collisions": False})
