@@ -13,6 +13,7 @@ import numbers
 from typing import Any, Callable
 
 import attrs
+import numpy
 
 
 def reject(owner: str, name: str, value: Any, allowed: str, *, error=ValueError):
@@ -45,6 +46,31 @@ def is_real(value) -> bool:
 
 def is_integer(value) -> bool:
     return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+
+
+def cell_edges(owner: str, edges):
+    """``edges`` as a float array: 1-D, at least 2 finite, strictly increasing cell edges
+    (the cells [e_i, e_{i+1}] of a cell-average function); refused by name otherwise."""
+    e = numpy.asarray(edges, dtype=float)
+    if e.ndim != 1 or e.size < 2 or not numpy.isfinite(e).all() or not numpy.all(numpy.diff(e) > 0):
+        reject(owner, "edges", edges, "must be a 1-D array of at least 2 finite, "
+               "strictly increasing cell edges")
+    return e
+
+
+def time_point(owner: str, t):
+    """``t`` as a float: a finite real number >= 0 (the time of an exact solution)."""
+    if not is_real(t) or not (0.0 <= float(t) < math.inf):
+        reject(owner, "t", t, "must be a finite real number >= 0")
+    return float(t)
+
+
+def rule_points(owner: str, points):
+    """``points`` as an int: the number of Gauss-Legendre points of a quadrature, in
+    [1, 100]."""
+    if not is_integer(points) or not 1 <= points <= 100:
+        reject(owner, "points", points, "must be an integer in [1, 100]")
+    return int(points)
 
 
 def real(lower: float = -math.inf, upper: float = math.inf, *,

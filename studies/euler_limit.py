@@ -25,7 +25,6 @@ prints the tables (about 15 minutes on 2 cores at 50 cells).
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import pathlib
 import time
 
@@ -34,19 +33,16 @@ import numpy
 
 from granframe.run.problems import make_problem
 from granframe.run.runner import Simulation
-from granframe.space.collisions import SplitStep
-from granframe.space.exact import euler_riemann_cell_averages
+from granframe.space.collisions import SingleModel, SplitStep
 from granframe.stepping.integrators import EquilibriumProjection
-from granframe.tools.studykit import finish, number, write_csv
-
-_spec = importlib.util.spec_from_file_location(
-    "space_study", pathlib.Path(__file__).resolve().parent / "space.py")
-SPACE = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(SPACE)
+from granframe.theory.euler import euler_riemann_cell_averages
+from granframe.tools.space_cases import (GAMMA, SOD_FINAL, SOD_GRID, SOD_LEFT, SOD_RIGHT,
+                                         euler_state, sod_description, sod_errors)
+from granframe.tools.studykit import cfl_time_step, finish, number, write_csv
 
 #: the knudsen numbers of the table
 KNUDSEN = (1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
-FINAL = SPACE.SOD_FINAL
+FINAL = SOD_FINAL
 
 
 def fields(rho, velocity, temperature) -> dict:
@@ -64,11 +60,12 @@ def limit_fields(cells: int, final: float = FINAL, time_step: float | None = Non
     """The fields at ``final`` of the eps -> 0 limit: the Sod tube's transport with every
     cell set to its discrete Maxwellian after every collision step (see the module notes),
     stepped by the problem itself (no store)."""
-    description = SPACE.sod_description(cells, 1.0, final=final)
+    description = sod_description(cells, 1.0, final=final)
     if time_step is not None:
         description = attrs.evolve(description, time_step=time_step)
     problem = make_problem(description)
-    problem.integrator = SplitStep(EquilibriumProjection(), problem.transport)
+    problem.integrator = SplitStep(SingleModel(EquilibriumProjection(), problem.equation),
+                                   problem.transport)
     steps = round(final / description.time_step)
     state, t = problem.state(problem.f0), 0.0
     for _ in range(steps):
@@ -81,7 +78,7 @@ def limit_fields(cells: int, final: float = FINAL, time_step: float | None = Non
 def sod_run(cells: int, knudsen: float, integrator: str = "penalised_ars222",
             final: float = FINAL, time_step: float | None = None) -> dict:
     """One Sod run: its last fields, drifts, positivity and seconds."""
-    description = SPACE.sod_description(cells, knudsen, final=final, integrator=integrator)
+    description = sod_description(cells, knudsen, final=final, integrator=integrator)
     if time_step is not None:
         description = attrs.evolve(description, time_step=time_step)
     started = time.perf_counter()
@@ -91,7 +88,7 @@ def sod_run(cells: int, knudsen: float, integrator: str = "penalised_ars222",
     f0_max = float(numpy.max(ds.f.values[0]))
     return {"fields": fields(ds.density.values[-1], ds.velocity.values[-1],
                              ds.temperature.values[-1]),
-            "exact": SPACE.sod_errors(ds), "steps": int(ds.sizes["step_time"] - 1),
+            "exact": sod_errors(ds), "steps": int(ds.sizes["step_time"] - 1),
             "dt": float(description.time_step),
             "energy_drift": float(abs(energy[-1] / energy[0] - 1)),
             "mass_drift": float(abs(mass[-1] / mass[0] - 1)),
@@ -121,15 +118,15 @@ def table(cells: int, knudsen=KNUDSEN) -> list[dict]:
 
 def _exact(cells: int, final: float = FINAL) -> dict:
     edges = numpy.linspace(0.0, 1.0, cells + 1)
-    left, right = (SPACE._euler_state(s) for s in (SPACE.SOD_LEFT, SPACE.SOD_RIGHT))
-    exact = euler_riemann_cell_averages(left, right, SPACE.GAMMA, edges, final)
+    left, right = (euler_state(s) for s in (SOD_LEFT, SOD_RIGHT))
+    exact = euler_riemann_cell_averages(left, right, GAMMA, edges, final)
     return {k: numpy.asarray(exact[k]) for k in ("rho", "u", "T")}
 
 
 def schemes(cells: int, knudsen: float = 1e-8) -> list[dict]:
     """penalised_euler and ARS(2,2,2) at the CFL step and half of it: L1 errors against the
     exact Euler solution and against the eps -> 0 limit at the same step."""
-    dt = SPACE.cfl_time_step(cells, FINAL, SPACE.SOD_GRID)
+    dt = cfl_time_step(cells, FINAL, SOD_GRID)
     rows = []
     for step in (dt, dt / 2):
         limit = limit_fields(cells, time_step=step)

@@ -49,6 +49,7 @@ from granframe.equations.homogeneous import HomogeneousBoltzmann  # noqa: E402
 from granframe.equations.rescaled import RescaledBoltzmann  # noqa: E402
 from granframe.errors import NonFiniteError  # noqa: E402
 from granframe.run.runner import moments  # noqa: E402
+from granframe.theory.cooling import maxwellian_cooling_rate  # noqa: E402
 from granframe.velocity.grid import ANTI_ALIASING_FACTOR  # noqa: E402
 from granframe.tools.studykit import (command, finish, read_summary, save_figure, write_csv,  # noqa: E402
                                 write_summary)
@@ -398,7 +399,7 @@ def maxwell(quick: bool) -> dict:
                                             final_s, every=round(1 / ds))
         T0 = series[0]["temperature"]
         for r in series:
-            r["T_error"] = abs(r["temperature"] / (T0 * numpy.exp(-(1 - e * e) * r["t"] / 4)) - 1)
+            r["T_error"] = abs(r["temperature"] / (T0 * numpy.exp(-maxwellian_cooling_rate(e) * r["t"])) - 1)
             r["kurtosis_error"] = r["kurtosis"] - float(maxwell_kurtosis(r["t"], e))
         histories[(n, support, radial_points, circle, ds)] = series
         row = {"N": n, "S": support, "h": grid.spacing, "N_rho": radial_points, "M": circle,

@@ -22,9 +22,6 @@ Run: ``python studies/granular_clusters.py --out DIR [--restitution 0.8] [--fina
 
 from __future__ import annotations
 
-import math
-import pathlib
-import sys
 import time
 
 import numpy
@@ -32,10 +29,8 @@ import numpy
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import HealthError, Simulation
-from granframe.tools.studykit import finish, json_text, number, save_figure
-
-sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from granular_hcs import output_folder, study_arguments  # noqa: E402
+from granframe.tools.studykit import (finish, json_text, number, output_folder, save_figure,
+                                      study_arguments)
 
 DT = 0.05
 

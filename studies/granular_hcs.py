@@ -10,33 +10,19 @@ mode u_2 / sqrt(T) = A sin(k x) (the same for g and f) the rate in s
 with zeta_g the collisional cooling rate of g in its cooling state and eta the shear
 viscosity. The rescaling rate a_0 is that of the Maxwellian f0; the cooling state's
 zeta_g differs from 2 a_0 by its a_2 correction (3 a_2 / 16), so T_g drifts slowly and
-zeta_g is measured from it (:func:`cooling_rate`). In granframe's units (B = |g|/(4 pi),
-Q/eps: pi sigma^2 = 1/eps, unit mass) the first Sonine approximation (Brey, Dufty, Kim &
-Santos, Phys. Rev. E 58 (1998) 4638; Garzo & Dufty, Phys. Rev. E 59 (1999) 5895) gives,
-with eta_0 = (5/16) eps sqrt(pi T) and nu_0 = rho T / eta_0,
-
-    zeta = nu_0 zeta*,   zeta* = (5/12)(1 - e^2)(1 + 3 a_2 / 16),
-    eta  = eta_0 / (nu_eta* - zeta*/2),   nu_eta* = (3 - e)(1 + e)/4 (1 - a_2/32),
-    a_2  = 16 (1 - e)(1 - 2 e^2) / (81 - 17 e + 30 e^2 (1 - e))   (van Noije & Ernst 1998),
-
-so the shear mode grows for k < k_c = sqrt(rho zeta / (2 eta)). The heat flux
-q = -kappa grad T - mu grad n has, with kappa_0 = (75/64) eps sqrt(pi T),
-
-    kappa* = kappa/kappa_0 = (2/3)(1 + 2 a_2) / (nu_kappa* - 2 zeta*),
-    nu_kappa* = (1 + e)/3 (1 + 33 (1 - e)/16 + (19 - 3e) a_2 / 512),
-    mu* = n mu / (T kappa_0) = 2 (zeta* kappa* + 2 a_2 / 3) / (2 nu_kappa* - 3 zeta*)
-
-(Garzo & Dufty 1999 in the dilute limit; the same expressions, with c* = 2 a_2, are the
-dilute limit of the GD99 model of the MFIX code, model/calc_mu_s.f).
+zeta_g is measured from it (:func:`cooling_rate`). The first Sonine approximation
+(Brey, Dufty, Kim & Santos, Phys. Rev. E 58 (1998) 4638; Garzo & Dufty, Phys. Rev. E 59
+(1999) 5895) gives zeta and eta (:func:`granframe.theory.modes.shear_mode`), so the shear
+mode grows for k < k_c = sqrt(rho zeta / (2 eta)); the longitudinal modes, the heat mode and
+its critical k_h are :mod:`granframe.theory.modes`, the coefficients
+:mod:`granframe.theory.sonine`.
 
 Run: ``python studies/granular_hcs.py --out DIR [--restitution 0.9] [--n-modes 24]``.
 """
 
 from __future__ import annotations
 
-import argparse
 import math
-import pathlib
 import time
 
 import numpy
@@ -44,124 +30,11 @@ import numpy
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
-from granframe.tools.studykit import finish, json_text, number, numbers, save_figure
-
-
-def sonine(e: float) -> dict:
-    """The first-Sonine a_2, zeta*, eta* = eta/eta_0, kappa* = kappa/kappa_0 and
-    mu* = n mu/(T kappa_0) of 3D inelastic hard spheres (module notes; the heat flux is
-    q = -kappa grad T - mu grad n)."""
-    a2 = 16 * (1 - e) * (1 - 2 * e * e) / (81 - 17 * e + 30 * e * e * (1 - e))
-    zeta = 5 / 12 * (1 - e * e) * (1 + 3 * a2 / 16)
-    nu_eta = (3 - e) * (1 + e) / 4 * (1 - a2 / 32)
-    nu_kappa = (1 + e) / 3 * (1 + 33 * (1 - e) / 16 + (19 - 3 * e) * a2 / 512)
-    kappa = 2 / 3 * (1 + 2 * a2) / (nu_kappa - 2 * zeta)
-    mu = 2 * (zeta * kappa + 2 * a2 / 3) / (2 * nu_kappa - 3 * zeta)
-    return {"a2": a2, "zeta*": zeta, "eta*": 1 / (nu_eta - zeta / 2), "kappa*": kappa,
-            "mu*": mu}
-
-
-def theory(e: float, knudsen: float, density: float, temperature: float, k: float) -> dict:
-    """zeta, eta and the Navier-Stokes rate Gamma(k) = zeta/2 - eta k^2 / rho of the shear
-    mode, in granframe's units."""
-    coefficients = sonine(e)
-    eta0 = 5 / 16 * knudsen * math.sqrt(math.pi * temperature)
-    nu0 = density * temperature / eta0
-    zeta = nu0 * coefficients["zeta*"]
-    eta = eta0 * coefficients["eta*"]
-    return {"zeta": zeta, "eta": eta, "rate": zeta / 2 - eta * k * k / density,
-            "k_c": math.sqrt(density * zeta / (2 * eta))}
-
-
-def longitudinal(e: float, k_star: float, zeta: float | None = None,
-                 conduction: float = 1.0):
-    r"""The linearised Navier-Stokes matrix of the longitudinal modes about the cooling
-    state, d/d tau (rho', w, theta) = M (rho', w, theta), for the Fourier amplitudes of
-    rho/rho_H - 1, i u_1/sqrt(T_H) and T/T_H - 1 at wavenumber k* = k sqrt(T_H)/nu_0, in
-    tau = int nu_0 dt (module notes, derived in docs/granular.md):
-
-        d rho'/d tau  = k* w
-        d w/d tau     = -k* (rho' + theta) + (zeta*/2 - (4/3) eta* k*^2) w
-        d theta/d tau = -(zeta* + (5/2) mu* k*^2) rho' + (2/3) k* w
-                        - (zeta*/2 + (5/2) kappa* k*^2) theta
-
-    (w = i u_1/sqrt(T) makes the matrix real; the compression -div u enters rho' and theta
-    with the same sign, as in n and (3/2) n T, so that in the elastic limit the pair of
-    complex eigenvalues is sound, -(k*^2/2)((4/3) eta* + kappa*) +- i sqrt(5/3) k*).
-    ``zeta``: a zeta* to use instead of the first Sonine one (eta*, kappa*, mu* stay);
-    ``conduction``: a factor on kappa* and mu* (on the heat flux)."""
-    c = sonine(e)
-    if zeta is not None:
-        c["zeta*"] = zeta
-    c["kappa*"] *= conduction
-    c["mu*"] *= conduction
-    return numpy.array([
-        [0.0, k_star, 0.0],
-        [-k_star, c["zeta*"] / 2 - 4 / 3 * c["eta*"] * k_star ** 2, -k_star],
-        [-(c["zeta*"] + 2.5 * c["mu*"] * k_star ** 2), 2 / 3 * k_star,
-         -(c["zeta*"] / 2 + 2.5 * c["kappa*"] * k_star ** 2)]])
-
-
-def heat_critical(e: float) -> float:
-    r"""k*_h, where the heat mode stops growing: det M(k*) = k*^2 (zeta*/2 - (5/2)(kappa* -
-    mu*) k*^2) (expanding :func:`longitudinal` along its first row) vanishes at
-
-        k*_h = sqrt(zeta* / (5 (kappa* - mu*))),
-
-    and a longitudinal perturbation of k* < k*_h has a growing mode (the clustering
-    instability; Brey, Dufty, Kim & Santos 1998, in the units k* = k sqrt(T)/nu_0)."""
-    c = sonine(e)
-    return math.sqrt(c["zeta*"] / (5.0 * (c["kappa*"] - c["mu*"])))
-
-
-def heat_mode(e: float, k_star: float, zeta: float | None = None, conduction: float = 1.0):
-    """The heat mode of :func:`longitudinal` at k*: its rate (the real eigenvalue with the
-    largest real part, per unit tau) and its eigenvector (rho', w, theta) scaled to
-    rho' = 1; ``zeta``, ``conduction`` as for :func:`longitudinal`."""
-    values, vectors = numpy.linalg.eig(longitudinal(e, k_star, zeta, conduction))
-    index = heat_index(values, k_star)
-    vector = vectors[:, index].real
-    return float(values[index].real), vector / vector[0]
-
-
-def heat_index(values, k_star: float) -> int:
-    """Which of the eigenvalues ``values`` of :func:`longitudinal` at k* is the heat
-    mode's: the real one with the largest real part."""
-    real = numpy.flatnonzero(numpy.abs(values.imag) <= 1e-12 * max(1.0, abs(k_star)))
-    return int(real[numpy.argmax(values.real[real])])
-
-
-def longitudinal_mode(x, v1, v2, v3, k: float, amplitude: float, density: float,
-                      velocity: float, temperature: float):
-    """The local Maxwellian of a longitudinal mode about rho = T = 1, u = 0:
-    rho = 1 + A r sin(k x), u_1 = A w cos(k x), T = 1 + A theta sin(k x), with
-    (r, w, theta) = (``density``, ``velocity``, ``temperature``) in the variables of
-    :func:`longitudinal` (for u_1 = A w cos(k x), the continuity equation d rho/dt =
-    -d u_1/dx gives the eigen-relation lambda r = k* w of its first row)."""
-    phase = k * numpy.asarray(x)
-    rho = 1.0 + amplitude * density * numpy.sin(phase)
-    u1 = amplitude * velocity * numpy.cos(phase)
-    t = 1.0 + amplitude * temperature * numpy.sin(phase)
-    return (rho / (2.0 * math.pi * t) ** 1.5
-            * numpy.exp(-((v1 - u1) ** 2 + v2 ** 2 + v3 ** 2) / (2.0 * t)))
-
-
-def collision_scale(knudsen: float, density: float, temperature: float) -> float:
-    """nu_0 = rho T / eta_0 = 16 rho sqrt(T) / (5 eps sqrt(pi))."""
-    return 16 * density * math.sqrt(temperature) / (5 * knudsen * math.sqrt(math.pi))
-
-
-def density_response(e: float, knudsen: float, temperature: float, k: float, s):
-    """rho'(s)/rho'(0) of Navier-Stokes for a density mode with u = 0, T uniform at s = 0,
-    in the rescaled time s of a hard-sphere run with T_g = ``temperature``
-    (d tau = nu_0(T_g) ds)."""
-    nu0 = collision_scale(knudsen, 1.0, temperature)
-    matrix = longitudinal(e, k * math.sqrt(temperature) / nu0)
-    values, vectors = numpy.linalg.eig(matrix)
-    weights = numpy.linalg.solve(vectors, numpy.array([1.0, 0.0, 0.0]))
-    tau = nu0 * numpy.asarray(s, dtype=float)
-    return numpy.real((vectors[0][None, :] * weights[None, :]
-                       * numpy.exp(values[None, :] * tau[:, None])).sum(axis=1))
+from granframe.theory.modes import (density_response, heat_critical_wavenumber, heat_mode,
+                                    heat_mode_index, longitudinal_matrix, shear_mode)
+from granframe.theory.sonine import reference_frequency
+from granframe.tools.studykit import (finish, json_text, number, numbers, output_folder,
+                                      save_figure, study_arguments)
 
 
 def description(e: float, length: float, cells: int, n_modes: int, support: float,
@@ -170,15 +43,17 @@ def description(e: float, length: float, cells: int, n_modes: int, support: floa
     """A rescaled 3D hard-sphere gas in a periodic box of ``length`` with the shear mode
     u_2 = amplitude sin(2 pi x / length), or (``field`` 'density') the density mode
     rho = 1 + amplitude sin(2 pi x / length) at uniform T, or (``field`` 'heat') the
-    Navier-Stokes heat mode (:func:`heat_mode`, first Sonine) of that wavenumber as a local
-    Maxwellian (:func:`longitudinal_mode`); ``quadrature`` the fast operator's rules
-    ('auto', the default's, or 'review': a quarter of the cost at N = 24, but 3.7 % of
-    max |Q| from the default's on a near-Maxwellian there)."""
+    Navier-Stokes heat mode (:func:`~granframe.theory.modes.heat_mode`, first Sonine) of
+    that wavenumber as a local Maxwellian
+    (:func:`~granframe.theory.modes.longitudinal_maxwellian`); ``quadrature`` the fast
+    operator's rules ('auto', the default's, or 'review': a quarter of the cost at N = 24,
+    but 3.7 % of max |Q| from the default's on a near-Maxwellian there)."""
     grid = {"dimension": 3, "n_modes": n_modes, "support_radius": support}
     k = 2 * math.pi / length
     if field == "heat":
-        _, (r, w, theta) = heat_mode(e, k / collision_scale(knudsen, 1.0, 1.0))
-        initial = {"name": "space_function", "function": "granular_hcs:longitudinal_mode",
+        _, (r, w, theta) = heat_mode(e, k / reference_frequency(knudsen, 1.0, 1.0))
+        initial = {"name": "space_function",
+                   "function": "granframe.theory.modes:longitudinal_maxwellian",
                    "params": {"k": k, "amplitude": amplitude, "density": float(r),
                               "velocity": float(w), "temperature": float(theta)}}
     else:
@@ -265,8 +140,8 @@ def cooling_rate(ds, skip: float) -> float:
 
 def density_comparison(ds, e: float, length: float, knudsen: float = 1.0) -> dict:
     """The density mode's amplitude A(s)/A(0) (the sine coefficient of rho) against
-    Navier-Stokes (:func:`density_response` at the run's mean T_g): at the end, and the
-    largest difference over the run."""
+    Navier-Stokes (:func:`~granframe.theory.modes.density_response` at the run's mean
+    T_g): at the end, and the largest difference over the run."""
     s, amplitude = amplitude_history(ds, length, "density")
     measured = amplitude / amplitude[0]
     temperature = float(ds.temperature.values.mean())
@@ -313,7 +188,7 @@ def heat_projection(ds, e: float, length: float, k_star: float, zeta: float):
     r"""The heat mode's amplitude of a longitudinal run at each s, projected on the
     Navier-Stokes heat mode: with the sine amplitudes of rho/<rho> - 1 and T/<T> - 1 and
     the cosine amplitude of u_1/sqrt(<T>) (the variables (rho', w, theta) of
-    :func:`longitudinal`, <.> the mean over the cells at each s),
+    :func:`~granframe.theory.modes.longitudinal_matrix`, <.> the mean over the cells at each s),
 
         c_h(s) = l . (rho', w, theta)(s),   l M = lambda_h l,
 
@@ -328,29 +203,30 @@ def heat_projection(ds, e: float, length: float, k_star: float, zeta: float):
         (density / density.mean(axis=1, keepdims=True) - 1.0, numpy.sin(phase)),
         (ds.velocity.values[:, :, 0] / numpy.sqrt(mean_t), numpy.cos(phase)),
         (temperature / mean_t - 1.0, numpy.sin(phase)))]
-    values, vectors = numpy.linalg.eig(longitudinal(e, k_star, zeta).T)
-    left = vectors[:, heat_index(values, k_star)].real
+    values, vectors = numpy.linalg.eig(longitudinal_matrix(e, k_star, zeta).T)
+    left = vectors[:, heat_mode_index(values, k_star)].real
     return sum(weight * amplitude for weight, amplitude in zip(left, amplitudes))
 
 
 def heat_comparison(ds, e: float, length: float, skip: float, knudsen: float = 1.0) -> dict:
     """The heat mode's rate in s, measured (:func:`heat_and_sound` on the density's sine
     amplitude; ``late``: the straight slope of ln A over the last quarter; ``projected
-    late``: that of :func:`heat_projection`) against
-    Navier-Stokes, lambda_h nu_0(T_g) (:func:`heat_mode` at k* = k sqrt(T_g)/nu_0(T_g)),
-    with the first Sonine zeta* and with the run's own zeta_g/nu_0(T_g)
-    (:func:`cooling_rate`), T_g the run's mean temperature at the end; and ``conduction``,
-    the factor f on kappa* - mu* (both scaled) that makes the Navier-Stokes rate with
-    zeta_g the measured one, whence the kinetic k_h / k_h(first Sonine) = 1/sqrt(f)
-    (k_h^2 = zeta*/(5 f (kappa* - mu*)), :func:`heat_critical`); f is NaN where no
-    f in [1/4, 4] gives the measured rate (a run too short or too coarse to measure it)."""
+    late``: that of :func:`heat_projection`) against Navier-Stokes, lambda_h nu_0(T_g)
+    (:func:`~granframe.theory.modes.heat_mode` at k* = k sqrt(T_g)/nu_0(T_g)), with the
+    first Sonine zeta* and with the run's own zeta_g/nu_0(T_g) (:func:`cooling_rate`), T_g
+    the run's mean temperature at the end; and ``conduction``, the factor f on
+    kappa* - mu* (both scaled) that makes the Navier-Stokes rate with zeta_g the measured
+    one, whence the kinetic k_h / k_h(first Sonine) = 1/sqrt(f) (k_h^2 = zeta*/(5 f
+    (kappa* - mu*)), :func:`~granframe.theory.modes.heat_critical_wavenumber`); f is NaN
+    where no f in [1/4, 4] gives the measured rate (a run too short or too coarse to
+    measure it)."""
     import scipy.optimize
 
     temperature = float(ds.temperature.values[-1].mean())
-    nu0 = collision_scale(knudsen, 1.0, temperature)
+    nu0 = reference_frequency(knudsen, 1.0, temperature)
     k_star = 2 * math.pi / length * math.sqrt(temperature) / nu0
     zeta_g = 2 * cooling_rate(ds, skip) / nu0
-    values = numpy.linalg.eigvals(longitudinal(e, k_star, zeta_g)) * nu0
+    values = numpy.linalg.eigvals(longitudinal_matrix(e, k_star, zeta_g)) * nu0
     s, amplitude = amplitude_history(ds, length, "heat")
     fit = heat_and_sound(s, amplitude, complex(values[numpy.argmax(values.imag)]), skip)
     late = last_quarter(s, skip)
@@ -375,15 +251,15 @@ def heat_critical_between(e: float, rows: list[dict], rate: str = "measured rate
     """The kinetic k_h: the wavenumber where the measured heat-mode rate crosses zero,
     between two runs of :func:`heat_comparison` on either side (``rows``: their ``k``,
     ``rate``, ``T_g`` and ``zeta_g/2``). The measured rate is the Navier-Stokes one
-    (with the first run's zeta_g, :func:`heat_mode`) plus a difference interpolated
-    linearly in k^2 between the two runs, so that the curvature of the rate in k is
-    Navier-Stokes' and only the difference is interpolated; the root is found in
-    [k_1, k_2]."""
+    (with the first run's zeta_g, :func:`~granframe.theory.modes.heat_mode`) plus a
+    difference interpolated linearly in k^2 between the two runs, so that the curvature of
+    the rate in k is Navier-Stokes' and only the difference is interpolated; the root is
+    found in [k_1, k_2]."""
     import scipy.optimize
 
     first, second = sorted(rows, key=lambda row: row["k"])
     temperature, half_zeta = first["T_g"], first["zeta_g/2"]
-    nu0 = collision_scale(1.0, 1.0, temperature)
+    nu0 = reference_frequency(1.0, 1.0, temperature)
 
     def navier_stokes(k):
         return heat_mode(e, k * math.sqrt(temperature) / nu0, 2 * half_zeta / nu0)[0] * nu0
@@ -401,43 +277,11 @@ def heat_critical_between(e: float, rows: list[dict], rate: str = "measured rate
     return float(scipy.optimize.brentq(kinetic, low, high, xtol=1e-12))
 
 
-def study_arguments(doc: str, n_modes: int, cells: int, final: float | None):
-    """The options the granular studies share (``--final`` only where ``final`` is not
-    None); a value outside what the study can run is refused by argparse, by name."""
-    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0].replace("\n", " "))
-    parser.add_argument("--out", required=True)
-    parser.add_argument("--restitution", type=number(0.0, 1.0), default=0.9)
-    parser.add_argument("--n-modes", type=number(4, kind=int, low_open=False),
-                        default=n_modes)
-    parser.add_argument("--support", type=number(0.0), default=3.5)
-    parser.add_argument("--cells", type=number(1, kind=int, low_open=False), default=cells)
-    if final is not None:
-        parser.add_argument("--final", type=number(0.0), default=final)
-    parser.add_argument("--quadrature", choices=("auto", "review"), default="auto",
-                        help="the fast operator's rules (review: a quarter of the cost at "
-                             "N = 24 in 3D, but Q differs from the default rules' by 3.7 %% "
-                             "of max |Q| there)")
-    parser.add_argument("--figure", nargs="+", metavar="STORE",
-                        help="draw these runs into a figure in OUT and stop")
-    return parser
-
-
-def output_folder(args, draw, name: str):
-    """OUT, created; with ``--figure`` the stores drawn by ``draw`` into OUT/``name``
-    instead, and None (nothing to run)."""
-    out = pathlib.Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    if args.figure:
-        draw(args.figure, out / name)
-        return None
-    return out
-
-
 def figure(stores, path) -> None:
     """ln(A(s)/A(0)) of each run against s, with the Navier-Stokes prediction (dashed):
     the shear mode's rate zeta_g/2 - eta k^2/rho (zeta_g the run's :func:`cooling_rate`)
     and the heat mode's (:func:`heat_comparison`, with zeta_g) from s = 1 on, the density
-    mode's :func:`density_response`."""
+    mode's :func:`~granframe.theory.modes.density_response`."""
     import matplotlib.pyplot as plt  # the Agg backend: studykit chose it on import
 
     fig, ax = plt.subplots(figsize=(7, 4.5), layout="tight")
@@ -461,7 +305,7 @@ def figure(stores, path) -> None:
                 rate = heat_comparison(ds, e, length, 1.0,
                                        description.knudsen)["Navier-Stokes rate with zeta_g"]
             else:
-                eta = theory(e, description.knudsen, 1.0, temperature, k)["eta"]
+                eta = shear_mode(e, description.knudsen, 1.0, temperature, k)["eta"]
                 rate = cooling_rate(ds, 1.0) - eta * k * k
             reference = numpy.log(amplitude[s >= 1.0][0] / amplitude[0]) + rate * (s - 1.0)
         ax.plot(s, reference, "--", color=line.get_color(), lw=1)
@@ -490,9 +334,9 @@ def main(argv=None):
     e = args.restitution
     if args.k_over_kh:
         unit, ratio_name = "kh", "k/k_h"
-        scale = heat_critical(e) * collision_scale(1.0, 1.0, 1.0)
+        scale = heat_critical_wavenumber(e) * reference_frequency(1.0, 1.0, 1.0)
     else:
-        unit, ratio_name, scale = "k", "k/k_c", theory(e, 1.0, 1.0, 1.0, 1.0)["k_c"]
+        unit, ratio_name, scale = "k", "k/k_c", shear_mode(e, 1.0, 1.0, 1.0, 1.0)["k_c"]
     name = {"velocity": "shear"}.get(args.field, args.field)
     rows = []
     for ratio in args.k_over_kh or args.k_over_kc:
@@ -507,7 +351,7 @@ def main(argv=None):
         ds = granframe.open_run(store, time_axis="steps")
         seconds = time.perf_counter() - began
         temperature = float(ds.temperature.values[-1].mean())
-        predicted = theory(e, 1.0, 1.0, temperature, k)
+        predicted = shear_mode(e, 1.0, 1.0, temperature, k)
         half_zeta = cooling_rate(ds, args.skip)
         if args.field == "velocity":
             compared = {"Navier-Stokes rate": predicted["rate"],
@@ -530,7 +374,7 @@ def main(argv=None):
     (out / f"{name}_e{e:g}.json").write_text(json_text(rows, indent=1))
     rates = [row["measured rate"] for row in rows] if args.field == "heat" else []
     if len(rates) == 2 and rates[0] * rates[1] < 0:
-        sonine_k = heat_critical(e) * collision_scale(1.0, 1.0, 1.0)
+        sonine_k = heat_critical_wavenumber(e) * reference_frequency(1.0, 1.0, 1.0)
         found = {"e": e, "k_h": heat_critical_between(e, rows), "k_h Sonine": sonine_k,
                  "k_h from the projected late slopes":
                      heat_critical_between(e, rows, "projected late")}

@@ -6,25 +6,23 @@ leaves the wall at x = 0 and the gas behind it is at rest (a rarefaction leaves 
 wall, and the runs stop before it reaches the shock). 2D velocities with the Maxwell
 kernel B = 1/(2 pi): Rankine-Hugoniot does not depend on the kernel (only on
 gamma = (d+2)/d = 2), and for this kernel the energy the collisions take out of any f is
-exact in rho and T (module notes of :func:`cooling_rate`), so that the granular Euler
-equations
+exact in rho and T (:func:`granframe.theory.cooling.maxwellian_cooling_rate`), so that the
+granular Euler equations
 
     d_t rho + d_x (rho u) = 0,   d_t (rho u) + d_x (rho u^2 + p) = 0,
     d_t E + d_x (u (E + p)) = -(1 - e^2) rho^2 T d / (8 eps),   p = rho T,
     E = rho u^2/2 + d rho T/2,
 
 are the limit eps -> 0 at fixed (1 - e^2)/eps of the kinetic run. They are solved here by
-an independent finite-volume scheme (:func:`granular_euler`); for e = 1 the post-shock
-state and the shock speed are exact (:func:`rankine_hugoniot`).
+an independent finite-volume scheme (:func:`granframe.theory.euler.granular_euler_piston`);
+for e = 1 the post-shock state and the shock speed are exact
+(:func:`granframe.theory.euler.rankine_hugoniot`).
 
 Run: ``python studies/granular_shock.py --out DIR [--restitution 1] [--knudsen 1e-3]``.
 """
 
 from __future__ import annotations
 
-import math
-import pathlib
-import sys
 import time
 
 import numpy
@@ -32,124 +30,12 @@ import numpy
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
-from granframe.space import exact
-from granframe.tools.studykit import finish, json_text, number, save_figure
-
-sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from granular_hcs import output_folder, study_arguments  # noqa: E402
-from space import cfl_time_step  # noqa: E402
+from granframe.theory.euler import granular_euler_piston, piston_speed, rankine_hugoniot
+from granframe.tools.studykit import (cfl_time_step, finish, json_text, number, output_folder,
+                                      save_figure, study_arguments)
 
 DIMENSION = 2
 GAMMA = (DIMENSION + 2) / DIMENSION
-
-
-def rankine_hugoniot(speed: float, density: float = 1.0, temperature: float = 1.0) -> dict:
-    """The exact elastic piston problem: gas (rho_1, T_1) moving at -U into a wall at rest.
-
-    The reflected problem is the Riemann problem (rho_1, +U, p_1) | (rho_1, -U, p_1), whose
-    star state (:func:`granframe.space.exact.euler_riemann_star`, Toro ch. 4) is the gas at
-    rest behind the shock: rho_2, p_2, T_2 = p_2 / rho_2. Mass conservation across the shock
-    gives its speed in the wall's frame, s = rho_1 U / (rho_2 - rho_1), and its Mach number
-    against the incoming gas, M = (s + U) / c_1, c_1 = sqrt(gamma T_1)."""
-    pressure = density * temperature
-    star = exact.euler_riemann_star((density, speed, pressure), (density, -speed, pressure),
-                                    GAMMA)
-    rho2 = star["rho_left"]
-    shock = density * speed / (rho2 - density)
-    return {"rho_2": rho2, "T_2": star["p"] / rho2, "p_2": star["p"], "shock_speed": shock,
-            "mach": (shock + speed) / math.sqrt(GAMMA * temperature)}
-
-
-def piston_speed(mach: float, temperature: float = 1.0) -> float:
-    """U = 2 c_1 (M - 1/M) / (gamma + 1): the wall speed that drives a shock of Mach M
-    (Landau & Lifshitz, Fluid Mechanics, section 89; c_1 = sqrt(gamma T_1))."""
-    return 2.0 * math.sqrt(GAMMA * temperature) * (mach - 1.0 / mach) / (GAMMA + 1.0)
-
-
-def cooling_rate(e: float, knudsen: float) -> float:
-    r"""c in dT/dt = -c rho T, the exact cooling of any f under the Maxwell kernel.
-
-    With B = 1/|S^{d-1}| (1/(2 pi) in 2D) and g' = (1-e)/2 g + (1+e)/2 |g| sigma, the mean
-    over sigma of |g'|^2 is (1 + e^2)/2 |g|^2, so the collisions change the energy density
-    by -(1 - e^2)/(16 eps) int int f f_* |g|^2 = -(1 - e^2) d rho^2 T / (8 eps), and with
-    E = d rho T/2 the temperature by -(1 - e^2) rho T / (4 eps)."""
-    return (1.0 - e * e) / (4.0 * knudsen)
-
-
-def _primitive(q):
-    rho = q[0]
-    u = q[1] / rho
-    temperature = (q[2] - 0.5 * rho * u * u) / (0.5 * DIMENSION * rho)
-    return rho, u, temperature
-
-
-def _minmod(a, b):
-    return numpy.where(a * b > 0.0, numpy.sign(a) * numpy.minimum(abs(a), abs(b)), 0.0)
-
-
-def _hll(left, right):
-    """HLL flux (Harten, Lax & van Leer 1983) with Davis's wave speeds, from primitive
-    (rho, u, T) states either side of each face."""
-    fluxes, states, speeds = [], [], []
-    for rho, u, temperature in (left, right):
-        p = rho * temperature
-        energy = 0.5 * rho * u * u + 0.5 * DIMENSION * p
-        states.append(numpy.array([rho, rho * u, energy]))
-        fluxes.append(numpy.array([rho * u, rho * u * u + p, u * (energy + p)]))
-        speeds.append((u, numpy.sqrt(GAMMA * temperature)))
-    (ul, cl), (ur, cr) = speeds
-    slow = numpy.minimum(ul - cl, ur - cr)
-    fast = numpy.maximum(ul + cl, ur + cr)
-    lo, hi = numpy.minimum(slow, 0.0), numpy.maximum(fast, 0.0)
-    return (hi * fluxes[0] - lo * fluxes[1] + hi * lo * (states[1] - states[0])) / (hi - lo)
-
-
-def granular_euler(speed: float, e: float, knudsen: float, length: float, times,
-                   cells: int = 4000, cfl: float = 0.4) -> dict:
-    """The granular Euler equations (module notes) for the same piston problem: MUSCL
-    (minmod on rho, u, T), HLL fluxes, SSP RK2 (Shu & Osher 1988), reflecting walls at both
-    ends, and the cooling each step by its exact solution at fixed rho,
-    T <- T exp(-c rho dt) (:func:`cooling_rate`), Strang-split around the transport.
-    Returns the cell centres and rho, u, T at each of ``times``."""
-    dx = length / cells
-    x = (numpy.arange(cells) + 0.5) * dx
-    rho = numpy.ones(cells)
-    q = numpy.array([rho, -speed * rho, 0.5 * speed * speed * rho + 0.5 * DIMENSION * rho])
-    c = cooling_rate(e, knudsen)
-
-    def cool(q, dt):
-        rho, u, temperature = _primitive(q)
-        temperature = temperature * numpy.exp(-c * rho * dt)
-        return numpy.array([rho, rho * u, 0.5 * rho * u * u + 0.5 * DIMENSION * rho * temperature])
-
-    def rate(q):
-        prim = numpy.array(_primitive(q))
-        mirror = prim[:, [1, 0]] * numpy.array([[1.0], [-1.0], [1.0]])
-        far = prim[:, [-1, -2]] * numpy.array([[1.0], [-1.0], [1.0]])
-        padded = numpy.concatenate([mirror[:, ::-1], prim, far], axis=1)
-        slope = _minmod(padded[:, 1:-1] - padded[:, :-2], padded[:, 2:] - padded[:, 1:-1])
-        centre = padded[:, 1:-1]
-        left = (centre + 0.5 * slope)[:, :-1]
-        right = (centre - 0.5 * slope)[:, 1:]
-        flux = _hll(tuple(left), tuple(right))
-        return -(flux[:, 1:] - flux[:, :-1]) / dx
-
-    out, t = {"x": x, "time": [], "density": [], "velocity": [], "temperature": []}, 0.0
-    for target in sorted(times):
-        while t < target - 1e-14:
-            rho, u, temperature = _primitive(q)
-            dt = min(cfl * dx / float(numpy.max(abs(u) + numpy.sqrt(GAMMA * temperature))),
-                     target - t)
-            q = cool(q, 0.5 * dt)
-            stage = q + dt * rate(q)
-            q = 0.5 * (q + stage + dt * rate(stage))
-            q = cool(q, 0.5 * dt)
-            t += dt
-        rho, u, temperature = _primitive(q)
-        for name, value in (("time", t), ("density", rho), ("velocity", u),
-                            ("temperature", temperature)):
-            out[name].append(value)
-    return {k: numpy.asarray(v) for k, v in out.items()}
 
 
 def description(speed: float, e: float, knudsen: float, cells: int, length: float,
@@ -221,7 +107,7 @@ def compare(store, speed: float, e: float, knudsen: float, length: float) -> dic
     density, temperature = ds.density.values, ds.temperature.values
     positions, shock = shock_track(t, x, density)
     quarters = [t[-1] * q for q in (0.25, 0.5, 0.75, 1.0)]
-    reference = granular_euler(speed, e, knudsen, length, quarters,
+    reference = granular_euler_piston(speed, e, knudsen, length, quarters,
                                cells=cells * max(1, 4000 // cells))
     rho_coarse = cell_averages(reference["density"], cells)
     t_coarse = cell_averages(reference["temperature"], cells)
@@ -252,7 +138,7 @@ def compare(store, speed: float, e: float, knudsen: float, length: float) -> dic
            "largest negative mass share": float(ds.negative_mass_fraction.values.max()),
            "history": history}
     if e == 1.0:
-        exact_state = rankine_hugoniot(speed)
+        exact_state = rankine_hugoniot(speed, GAMMA)
         row.update({"rho_2": plateau(x, density[-1], positions[-1]),
                     "T_2": plateau(x, temperature[-1], positions[-1]),
                     "RH rho_2": exact_state["rho_2"], "RH T_2": exact_state["T_2"],
@@ -285,7 +171,7 @@ def figure(stores, path) -> None:
             continue
         drawn.add(key)
         times = numpy.linspace(0.0, t[-1], 41)[1:]
-        ref = granular_euler(speed, e, eps, length, times)
+        ref = granular_euler_piston(speed, e, eps, length, times)
         axes[0].plot(ref["x"], ref["density"][-1], "k-", lw=0.8)
         axes[1].plot(ref["x"], ref["temperature"][-1], "k-", lw=0.8)
         axes[2].plot(ref["time"], ref["temperature"][:, :len(ref["x"]) // 100].mean(axis=1),
@@ -313,7 +199,7 @@ def main(argv=None):
     out = output_folder(args, figure, "shock.png")
     if out is None:
         return
-    speed = piston_speed(args.mach)
+    speed = piston_speed(args.mach, GAMMA)
     grid = {"n_modes": args.n_modes, "support_radius": args.support}
     time_step = cfl_time_step(args.cells, args.final, grid, length=args.length)
     began = time.perf_counter()

@@ -24,8 +24,6 @@ Run: ``python studies/granular_vibrated.py --out DIR --speeds 0,0.5,1``.
 from __future__ import annotations
 
 import math
-import pathlib
-import sys
 import time
 
 import numpy
@@ -34,11 +32,8 @@ import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.space import exact
-from granframe.tools.studykit import finish, json_text, number, numbers, save_figure
-
-sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from granular_hcs import output_folder, study_arguments  # noqa: E402
-from space import cfl_time_step  # noqa: E402
+from granframe.tools.studykit import (cfl_time_step, finish, json_text, number, numbers,
+                                      output_folder, save_figure, study_arguments)
 
 DIMENSION = 2
 #: c_2 of the period mean <J2/J0> = (d+1) T_w/2 + T_w (c_2 eps^2 + ...), docs/space.md

@@ -17,7 +17,8 @@ p/T_b), W = (T/T_b)^{3/2} solves
 
 and the mass fixes rho_b: rho_b int_0^1 W^{-2/3} dx = 1. So T_min/T_b and rho_max/rho_b
 follow from e and eps alone, whatever the temperature jump T_w - T_b at the walls: those
-are compared with the kinetic run (T_b and rho_b its profiles extrapolated to the walls).
+are compared with the kinetic run (T_b and rho_b its profiles extrapolated to the walls);
+:func:`granframe.theory.walls.heated_walls_profile` solves the problem.
 
 Run: ``python studies/granular_walls.py --out DIR [--restitution 0.9] [--knudsen 0.2]``;
 a run of hours stores f every ``--snapshot-every STEPS`` steps and continues where it was
@@ -26,63 +27,19 @@ killed with ``--resume`` (bitwise the run that was not killed).
 
 from __future__ import annotations
 
-import argparse
 import math
-import pathlib
-import sys
 
 import numpy
-import scipy.integrate
 import scipy.optimize
 
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
-from granframe.tools.studykit import finish, json_text, number, save_figure
+from granframe.theory.walls import heated_walls_profile
+from granframe.tools.analysis import energy_balance
+from granframe.tools.studykit import (cfl_time_step, finish, json_text, number, output_folder,
+                                      save_figure, study_arguments)
 from granframe.velocity.estimators import TAIL_ERROR_FACTOR, spectral_tail
-
-sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from granular_hcs import output_folder, sonine, study_arguments  # noqa: E402
-from space import cfl_time_step, energy_balance  # noqa: E402
-
-
-def navier_stokes(e: float, knudsen: float) -> dict:
-    """The steady Navier-Stokes profile between the walls (module notes): rho_b, Lambda,
-    T_min/T_b, rho_max/rho_b, and T/T_b at 101 distances from the centre (0 to 1/2).
-
-    Shot from the centre, where the profile is flat: V'' = beta V^(-1/3), V(0) = 1,
-    V'(0) = 0 gives W = V/V(1/2) for Lambda = beta V(1/2)^(4/3), and beta is found so that
-    Lambda = C rho_b^2 with rho_b from the mass."""
-    coefficients = sonine(e)
-    eps = math.sqrt(2.0) * knudsen
-    conduction = coefficients["kappa*"] - coefficients["mu*"]
-    c = 6.144 * coefficients["zeta*"] / (math.pi * eps * eps * conduction)
-    x = numpy.linspace(0.0, 0.5, 101)
-    if c == 0.0:                                   # elastic: no sink, a uniform gas
-        return {"rho_b": 1.0, "Lambda": 0.0, "T_min/T_b": 1.0, "rho_max/rho_b": 1.0,
-                "distance": x, "T/T_b": numpy.ones_like(x)}
-
-    def shoot(beta):
-        """From the centre: V = W/W_c with V(0) = 1, V'(0) = 0, V'' = beta V^(-1/3)
-        (beta = Lambda W_c^(-4/3)), on 0 <= y <= 1/2 (y the distance from the centre)."""
-        solution = scipy.integrate.solve_ivp(
-            lambda _, y: [y[1], beta * y[0] ** (-1.0 / 3.0)], (0.0, 0.5), [1.0, 0.0],
-            t_eval=x, rtol=1e-12, atol=1e-14, method="DOP853")
-        v = solution.y[0]
-        w = v / v[-1]                              # W = V / V(1/2): W = 1 at the wall
-        rho_b = 1.0 / (2.0 * scipy.integrate.simpson(w ** (-2.0 / 3.0), x=x))
-        return w, rho_b, beta * v[-1] ** (-4.0 / 3.0)    # Lambda = beta W_c^(4/3)
-
-    def mismatch(log_beta):
-        _, rho_b, lam = shoot(math.exp(log_beta))
-        return math.log(lam / (c * rho_b * rho_b))
-
-    log_beta = scipy.optimize.brentq(mismatch, math.log(1e-8), math.log(1e8), xtol=1e-13)
-    w, rho_b, lam = shoot(math.exp(log_beta))
-    temperature = w ** (2.0 / 3.0)
-    return {"rho_b": rho_b, "Lambda": lam, "T_min/T_b": float(temperature[0]),
-            "rho_max/rho_b": float(1.0 / temperature[0]), "distance": x,
-            "T/T_b": temperature}
 
 
 def description(e: float, knudsen: float, cells: int, n_modes: int, support: float,
@@ -177,7 +134,7 @@ def figure(stores, path) -> None:
         cells = ds.sizes["x"]
         temperature, density = ds.temperature.values[-1], ds.density.values[-1]
         t_b, rho_b = at_walls(temperature, cells), at_walls(density, cells)
-        theory = navier_stokes(e, knudsen)
+        theory = heated_walls_profile(e, knudsen)
         y = theory["distance"]
         x = numpy.concatenate([0.5 - y[::-1], 0.5 + y[1:]])
         profile = numpy.concatenate([theory["T/T_b"][::-1], theory["T/T_b"][1:]])
@@ -229,7 +186,7 @@ def main(argv=None):
     seconds = result.wall_seconds
     ds = granframe.open_run(store, time_axis="steps")
     measured = kinetic(ds, run.problem.operator, kn)
-    theory = navier_stokes(e, kn)
+    theory = heated_walls_profile(e, kn)
     row = {"e": e, "Kn": kn, "cells": args.cells, "N": args.n_modes, "S": args.support,
            "quadrature": args.quadrature, "dt": time_step, "final": args.final,
            "seconds": seconds,

@@ -51,24 +51,19 @@ levels and their shares over time) there and prints the tables.
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import pathlib
 import time
 
 import numpy
 
-from granframe.tools.studykit import finish, name_list, numbers, save_figure, write_csv
+from granframe.tools.studykit import (cfl_time_step, finish, name_list, numbers, save_figure,
+                                      write_csv)
 import matplotlib.pyplot as plt  # noqa: E402  (after studykit chose the Agg backend)
 from granframe.run.description import Hierarchy, RunDescription
 from granframe.run.runner import Simulation
 from granframe.tools import plotting
+from granframe.tools.space_cases import SOD_FINAL, SOD_GRID, sod_description, walls_description
 
-_spec = importlib.util.spec_from_file_location(
-    "space_study", pathlib.Path(__file__).resolve().parent / "space.py")
-SPACE = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(SPACE)
-
-SOD_GRID = SPACE.SOD_GRID
 SHOCK_GRID = {"dimension": 2, "n_modes": 40, "support_radius": 5.0}
 GRID_3D = {"dimension": 3, "n_modes": 24, "support_radius": 3.5}
 FINE_GRID = {"dimension": 2, "n_modes": 48, "support_radius": 4.5}
@@ -84,13 +79,13 @@ def _with(description: RunDescription, hierarchy) -> RunDescription:
 
 
 def sod(knudsen):
-    def build(cells, hierarchy=None, grid=SOD_GRID, final=SPACE.SOD_FINAL):
-        return _with(SPACE.sod_description(cells, knudsen, final=final, grid=grid), hierarchy)
+    def build(cells, hierarchy=None, grid=SOD_GRID, final=SOD_FINAL):
+        return _with(sod_description(cells, knudsen, final=final, grid=grid), hierarchy)
     return build
 
 
 def walls(cells, hierarchy=None):
-    d = SPACE.walls_description(cells, 0.1, 0.9, 1.0, 1.0, 1.0, 2.0, conservative=True,
+    d = walls_description(cells, 0.1, 0.9, 1.0, 1.0, 1.0, 2.0, conservative=True,
                                 title=f"heated walls, e = 0.9, eps = 0.1, {cells} cells")
     return _with(d, hierarchy)
 
@@ -103,7 +98,7 @@ def shock(cells, hierarchy=None):
         grid=SHOCK_GRID, kernel="maxwell", restitution={"name": "constant", "value": 0.97},
         initial={"name": "riemann", "left": state, "right": state},
         operator={"name": "fast_spectral"}, integrator="penalised_ars222", knudsen=1e-2,
-        conservative=True, time_step=SPACE.cfl_time_step(cells, final, SHOCK_GRID),
+        conservative=True, time_step=cfl_time_step(cells, final, SHOCK_GRID),
         final_time=final, output={"snapshot_interval": final},
         space={"cells": cells, "left": "specular", "right": "specular"})
     return _with(d, hierarchy)
@@ -117,7 +112,7 @@ def shear(cells, hierarchy=None):
         initial={"name": "sinusoidal_mode", "field": "velocity", "component": 2,
                  "amplitude": 0.2},
         operator={"name": "fast_spectral"}, integrator="penalised_ars222", knudsen=1e-2,
-        conservative=True, time_step=SPACE.cfl_time_step(cells, final, SOD_GRID),
+        conservative=True, time_step=cfl_time_step(cells, final, SOD_GRID),
         final_time=final, output={"snapshot_interval": final},
         space={"cells": cells})
     return _with(d, hierarchy)

@@ -52,27 +52,13 @@ import xarray  # noqa: E402
 
 from granframe.run.description import RunDescription  # noqa: E402
 from granframe.run.runner import Simulation  # noqa: E402
-from granframe.space.exact import euler_riemann, euler_riemann_cell_averages  # noqa: E402
 from granframe.space.transport import transport_speeds  # noqa: E402
+from granframe.theory.euler import euler_riemann, euler_riemann_cell_averages  # noqa: E402
+from granframe.tools.analysis import energy_balance  # noqa: E402
+from granframe.tools.space_cases import (GAMMA, SOD_LEFT, SOD_RIGHT, euler_state,  # noqa: E402
+                                         sod_description, sod_errors, walls_description)
 from granframe.tools.studykit import finish, write_csv, write_summary  # noqa: E402
 
-#: the velocity grid of the Sod tube: on N = 24 (h = 0.644, h/sqrt(T) = 0.88 in the
-#: rarefaction's T = 0.53) the spectral Q of the grid Maxwellian is 5e-4 of its peak, and the
-#: star states of the eps -> 0 limit come out about 1 % off (the refinement stalls near L1
-#: rho = 1.2e-2 at 200 cells); on N = 32, 1.6e-5 and 0.2 %
-SOD_GRID = {"dimension": 2, "n_modes": 32, "support_radius": 3.5}
-# the edge monitors of the quick Sod tube (50 cells, N = 32, S = 3.5) warn: at t = 0.2 the
-# share of the energy beyond the edge radius in the worst cell is 0.76 % (eps = 1e-2),
-# 0.18 % (1e-3) and 0.19 % (1e-4), above the tolerance 0.1 %. It is the velocity grid's
-# resolution, not the box: at eps = 1e-2 a wider support S = 4.5 at N = 32 (h = 0.621)
-# raises it to 2.6 %, while N = 40 and 48 at S = 3.5 lower it to 0.24 % and 0.12 %; a
-# quick variant that silences them would cost more than twice as much
-#: the velocity grid of the wall runs (T from 0.8 to 1.2)
-GRID = {"dimension": 2, "n_modes": 24, "support_radius": 3.5}
-GAMMA = 2.0                       # (d + 2)/d with d = 2
-SOD_LEFT = {"density": 1.0, "temperature": 1.0}
-SOD_RIGHT = {"density": 0.125, "temperature": 0.8}
-SOD_FINAL = 0.2
 SOD_KNUDSEN = (1e-2, 1e-3, 1e-4)
 SOD_CELLS = (25, 50, 100, 200)
 #: the energy-balance case: e, eps, wall temperature, initial temperature, final time
@@ -83,100 +69,10 @@ BALANCE_STEPS = ((8, 1.0), (8, 0.5), (8, 0.25), (16, 1.0), (32, 1.0))
 HEAT = {"knudsen": 0.1, "T1": 0.8, "T2": 1.2, "final": 4.0}
 
 
-def _euler_state(state):
-    """(rho, u, p) of a {density, temperature} state at rest, p = rho T."""
-    return (state["density"], 0.0, state["density"] * state["temperature"])
-
-
-def cfl_time_step(cells: int, final: float, grid=GRID, cfl: float = 0.5, length: float = 1.0,
-                  fraction: float = 1.0) -> float:
-    """The largest dt <= fraction x the transport's CFL limit 2 cfl dx / (L - h) that divides
-    ``final`` a whole number of times (L = S (3 + sqrt 2)/2, h = 2L/N)."""
-    half_width = grid["support_radius"] * (3.0 + math.sqrt(2.0)) / 2.0
-    spacing = 2.0 * half_width / grid["n_modes"]
-    limit = fraction * 2.0 * cfl * (length / cells) / (half_width - spacing)
-    return final / math.ceil(final / limit * (1 - 1e-12))
-
-
-def sod_description(cells: int, knudsen: float, final: float = SOD_FINAL, grid=SOD_GRID,
-                    integrator: str = "penalised_ars222", conservative=True) -> RunDescription:
-    """The elastic Sod tube between specular walls at dt = the CFL limit."""
-    return RunDescription(
-        title=f"Sod tube, eps = {knudsen:g}, {cells} cells",
-        grid=grid, kernel="maxwell", restitution={"name": "constant", "value": 1.0},
-        initial={"name": "riemann", "left": SOD_LEFT, "right": SOD_RIGHT},
-        operator={"name": "fast_spectral"}, integrator=integrator, knudsen=knudsen,
-        conservative=conservative, time_step=cfl_time_step(cells, final, grid),
-        final_time=final, output={"snapshot_interval": final},
-        space={"cells": cells, "left": "specular", "right": "specular"})
-
-
-def sod_errors(ds) -> dict:
-    """L1 errors sum_i dx |w_i - w_exact,i| of rho, u_1, T at the last step against the
-    cell averages of the exact Euler solution (gamma = 2) at that time."""
-    cells = ds.sizes["x"]
-    edges = numpy.linspace(0.0, 1.0, cells + 1)
-    t = float(ds.step_time.values[-1])
-    exact = euler_riemann_cell_averages(_euler_state(SOD_LEFT), _euler_state(SOD_RIGHT),
-                                        GAMMA, edges, t)
-    computed = {"rho": ds.density.values[-1], "u": ds.velocity.values[-1][:, 0],
-                "T": ds.temperature.values[-1]}
-    return {name: float(numpy.sum(numpy.abs(computed[name] - exact[name])) / cells)
-            for name in computed}
-
-
-def walls_description(cells: int, knudsen: float, restitution: float, T1: float, T2: float,
-                      initial: float, final: float, fraction: float = 1.0,
-                      title: str = "", conservative=False) -> RunDescription:
-    """Maxwell molecules between diffuse walls at T1 (x = 0) and T2 (x = 1), from the
-    Maxwellian of temperature ``initial``, explicit SSP RK2 collisions."""
-    return RunDescription(
-        title=title or f"diffuse walls T1 = {T1:g}, T2 = {T2:g}, e = {restitution:g}, "
-                       f"eps = {knudsen:g}, {cells} cells",
-        grid=GRID, kernel="maxwell", restitution={"name": "constant", "value": restitution},
-        initial={"name": "maxwellian", "temperature": initial},
-        operator={"name": "fast_spectral"}, integrator="ssp_rk2", knudsen=knudsen,
-        conservative=conservative,
-        time_step=cfl_time_step(cells, final, fraction=fraction), final_time=final,
-        output={"snapshot_interval": final},
-        space={"cells": cells, "left": {"name": "diffuse", "temperature": T1},
-               "right": {"name": "diffuse", "temperature": T2}})
-
-
 def balance_description(cells: int, fraction: float = 1.0, final: float | None = None):
     b = BALANCE
     return walls_description(cells, b["knudsen"], b["restitution"], b["wall"], b["wall"],
                              b["initial"], final or b["final"], fraction)
-
-
-def energy_balance(ds, operator, knudsen: float, window: float = 0.2) -> dict:
-    r"""The energy budget of a wall run at its last step.
-
-    ``heat``: what both walls put in per unit time, sum_walls wall_energy / dt (the last
-    step; ``heat_window``: averaged over the last ``window`` of the steps);
-    ``dissipation``: sum_cells dx h^d sum_j Q_j |v_j|^2 / 2 / eps of the final snapshot,
-    Q the run's operator; ``dEdt``: the change of the total energy over the last step / dt.
-    Every step E^{n+1} - E^n = (wall energy) + (collision step's energy change), so
-    ``mismatch`` = (heat + dissipation)/heat equals dEdt/heat (unsteadiness) plus
-    ``residual`` = (heat + dissipation - dEdt)/heat, the collision step's energy change
-    against its rate at the end of the step (splitting and time error, O(dt)).
-    """
-    f = ds.f.values[-1]
-    grid = operator.grid
-    dx = 1.0 / ds.sizes["x"]
-    q = numpy.asarray(operator(f))
-    dissipation = float(numpy.sum(q * grid.speed_squared()) * grid.cell_volume
-                        * 0.5 * dx / knudsen)
-    dt = ds.dt.values[1:]
-    heat_rate = ds.wall_energy.values[1:].sum(axis=1) / dt
-    count = max(1, int(window * len(heat_rate)))
-    energy = ds.kinetic_energy.values
-    heat = float(heat_rate[-1])
-    dEdt = float((energy[-1] - energy[-2]) / dt[-1])
-    return {"heat": heat, "heat_window": float(heat_rate[-count:].mean()),
-            "dissipation": dissipation, "dEdt": dEdt,
-            "mismatch": (heat + dissipation) / heat, "unsteadiness": dEdt / heat,
-            "residual": (heat + dissipation - dEdt) / heat}
 
 
 def _description(ds) -> RunDescription:
@@ -206,7 +102,7 @@ def heat_transfer(ds, window: float = 0.2) -> dict:
     equals the heat rates of the walls, what the left wall puts in and the right one takes
     out per unit time (averaged over the last ``window`` of the steps). ``q1``: the recorded
     heat-flux field, which counts the node j = 0 as its two halves at +-L, as the transport
-    moves it (:mod:`granframe.space.fields`); at the steady state (u = 0) it is the energy
+    moves it (:mod:`granframe.velocity.moments`); at the steady state (u = 0) it is the energy
     flux.
     """
     flux = energy_flux(ds)
@@ -267,7 +163,7 @@ def report(stores: dict, out) -> dict:
                 axis.plot(ds.x.values, values, "o-", ms=2.5, lw=0.8, label=f"eps = {eps:g}")
         t, cells = summary[sod[0]]["final_time"], summary[sod[0]]["cells"]
         grid = ds.attrs["granframe"]["description"]["grid"]
-        left, right = _euler_state(SOD_LEFT), _euler_state(SOD_RIGHT)
+        left, right = euler_state(SOD_LEFT), euler_state(SOD_RIGHT)
         exact = euler_riemann(left, right, GAMMA, x, t)
         averages = euler_riemann_cell_averages(left, right, GAMMA,
                                                numpy.linspace(0.0, 1.0, cells + 1), t)

@@ -7,6 +7,7 @@ import math
 import numpy
 
 from granframe import validators as check
+from granframe.theory.cooling import maxwellian_cooling_rate
 
 
 def _bkw_profile(grid, shape_parameter, xp=numpy):
@@ -76,7 +77,9 @@ def heated_maxwell_temperature(time, initial_temperature, restitution, heat_bath
     """Temperature of the heated Maxwell-molecule problem (review, eq. (ext_temp)).
 
     T(t) = (T0 - 8 tau/(1-e^2)) exp(-rho0 (1-e^2) t / 4) + 8 tau/(1-e^2), for
-    d_t f = Q(f,f) + tau Delta f with the review's B (1/(2 pi) in 2D, 1/(4 pi) in 3D).
+    d_t f = Q(f,f) + tau Delta f with the review's B (1/(2 pi) in 2D, 1/(4 pi) in 3D):
+    rho0 (1-e^2)/4 is the cooling rate of Maxwell molecules
+    (:func:`granframe.theory.cooling.maxwellian_cooling_rate`).
     For e = 1 it is T0 + 2 tau t.
     """
     e, tau = restitution, heat_bath
@@ -84,7 +87,8 @@ def heated_maxwell_temperature(time, initial_temperature, restitution, heat_bath
     if e == 1.0:
         return initial_temperature + 2.0 * tau * t
     limit = 8.0 * tau / ((1.0 - e * e) * density)
-    rate = density * (1 - e * e) / 4 * t   # T0 e^-rate + limit (1 - e^-rate), no cancellation
+    # T0 e^-rate + limit (1 - e^-rate), no cancellation
+    rate = maxwellian_cooling_rate(e, density) * t
     return initial_temperature * numpy.exp(-rate) - limit * numpy.expm1(-rate)
 
 

@@ -1,12 +1,14 @@
 """Exact solutions and scales of the one-dimensional space-inhomogeneous problem (docs/space.md).
 
-- the Riemann problem of the compressible Euler equations (the hydrodynamic limit eps -> 0,
-  gamma = (d+2)/d), pointwise and as cell averages;
 - the free-molecular steady state between two diffuse walls (no collisions), in closed form
   and on a velocity grid;
 - free transport d_t f + c d_x f = 0: a periodic sine, and specular walls by the method
   of images;
-- the mean free path and the Knudsen number of the kernels in granframe's conventions.
+- the mean free path and the Knudsen number of the kernels in granframe's conventions;
+- the energy a vibrating diffuse wall puts in per period.
+
+The Riemann problem of the Euler equations (the hydrodynamic limit eps -> 0) is
+:mod:`granframe.theory.euler`.
 
 Temperature, pressure and heat flux follow granframe's conventions: T = int |v-u|^2 f dv
 / (d rho), p = rho T, q_i = int (v-u)_i |v-u|^2 f dv / 2.
@@ -20,294 +22,16 @@ import numbers
 import numpy
 
 from granframe import validators as check
-
-
-def _gauss_cell_averages(edges, function, breaks, points):
-    """Averages over the cells [e_i, e_{i+1}] of ``function``, smooth between the points
-    ``breaks``: each cell is split at the breaks inside it and each piece gets the
-    ``points``-point Gauss-Legendre rule (exact for polynomials of degree 2 points - 1).
-
-    ``function(x)`` maps a 1-D array of n positions to an array of shape (n, ...).
-    """
-    edges = numpy.asarray(edges, dtype=float)
-    breaks = numpy.asarray(breaks, dtype=float).ravel()
-    inner = breaks[(breaks > edges[0]) & (breaks < edges[-1])]
-    nodes = numpy.unique(numpy.concatenate([edges, inner]))
-    left, right = nodes[:-1], nodes[1:]
-    abscissae, weights = numpy.polynomial.legendre.leggauss(points)
-    half = 0.5 * (right - left)
-    x = (0.5 * (left + right))[:, None] + half[:, None] * abscissae[None, :]
-    values = numpy.asarray(function(x.ravel()), dtype=float)
-    values = values.reshape(x.shape + values.shape[1:])
-    scale = (half[:, None] * weights[None, :]).reshape(x.shape + (1,) * (values.ndim - 2))
-    pieces = numpy.sum(values * scale, axis=1)
-    starts = numpy.searchsorted(left, edges[:-1])
-    widths = numpy.diff(edges).reshape((-1,) + (1,) * (pieces.ndim - 1))
-    return numpy.add.reduceat(pieces, starts, axis=0) / widths
-
-
-def _edges_argument(owner, edges):
-    e = numpy.asarray(edges, dtype=float)
-    if e.ndim != 1 or e.size < 2 or not numpy.isfinite(e).all() or not numpy.all(numpy.diff(e) > 0):
-        check.reject(owner, "edges", edges, "must be a 1-D array of at least 2 finite, "
-                     "strictly increasing cell edges")
-    return e
+from granframe.theory.cells import gauss_cell_averages
+# granframe.tools.advise imports the Riemann solver from here; new code imports it from
+# granframe.theory.euler
+from granframe.theory.euler import euler_riemann_star  # noqa: F401
 
 
 def _positive(owner, name, value):
     if not check.is_real(value) or not (0.0 < float(value) < math.inf):
         check.reject(owner, name, value, "must be a positive finite real number")
     return float(value)
-
-
-def _time_argument(owner, t):
-    if not check.is_real(t) or not (0.0 <= float(t) < math.inf):
-        check.reject(owner, "t", t, "must be a finite real number >= 0")
-    return float(t)
-
-
-def _points_argument(owner, points):
-    if not check.is_integer(points) or not 1 <= points <= 100:
-        check.reject(owner, "points", points, "must be an integer in [1, 100]")
-    return int(points)
-
-
-# -- The Riemann problem of the Euler equations ---------------------------------------------
-
-
-def _euler_state(owner, name, state):
-    try:
-        rho, u, p = (float(s) for s in state)
-    except (TypeError, ValueError):
-        check.reject(owner, name, state, "must be a (rho, u, p) triple of real numbers")
-    if not (0.0 < rho < math.inf and math.isfinite(u) and 0.0 < p < math.inf):
-        check.reject(owner, name, state, "must be (rho, u, p) with rho > 0, p > 0 finite "
-                     "and u finite")
-    return rho, u, p
-
-
-def _gamma_argument(owner, gamma):
-    if not check.is_real(gamma) or not (1.0 < float(gamma) < math.inf):
-        check.reject(owner, "gamma", gamma, "must be a finite real number > 1 "
-                     "((d+2)/d: 2 in 2D, 5/3 in 3D)")
-    return float(gamma)
-
-
-def _pressure_function(p, rho, pk, gamma):
-    """Toro's f_K(p) and f_K'(p) (section 4.3): shock branch for p > p_K, rarefaction
-    branch for p <= p_K."""
-    a = math.sqrt(gamma * pk / rho)
-    if p > pk:
-        A, B = 2.0 / ((gamma + 1.0) * rho), (gamma - 1.0) / (gamma + 1.0) * pk
-        root = math.sqrt(A / (p + B))
-        return (p - pk) * root, root * (1.0 - 0.5 * (p - pk) / (p + B))
-    ratio = p / pk
-    exponent = (gamma - 1.0) / (2.0 * gamma)
-    return (2.0 * a / (gamma - 1.0) * (ratio ** exponent - 1.0),
-            ratio ** (-(gamma + 1.0) / (2.0 * gamma)) / (rho * a))
-
-
-def euler_riemann_star(left, right, gamma: float) -> dict:
-    r"""Star state and wave speeds of the Euler Riemann problem (Toro, ch. 4).
-
-    The pressure p* in the star region is the root of
-
-        f(p) = f_L(p) + f_R(p) + u_R - u_L = 0,
-        f_K(p) = (p - p_K) sqrt(A_K / (p + B_K))                  p > p_K (shock),
-        f_K(p) = 2 a_K / (gamma-1) ((p/p_K)^{(gamma-1)/(2 gamma)} - 1)   p <= p_K (fan),
-
-    A_K = 2 / ((gamma+1) rho_K), B_K = (gamma-1)/(gamma+1) p_K, a_K = sqrt(gamma p_K/rho_K),
-    found by Newton's method from the two-rarefaction guess (f is increasing and concave,
-    so the iterates converge) until the relative change is below 1e-15;
-    u* = (u_L + u_R)/2 + (f_R(p*) - f_L(p*))/2. Toro, Riemann Solvers and Numerical
-    Methods for Fluid Dynamics, 3rd ed., 2009, sections 4.2-4.3.
-
-    Parameters
-    ----------
-    left, right : tuple
-        (rho, u, p) on each side; rho > 0, p > 0 (in granframe's variables p = rho T).
-    gamma : float
-        Ratio of specific heats, > 1 ((d+2)/d for the Boltzmann equation's Euler limit).
-
-    Returns
-    -------
-    dict
-        ``p``, ``u`` (p*, u*), ``rho_left``, ``rho_right`` (the densities either side of
-        the contact), ``left_wave``, ``right_wave`` (``"shock"`` or ``"rarefaction"``)
-        and ``speeds``: the sorted speeds of every discontinuity and fan edge (a shock
-        speed, or the head and tail of a fan, on each side, and the contact u*).
-
-    Raises
-    ------
-    ValueError
-        For data that generate vacuum, 2 (a_L + a_R)/(gamma - 1) <= u_R - u_L.
-    """
-    return _riemann_star("euler_riemann_star", left, right, gamma)
-
-
-def _riemann_star(owner, left, right, gamma):
-    """:func:`euler_riemann_star`, its errors naming ``owner``."""
-    gamma = _gamma_argument(owner, gamma)
-    rl, ul, pl = _euler_state(owner, "left", left)
-    rr, ur, pr = _euler_state(owner, "right", right)
-    al, ar = math.sqrt(gamma * pl / rl), math.sqrt(gamma * pr / rr)
-    if 2.0 * (al + ar) / (gamma - 1.0) <= ur - ul:
-        check.reject(owner, "left, right", (tuple(left), tuple(right)),
-                     f"must not generate vacuum: 2 (a_L + a_R)/(gamma - 1) = "
-                     f"{2.0 * (al + ar) / (gamma - 1.0):.6g} <= u_R - u_L = {ur - ul:.6g}; "
-                     "the exact solver needs states without vacuum")
-    z = (gamma - 1.0) / (2.0 * gamma)
-    p = ((al + ar - 0.5 * (gamma - 1.0) * (ur - ul))
-         / (al / pl ** z + ar / pr ** z)) ** (1.0 / z)          # two-rarefaction guess
-    for _ in range(100):
-        fl, dl = _pressure_function(p, rl, pl, gamma)
-        fr, dr = _pressure_function(p, rr, pr, gamma)
-        step = (fl + fr + ur - ul) / (dl + dr)
-        new = max(p - step, 1e-3 * p)
-        if abs(new - p) <= 1e-15 * new:
-            p = new
-            break
-        p = new
-    fl, _ = _pressure_function(p, rl, pl, gamma)
-    fr, _ = _pressure_function(p, rr, pr, gamma)
-    u = 0.5 * (ul + ur) + 0.5 * (fr - fl)
-    g6 = (gamma - 1.0) / (gamma + 1.0)
-    speeds = []
-    if p > pl:
-        rho_left = rl * (p / pl + g6) / (g6 * p / pl + 1.0)
-        speeds.append(ul - al * math.sqrt((gamma + 1.0) / (2 * gamma) * p / pl + z))
-    else:
-        rho_left = rl * (p / pl) ** (1.0 / gamma)
-        speeds += [ul - al, u - al * (p / pl) ** z]
-    speeds.append(u)
-    if p > pr:
-        rho_right = rr * (p / pr + g6) / (g6 * p / pr + 1.0)
-        speeds.append(ur + ar * math.sqrt((gamma + 1.0) / (2 * gamma) * p / pr + z))
-    else:
-        rho_right = rr * (p / pr) ** (1.0 / gamma)
-        speeds += [u + ar * (p / pr) ** z, ur + ar]
-    return {"p": p, "u": u, "rho_left": rho_left, "rho_right": rho_right,
-            "left_wave": "shock" if p > pl else "rarefaction",
-            "right_wave": "shock" if p > pr else "rarefaction", "speeds": speeds}
-
-
-def euler_riemann(left, right, gamma: float, x, t: float, x0: float = 0.5) -> dict:
-    r"""Exact solution of the Riemann problem of the 1D compressible Euler equations.
-
-    d_t (rho, rho u, E) + d_x (rho u, rho u^2 + p, u (E + p)) = 0 with
-    E = rho u^2/2 + p/(gamma - 1), from (rho, u, p) = ``left`` for x < x0 and ``right``
-    for x > x0. The solution is self-similar in S = (x - x0)/t and sampled as in Toro,
-    section 4.5 (the star state from :func:`euler_riemann_star`); inside a left fan
-
-        a = 2/(gamma+1) (a_L + (gamma-1)/2 (u_L - S)),
-        u = 2/(gamma+1) (a_L + (gamma-1)/2 u_L + S),
-        rho = rho_L (a/a_L)^{2/(gamma-1)},   p = p_L (a/a_L)^{2 gamma/(gamma-1)},
-
-    and symmetrically on the right. In granframe's variables gamma = (d+2)/d, p = rho T with
-    T the temperature per velocity dimension, and E = int |v|^2/2 f dv, since
-    1/(gamma-1) = d/2. Toro, Riemann Solvers and Numerical Methods for Fluid Dynamics,
-    3rd ed., 2009, ch. 4.
-
-    Parameters
-    ----------
-    left, right : tuple
-        (rho, u, p) with rho > 0, p > 0.
-    gamma : float
-        > 1.
-    x : array_like
-        Positions (any shape).
-    t : float
-        Time >= 0 (t = 0: the initial data, the left state for x < x0).
-    x0 : float
-        Position of the initial discontinuity.
-
-    Returns
-    -------
-    dict
-        ``rho``, ``u``, ``p``, ``T`` (= p / rho), arrays of the shape of x.
-    """
-    owner = "euler_riemann"
-    gamma = _gamma_argument(owner, gamma)
-    t = _time_argument(owner, t)
-    rl, ul, pl = _euler_state(owner, "left", left)
-    rr, ur, pr = _euler_state(owner, "right", right)
-    star = _riemann_star(owner, left, right, gamma)
-    x = numpy.asarray(x, dtype=float)
-    if t == 0.0:
-        is_left = x < x0
-        rho, u, p = (numpy.where(is_left, a, b) for a, b in ((rl, rr), (ul, ur), (pl, pr)))
-        return {"rho": rho, "u": u, "p": p, "T": p / rho}
-    s = (x - x0) / t
-    ps, us = star["p"], star["u"]
-    g4, g5, g7 = 2.0 / (gamma - 1.0), 2.0 / (gamma + 1.0), 0.5 * (gamma - 1.0)
-    g3 = 2.0 * gamma / (gamma - 1.0)
-    al, ar = math.sqrt(gamma * pl / rl), math.sqrt(gamma * pr / rr)
-    speeds = star["speeds"]
-    with numpy.errstate(invalid="ignore"):
-        # left of the contact
-        if star["left_wave"] == "shock":
-            outside_l, fan_l = s < speeds[0], numpy.zeros(s.shape, dtype=bool)
-        else:
-            outside_l, fan_l = s < speeds[0], (s >= speeds[0]) & (s < speeds[1])
-        cl = numpy.clip(g5 * (al + g7 * (ul - s)), 0.0, None) / al
-        rho_l = numpy.where(outside_l, rl, numpy.where(fan_l, rl * cl ** g4, star["rho_left"]))
-        u_l = numpy.where(outside_l, ul, numpy.where(fan_l, g5 * (al + g7 * ul + s), us))
-        p_l = numpy.where(outside_l, pl, numpy.where(fan_l, pl * cl ** g3, ps))
-        # right of the contact
-        if star["right_wave"] == "shock":
-            outside_r, fan_r = s > speeds[-1], numpy.zeros(s.shape, dtype=bool)
-        else:
-            outside_r, fan_r = s > speeds[-1], (s <= speeds[-1]) & (s > speeds[-2])
-        cr = numpy.clip(g5 * (ar - g7 * (ur - s)), 0.0, None) / ar
-        rho_r = numpy.where(outside_r, rr, numpy.where(fan_r, rr * cr ** g4, star["rho_right"]))
-        u_r = numpy.where(outside_r, ur, numpy.where(fan_r, g5 * (-ar + g7 * ur + s), us))
-        p_r = numpy.where(outside_r, pr, numpy.where(fan_r, pr * cr ** g3, ps))
-    is_left = s < us
-    rho = numpy.where(is_left, rho_l, rho_r)
-    u = numpy.where(is_left, u_l, u_r)
-    p = numpy.where(is_left, p_l, p_r)
-    return {"rho": rho, "u": u, "p": p, "T": p / rho}
-
-
-def euler_riemann_cell_averages(left, right, gamma: float, edges, t: float, x0: float = 0.5,
-                                points: int = 8) -> dict:
-    r"""Cell averages of the exact Euler Riemann solution (:func:`euler_riemann`).
-
-    Each cell [e_i, e_{i+1}] is split at the positions x0 + s t of the shocks, the contact
-    and the fan edges (the ``speeds`` of :func:`euler_riemann_star`), and every piece gets
-    the ``points``-point Gauss-Legendre rule. Between the breaks the solution is constant
-    or a fan, where rho, rho u and E are powers of a linear function of x: polynomials of
-    degree <= 2 + 2 gamma/(gamma-1) (7 for gamma = 2, 9 for 5/3, 13 for 1.4), integrated
-    exactly by 7 or more points. For other gamma the fan is smooth: on the Sod data with
-    gamma = 1.3 at t = 0.2, the default 8 points and 60 points agree to 3e-15 on 10 and on
-    100 cells of [0, 1].
-
-    Returns
-    -------
-    dict
-        The averages of the conserved variables ``rho``, ``momentum`` (rho u) and
-        ``energy`` (E = rho u^2/2 + p/(gamma-1)), and from them, as a finite-volume scheme
-        computes them, ``u`` = momentum/rho, ``p`` = (gamma-1)(E - momentum^2/(2 rho)),
-        ``T`` = p/rho; arrays of length ``len(edges) - 1``.
-    """
-    owner = "euler_riemann_cell_averages"
-    edges = _edges_argument(owner, edges)
-    points = _points_argument(owner, points)
-    gamma = _gamma_argument(owner, gamma)
-    t = _time_argument(owner, t)
-    star = _riemann_star(owner, left, right, gamma)
-
-    def conserved(x):
-        w = euler_riemann(left, right, gamma, x, t, x0)
-        momentum = w["rho"] * w["u"]
-        return numpy.stack([w["rho"], momentum,
-                            0.5 * momentum * w["u"] + w["p"] / (gamma - 1.0)], axis=-1)
-
-    breaks = x0 + t * numpy.asarray(star["speeds"]) if t > 0 else numpy.array([x0])
-    rho, momentum, energy = _gauss_cell_averages(edges, conserved, breaks, points).T
-    u = momentum / rho
-    p = (gamma - 1.0) * (energy - 0.5 * momentum * u)
-    return {"rho": rho, "momentum": momentum, "energy": energy, "u": u, "p": p, "T": p / rho}
 
 
 # -- Free-molecular flow between two diffuse walls -------------------------------------------
@@ -557,7 +281,7 @@ def free_molecular_couette_grid(grid, temperature: float, velocity: float, densi
     n follows from the grid mass h^d sum f = rho.
 
     The moments are taken as the recorded fields count them
-    (:class:`~granframe.space.fields.FieldMoments`: the node -L as its two halves). The
+    (:class:`~granframe.velocity.moments.FieldMoments`: the node -L as its two halves). The
     wall momentum per unit time is the flux of the state through each wall,
     h^d sum_v v_1 v f (the node -L, whose two halves cancel, left out): (P_11, P_12, 0)
     through the wall at x = 0 and its negative through the other, since u = 0. The
@@ -582,7 +306,7 @@ def free_molecular_couette_grid(grid, temperature: float, velocity: float, densi
         ``f`` (the grid's shape), ``n``, the fields ``rho``, ``u``, ``T``, ``P``, ``P11``,
         ``P12``, ``q``, and ``wall_momentum`` (2, d) as in :func:`free_molecular_couette`.
     """
-    from granframe.space.fields import FieldMoments
+    from granframe.velocity.moments import FieldMoments
 
     owner = "free_molecular_couette_grid"
     T, U, rho, alpha = _couette_arguments(owner, temperature, velocity, density, accommodation)
@@ -669,8 +393,8 @@ def free_transport_sine(edges, t: float, c, amplitude: float, wavenumber: int, l
         Shape ``(len(edges) - 1,) + numpy.shape(c)``.
     """
     owner = "free_transport_sine"
-    edges = _edges_argument(owner, edges)
-    t = _time_argument(owner, t)
+    edges = check.cell_edges(owner, edges)
+    t = check.time_point(owner, t)
     length = _positive(owner, "length", length)
     if not isinstance(wavenumber, numbers.Integral) or isinstance(wavenumber, bool) \
             or wavenumber == 0:
@@ -686,7 +410,7 @@ def free_transport_sine(edges, t: float, c, amplitude: float, wavenumber: int, l
 
 def _images_arguments(owner, length, t, velocities, speeds):
     length = _positive(owner, "length", length)
-    t = _time_argument(owner, t)
+    t = check.time_point(owner, t)
     v = numpy.asarray(velocities, dtype=float)
     if v.ndim != 1:
         check.reject(owner, "velocities", velocities, "must be a 1-D array of v_1 values")
@@ -761,14 +485,14 @@ def specular_images_cell_averages(initial, length: float, edges, t: float, veloc
         Shape ``(len(edges) - 1, len(velocities))``.
     """
     owner = "specular_images_cell_averages"
-    edges = _edges_argument(owner, edges)
-    points = _points_argument(owner, points)
+    edges = check.cell_edges(owner, edges)
+    points = check.rule_points(owner, points)
     length, t, v, c = _images_arguments(owner, length, t, velocities, speeds)
     shifts = c * t
     lowest = math.floor((edges[0] - shifts.max()) / length)
     highest = math.ceil((edges[-1] - shifts.min()) / length)
     folds = shifts[:, None] + length * numpy.arange(lowest, highest + 1)[None, :]
-    return _gauss_cell_averages(
+    return gauss_cell_averages(
         edges, lambda x: specular_images(initial, length, x, t, v, c), folds, points)
 
 

@@ -1,4 +1,5 @@
-"""Quantities the studies extract from runs: relative entropy, decay rates, tail exponents."""
+"""Quantities the studies extract from runs: relative entropy, decay rates, tail exponents,
+the energy budget of a space run with walls."""
 
 from __future__ import annotations
 
@@ -50,3 +51,38 @@ def tail_exponent(speed, f, window):
     use = (middle >= window[0]) & (middle <= window[1]) & (slope < 0)
     b, _, stderr = fit_line(numpy.log(middle[use]), numpy.log(-slope[use]))
     return b + 1.0, stderr
+
+
+def energy_balance(ds, operator, knudsen: float, window: float = 0.2,
+                   length: float = 1.0) -> dict:
+    r"""The energy budget of a space run with walls at its last step.
+
+    ``ds``: the run's dataset with the steps as its time axis (``f``, ``dt``,
+    ``wall_energy``, ``kinetic_energy``); ``operator``: the run's collision operator
+    (``operator.grid`` its velocity grid); ``length``: the interval's.
+
+    ``heat``: what both walls put in per unit time, sum_walls wall_energy / dt (the last
+    step; ``heat_window``: averaged over the last ``window`` of the steps);
+    ``dissipation``: sum_cells dx h^d sum_j Q_j |v_j|^2 / 2 / eps of the final snapshot,
+    Q the run's operator; ``dEdt``: the change of the total energy over the last step / dt.
+    Every step E^{n+1} - E^n = (wall energy) + (collision step's energy change), so
+    ``mismatch`` = (heat + dissipation)/heat equals dEdt/heat (``unsteadiness``) plus
+    ``residual`` = (heat + dissipation - dEdt)/heat, the collision step's energy change
+    against its rate at the end of the step (splitting and time error, O(dt)).
+    """
+    f = ds.f.values[-1]
+    grid = operator.grid
+    dx = length / ds.sizes["x"]
+    q = numpy.asarray(operator(f))
+    dissipation = float(numpy.sum(q * grid.speed_squared()) * grid.cell_volume
+                        * 0.5 * dx / knudsen)
+    dt = ds.dt.values[1:]
+    heat_rate = ds.wall_energy.values[1:].sum(axis=1) / dt
+    count = max(1, int(window * len(heat_rate)))
+    energy = ds.kinetic_energy.values
+    heat = float(heat_rate[-1])
+    dEdt = float((energy[-1] - energy[-2]) / dt[-1])
+    return {"heat": heat, "heat_window": float(heat_rate[-count:].mean()),
+            "dissipation": dissipation, "dEdt": dEdt,
+            "mismatch": (heat + dissipation) / heat, "unsteadiness": dEdt / heat,
+            "residual": (heat + dissipation - dEdt) / heat}

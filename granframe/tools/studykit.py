@@ -1,5 +1,6 @@
 """Small pieces shared by the studies (``studies/*.py``): their command line and how it
-ends, CSV tables, figures and ``summary.json``."""
+ends, their output folder, CSV tables, figures and ``summary.json``, and a time step at the
+transport's CFL limit. A study imports granframe and this module, never another study."""
 
 from __future__ import annotations
 
@@ -15,6 +16,9 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+from granframe.space.transport import step_limit  # noqa: E402
+from granframe.velocity.grid import VelocityGrid  # noqa: E402
 
 
 def number(low: float, high: float = math.inf, low_open: bool = True, kind=float):
@@ -54,6 +58,50 @@ def name_list(allowed):
                 f"{', '.join(map(repr, unknown))} not allowed: choose from {', '.join(allowed)}")
         return chosen
     return parse
+
+
+def study_arguments(doc: str, n_modes: int, cells: int, final: float | None):
+    """The options the granular studies share (``--final`` only where ``final`` is not
+    None); a value outside what the study can run is refused by argparse, by name."""
+    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0].replace("\n", " "))
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--restitution", type=number(0.0, 1.0), default=0.9)
+    parser.add_argument("--n-modes", type=number(4, kind=int, low_open=False),
+                        default=n_modes)
+    parser.add_argument("--support", type=number(0.0), default=3.5)
+    parser.add_argument("--cells", type=number(1, kind=int, low_open=False), default=cells)
+    if final is not None:
+        parser.add_argument("--final", type=number(0.0), default=final)
+    parser.add_argument("--quadrature", choices=("auto", "review"), default="auto",
+                        help="the fast operator's rules (review: a quarter of the cost at "
+                             "N = 24 in 3D, but Q differs from the default rules' by 3.7 %% "
+                             "of max |Q| there)")
+    parser.add_argument("--figure", nargs="+", metavar="STORE",
+                        help="draw these runs into a figure in OUT and stop")
+    return parser
+
+
+def output_folder(args, draw, name: str):
+    """OUT (``args.out``), created; with ``--figure`` the stores drawn by ``draw`` into
+    OUT/``name`` instead, and None (nothing to run)."""
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    if args.figure:
+        draw(args.figure, out / name)
+        return None
+    return out
+
+
+def cfl_time_step(cells: int, final: float, grid: dict, cfl: float = 0.5,
+                  length: float = 1.0, fraction: float = 1.0) -> float:
+    """The largest dt <= ``fraction`` x the transport's CFL limit
+    (:func:`granframe.space.transport.step_limit`, 2 cfl dx / (L - h) with dx =
+    length / cells) that divides ``final`` a whole number of times. ``grid``: the
+    velocity grid's table (``n_modes``, ``support_radius``; L and h do not depend on its
+    ``dimension``, 2 where it has none)."""
+    velocity = VelocityGrid(**{"dimension": 2, **grid})
+    limit = fraction * step_limit(velocity, length / cells, cfl)
+    return final / math.ceil(final / limit * (1 - 1e-12))
 
 
 def write_csv(path, rows: list[dict], fields=None) -> None:
