@@ -18,8 +18,8 @@ from scipy.interpolate import CubicSpline
 import granframe.tools.advise as advise_module
 from granframe.equations.rescaled import Rescaling
 from granframe.run.storage import RunStore
-from granframe.tools.advise import (MODES, SPHERE, HierarchyPrice, Scene, advise,
-                                    price_hierarchy)
+from granframe.tools.advise import HierarchyPrice, Scene, advise, price_hierarchy
+from granframe.tools.advise_numerics import MODES, SPHERE
 from granframe.velocity.quadratures import Lebedev
 from granframe.tools.cli import main
 from granframe.run.description import Hierarchy, RunDescription
