@@ -51,9 +51,8 @@ def open_run(path, *, time_axis: str = "snapshots") -> xarray.Dataset:
     Returns
     -------
     xarray.Dataset
-        The store's arrays under their own names, ``f`` read lazily (a snapshot is read
-        when used), with the dimensions, coordinates and attributes that
-        :func:`run_dataset` lists, and for a space run those of :func:`label_space`.
+        The store's arrays under their own names, ``f`` read lazily (a snapshot when
+        used), labelled as :func:`run_dataset` and, for a space run, :func:`label_space` list.
 
     Raises
     ------
