@@ -10,9 +10,10 @@ from __future__ import annotations
 import numpy
 
 from granframe.backends import to_host
-from granframe.space.conserving import conserving_step, guard_moments
+from granframe.space.conserving import conserving_step
 from granframe.space.hierarchy.levels import FluidParts
 from granframe.space.hierarchy.rates import scaled_rates
+from granframe.velocity.guard import guard_moments
 
 
 def realizability(density, velocity, temperature, dx: float, periodic: bool, knudsen: float,

@@ -8,10 +8,11 @@ full operator: :class:`EulerLevel`, :class:`RelaxationLevel`, :class:`Ellipsoida
 from __future__ import annotations
 
 from granframe.abc import CollisionModel
-from granframe.space.conserving import conserving_step, guard_moments
+from granframe.space.conserving import conserving_step
 from granframe.space.hierarchy.rates import CoolingRate
 from granframe.space.hierarchy.relaxation import EllipsoidalEquation, RelaxationEquation
 from granframe.velocity.equilibrium import discrete_maxwellians
+from granframe.velocity.guard import guard_moments
 
 
 class FluidParts:

@@ -13,9 +13,9 @@ import math
 import numpy
 
 from granframe.space.collisions import CellCollisions
-from granframe.space.conserving import guard_moments
 from granframe.space.hierarchy.rates import scaled_rates
 from granframe.velocity.equilibrium import discrete_maxwellians
+from granframe.velocity.guard import guard_moments
 
 
 class RelaxationEquation(CellCollisions):
@@ -42,7 +42,7 @@ class RelaxationEquation(CellCollisions):
     def target(self, flat, guarded):
         """(M, converged): the discrete Maxwellian of every cell of ``flat`` (cells,
         *grid.shape) with the moments ``guarded``
-        (:class:`~granframe.space.conserving.GuardedMoments`)."""
+        (:class:`~granframe.velocity.guard.GuardedMoments`)."""
         xp = self.operator.backend.xp
         return discrete_maxwellians(self.operator.grid, guarded.density, guarded.momentum,
                                     guarded.second, xp, self.moments.points)
