@@ -174,6 +174,96 @@ def partition(cells: int, chunk: int, processes: int, ghost: int,
     return [(stop - count, stop) for count, stop in zip(counts, stops)]
 
 
+def cell_divisors(cells: int, low: int, high: int | None = None) -> list[int]:
+    """The divisors of ``cells`` from ``low`` to ``high`` (``cells`` by default), in
+    increasing order: the block and chunk widths that cut the cells into equal parts."""
+    return [b for b in range(low, (cells if high is None else high) + 1) if cells % b == 0]
+
+
+def store_chunk(cells: int, ghost: int, block_cells: int | None = None) -> int:
+    """The store's chunk width along a space axis: ``block_cells``, or by default the
+    largest divisor of ``cells`` from ``ghost`` to min(64, cells / 16), so that the axis has
+    about 16 chunks or more to share among processes (each writes whole chunks:
+    :func:`partition`), and otherwise the smallest divisor from ``ghost`` (all cells when
+    there is none)."""
+    if block_cells is not None:
+        return block_cells
+    ghost = max(ghost, 1)
+    divisors = cell_divisors(cells, ghost)
+    small = [b for b in divisors if b <= min(64, max(ghost, cells // 16))]
+    return small[-1] if small else divisors[0]
+
+
+def batch_block(owned: int, ghost: int, block_cells: int | None = None) -> int:
+    """The cells per block of a process's batched transport
+    (:class:`~granframe.space.domain.Domain`): ``block_cells`` when given (then equal to
+    the store's chunk), else the largest divisor of its ``owned`` cells from ``ghost`` to
+    64 (all of them when there is none). Larger than the store's chunk by default: the
+    blocks only batch the transport, the ghost cells between blocks are copies, so the
+    result does not depend on them, and fewer blocks copy fewer ghosts."""
+    if block_cells is not None:
+        return block_cells
+    divisors = cell_divisors(owned, max(ghost, 1), min(owned, 64))
+    return divisors[-1] if divisors else owned
+
+
+class CellLayout:
+    """How the cells of a space axis are cut, in one place: the store's chunks, the
+    ranges of the processes (whole chunks, :func:`partition`) and this process's batch
+    blocks (:func:`batch_block`), as Dedalus's distributor holds its layouts; a store
+    resumed by these processes is checked against their ranges by
+    :func:`check_store_chunks`. A serial run is the case of one process owning every cell.
+
+    Parameters
+    ----------
+    cells, ghost : int
+        The cells of the axis and the reconstruction's ghost width.
+    communicator : Communicator
+        The processes; this one is ``communicator.rank``.
+    block_cells : int or None
+        The description's ``space.block_cells`` (None: the defaults of :func:`store_chunk`
+        and :func:`batch_block`).
+    counts : sequence of int, optional
+        The cells of each process (:func:`partition`).
+
+    Attributes
+    ----------
+    chunk : int
+        The store's chunk width.
+    ranges : list of (int, int)
+        The cells (start, stop) of every process, in rank order.
+    block : int
+        The cells per batch block of this process.
+    """
+
+    def __init__(self, cells: int, ghost: int, communicator: Communicator,
+                 block_cells: int | None = None, counts=None):
+        self.cells, self.ghost = cells, ghost
+        self.chunk = store_chunk(cells, ghost, block_cells)
+        self.ranges = partition(cells, self.chunk, communicator.size, ghost, counts)
+        self.start, self.stop = self.ranges[communicator.rank]
+        self.block = batch_block(self.stop - self.start, ghost, block_cells)
+
+    @property
+    def owned(self) -> slice:
+        """The cells this process owns."""
+        return slice(self.start, self.stop)
+
+
+def check_store_chunks(ranges, chunk: int, cells, path) -> None:
+    """Refuse to let processes with the cells ``ranges`` share a store chunked by
+    ``chunk`` cells along x (of ``cells``) whose chunks do not fall on the boundaries of
+    their ranges (a store made with another ``block_cells``): each process writes whole
+    chunks (:func:`partition`)."""
+    starts = [a for a, _ in ranges]
+    if any(start % chunk for start in starts):
+        check.reject("run", "processes", len(ranges), f"cannot share the store '{path}' "
+                     f"among themselves: it is chunked by {chunk} cells along x, and the "
+                     f"cells of the processes start at {starts}; each must start at a "
+                     f"multiple of {chunk} (run on a number of processes that divides "
+                     f"{cells} // {chunk} chunks, or give the partition)")
+
+
 class Halo:
     """The ghost cells of the ends of an owned range that other processes own: the
     ``neighbours`` of a :class:`~granframe.space.domain.Domain`.

@@ -472,10 +472,10 @@ def test_fuzzed_space_sections_build_or_name_a_parameter(example):
         return
     cells = simulation.description.space.cells
     assert simulation.f0.shape == (cells, 16, 16) and numpy.isfinite(simulation.f0).all()
-    if not simulation.problem.right.periodic:      # the wall sends back what arrives, finite
+    if not simulation.right.periodic:      # the wall sends back what arrives, finite
         positive, negative = upwind_speeds(GRID)
         incoming = simulation.f0[:1]
-        flux = (positive * simulation.problem.right.emit(incoming, GRID, numpy)
+        flux = (positive * simulation.right.emit(incoming, GRID, numpy)
                 + negative * incoming)
         assert numpy.isfinite(flux).all() and abs(flux.sum()) <= 1e-13 * abs(flux).sum()
 

@@ -51,6 +51,7 @@ from granframe import validators as check
 from granframe.abc import PRECISIONS
 from granframe.errors import UnknownParameterError
 from granframe.backends import AUTO, resolve_backend
+from granframe.parallel import store_chunk
 from granframe.velocity.grid import VelocityGrid
 from granframe.model.initial import callable_reference, resolve_callable
 from granframe.registry import default_registries
@@ -310,12 +311,6 @@ def component_field(**kwargs):
 MAX_CELLS = 10 ** 9
 
 
-def cell_divisors(cells: int, low: int, high: int | None = None) -> list[int]:
-    """The divisors of ``cells`` from ``low`` to ``high`` (``cells`` by default), in
-    increasing order: the block and chunk widths that cut the cells into equal parts."""
-    return [b for b in range(low, (cells if high is None else high) + 1) if cells % b == 0]
-
-
 def _levels(value):
     """The hierarchy's levels as a tuple of :class:`Component` (names or tables)."""
     if isinstance(value, (str, dict, Component)):
@@ -493,17 +488,9 @@ class Space:
         return default_registries().create(family, component.name, **component.params)
 
     def blocks(self, ghost: int) -> int:
-        """The store's chunk width along x: ``block_cells``, or by default the largest
-        divisor of ``cells`` from ``ghost`` to min(64, cells / 16), so that the interval
-        has about 16 chunks or more to share among processes (each writes whole chunks:
-        :func:`granframe.parallel.partition`), and otherwise the smallest divisor from
-        ``ghost`` (all cells when there is none)."""
-        if self.block_cells is not None:
-            return self.block_cells
-        ghost = max(ghost, 1)
-        divisors = cell_divisors(self.cells, ghost)
-        small = [b for b in divisors if b <= min(64, max(ghost, self.cells // 16))]
-        return small[-1] if small else divisors[0]
+        """The store's chunk width along x (:func:`granframe.parallel.store_chunk` of
+        ``cells`` and ``block_cells``)."""
+        return store_chunk(self.cells, ghost, self.block_cells)
 
     def check(self, grid, time_step, step_limit: bool) -> dict:
         """Build and check the reconstruction and the boundaries against the cells, the

@@ -35,6 +35,7 @@ from granframe.errors import NonFiniteError
 from granframe.registry import default_registries
 from granframe.run.description import COMPONENT_FAMILIES, RunDescription, fixed_steps
 from granframe.run.problems import make_problem, moments
+from granframe.parallel import check_store_chunks
 from granframe.run.storage import RECORDED_MOMENTS, RunStore, StoreExistsError, collective
 from granframe.stepping.integrators import StepController, StepSizeError
 from granframe.validators import distinct, reject
@@ -536,9 +537,9 @@ class Simulation:
     The problem (:func:`~granframe.run.problems.make_problem`: space-homogeneous, or in
     space for a description with a ``space`` section) holds everything the run steps; the
     simulation drives it through the :class:`granframe.abc.Problem` contract only. The
-    contract's members ``grid``, ``backend``, ``operator``, ``f0``, ``equation``,
-    ``integrator``, ``projection`` and ``communicator`` are read through the simulation;
-    anything else of a problem through ``simulation.problem``. A fixed time
+    problem's public members (``grid``, ``backend``, ``operator``, ``f0``, ``equation``,
+    ``integrator``, ``projection``, a space run's ``domain``, ...) are read through the
+    simulation. A fixed time
     step above the explicit stability limit at f0 is refused here.
 
     A space run launched on several processes (``mpiexec -n 4 granframe run ...``) is
@@ -562,16 +563,13 @@ class Simulation:
         """The processes of the run (a serial communicator for one process)."""
         return self.problem.communicator
 
-    # the members of the problem contract (granframe.abc.Problem), read through the run
-    grid = property(lambda self: self.problem.grid, doc="The velocity grid.")
-    backend = property(lambda self: self.problem.backend, doc="The array backend.")
-    operator = property(lambda self: self.problem.operator, doc="The collision operator.")
-    f0 = property(lambda self: self.problem.f0, doc="f0 on the host, checked and projected.")
-    projection = property(lambda self: self.problem.projection,
-                          doc="The moments of f0 before and after its projection.")
-    integrator = property(lambda self: self.problem.integrator, doc="The time integrator.")
-    equation = property(lambda self: self.problem.equation,
-                        doc="The equation the integrator steps.")
+    def __getattr__(self, name):
+        """The problem's public members, read through the simulation for convenience
+        (``simulation.f0``, ``simulation.domain`` in a notebook or a test); the runner
+        itself reads the problem through the :class:`granframe.abc.Problem` contract only."""
+        if name.startswith("_") or "problem" not in self.__dict__:
+            raise AttributeError(name)
+        return getattr(self.__dict__["problem"], name)
 
     def provenance(self) -> dict:
         """Versions and plugins behind this run (stored with it)."""
@@ -763,14 +761,8 @@ class Simulation:
         if len(ranges) == 1 or not RunStore.exists(out):
             return
         space = RunStore.open(out, complete=False).metadata.get("space") or {}
-        chunk = int(space.get("block_cells", 1))
-        if any(start % chunk for start, _ in ranges):
-            reject("run", "processes", self.communicator.size, f"cannot share the store "
-                   f"'{out}' among themselves: it is chunked by {chunk} cells along x, and "
-                   f"the cells of the processes start at {[a for a, _ in ranges]}; each must "
-                   f"start at a multiple of {chunk} (run on a number of processes that "
-                   f"divides {space.get('cells', '?')} // {chunk} chunks, or give the "
-                   "partition)")
+        check_store_chunks(ranges, int(space.get("block_cells", 1)), space.get("cells", "?"),
+                           out)
 
     def _first_commit(self, store, started):
         """Commit f0 and its moments to a new store and publish it: the store (opened at its

@@ -31,8 +31,7 @@ from granframe.equations.conservative import ConservativeCorrection
 from granframe.equations.rescaled import RescaledBoltzmann
 from granframe.memory import check_run_memory
 from granframe.model.initial import check_fits, check_projection
-from granframe.parallel import Halo, SerialCommunicator, partition, world
-from granframe.run.description import cell_divisors
+from granframe.parallel import CellLayout, Halo, SerialCommunicator, world
 from granframe.run.monitors import CELL_INDICATORS, CellEdgeMonitors, cell_resolution_report
 from granframe.run.problems.parts import build_operator, check_step
 from granframe.run.storage import STEP_RECORDS, Layout, RecordArray
@@ -87,18 +86,6 @@ def space_layout(grid, domain: Domain, block: int, levels: bool = False) -> Layo
                   space={"cells": cells, "length": domain.length, "block_cells": block})
 
 
-def _blocks(space, ghost: int, owned: int) -> int:
-    """The cells per block of a process's :class:`~granframe.space.domain.Domain`:
-    ``space.block_cells`` when given, else the largest divisor of its ``owned`` cells from
-    ``ghost`` to 64 (all of them when there is none). The blocks only batch the
-    transport: the ghost cells between blocks are copies, so the result does not depend
-    on them."""
-    if space.block_cells is not None:
-        return space.block_cells
-    divisors = cell_divisors(owned, max(ghost, 1), min(owned, 64))
-    return divisors[-1] if divisors else owned
-
-
 def _cell(condition, mass):
     """One cell of ``condition`` for :func:`check_fits`: its intended mass, under the
     condition's name (which the messages show)."""
@@ -131,10 +118,11 @@ class SpaceProblem(Problem):
         ghost = self.reconstruction.ghost
         self.communicator = comm = (SerialCommunicator() if outline else
                                     world() if communicator is None else communicator)
-        #: the cells (start, stop) of every process, in rank order, and this one's
-        self.ranges = partition(space.cells, space.blocks(ghost), comm.size, ghost,
-                                partition_cells)
-        start, stop = self.ranges[comm.rank]
+        #: the store's chunks, the cells (start, stop) of every process in rank order and
+        #: this one's batch blocks
+        self.cell_layout = CellLayout(space.cells, ghost, comm, space.block_cells, partition_cells)
+        self.ranges = self.cell_layout.ranges
+        start, stop = self.cell_layout.start, self.cell_layout.stop
         collide = space.collisions
         if outline:
             self.backend = NumpyBackend(threads=1)
@@ -146,8 +134,8 @@ class SpaceProblem(Problem):
             self.operator = build_operator(d, self.backend) if collide else None
         xp = self.backend.xp
         self.collision_integrator = d.build("integrator") if collide else None
-        self.domain = Domain(space.cells, space.length, _blocks(space, ghost, stop - start),
-                             ghost, grid, xp, owned=(start, stop))
+        self.domain = Domain(space.cells, space.length, self.cell_layout.block, ghost, grid, xp,
+                             owned=(start, stop))
         if comm.size > 1:
             self.domain.neighbours = Halo.of(comm, self.ranges, self.left.periodic)
         #: wall seconds of the reductions of the records over the processes
@@ -256,8 +244,7 @@ class SpaceProblem(Problem):
                "negligible well inside the faces of the box (h = 2L/N falls with it)")
 
     def layout(self):
-        return space_layout(self.grid, self.domain,
-                            self.description.space.blocks(self.reconstruction.ghost),
+        return space_layout(self.grid, self.domain, self.cell_layout.chunk,
                             levels=self.description.space.hierarchy is not None)
 
     @property
