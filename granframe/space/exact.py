@@ -23,9 +23,6 @@ import numpy
 
 from granframe import validators as check
 from granframe.theory.cells import gauss_cell_averages
-# granframe.tools.advise imports the Riemann solver from here; new code imports it from
-# granframe.theory.euler
-from granframe.theory.euler import euler_riemann_star  # noqa: F401
 
 
 def _positive(owner, name, value):

@@ -83,7 +83,7 @@ from granframe.run.description import (COMPONENT_FAMILIES, Component, Hierarchy,
 from granframe.velocity.estimators import TAIL_ERROR_FACTOR
 from granframe.model.exact import heated_maxwell_law
 from granframe.velocity.grid import VelocityGrid
-from granframe.space.exact import euler_riemann_star
+from granframe.theory.euler import euler_riemann_star
 from granframe.space.initial import RiemannProblem, SpaceCondition
 from granframe.registry import default_registries
 from granframe.tools.advise_numerics import (Probe, choose_modes, choose_quadrature,
@@ -512,7 +512,7 @@ def _advise_space(scene: Scene, base: dict, errors: dict, reasons: list) -> Advi
 def _swept_levels(description, levels):
     """The levels at the final time t_f of a run from a ``riemann`` initial condition,
     estimated: every cell the waves of the Euler Riemann problem (the limit eps -> 0,
-    gamma = (d + 2)/d; :func:`granframe.space.exact.euler_riemann_star`) have swept by then,
+    gamma = (d + 2)/d; :func:`granframe.theory.euler.euler_riemann_star`) have swept by then,
     [x0 + s_min t_f, x0 + s_max t_f] with s the speeds of the slowest and the fastest wave,
     widened by the hierarchy's buffer, at the full level; the others at ``levels`` (those of
     t = 0). In a periodic interval the discontinuity at its ends (the right state left of

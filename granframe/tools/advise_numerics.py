@@ -22,7 +22,7 @@ from granframe.velocity.estimators import (TAIL_ERROR_FACTOR, mass_beyond, pair_
 from granframe.velocity.grid import VelocityGrid
 from granframe.model.initial import check_fits, face_share
 from granframe.velocity.moments import FieldMoments
-from granframe.space.exact import euler_riemann_star
+from granframe.theory.euler import euler_riemann_star
 from granframe.space.initial import RiemannProblem, SpaceCondition
 from granframe.velocity.quadratures import LEBEDEV_ORDERS, CircleTrapezoid, Lebedev
 from granframe.registry import default_registries
@@ -163,7 +163,7 @@ class Probe:
         """[(rho, u, T)] of the star states of a ``riemann`` initial condition, left and
         right of the contact: the states the gas reaches behind the waves of the Euler
         Riemann problem (the limit eps -> 0, gamma = (d + 2)/d;
-        :func:`granframe.space.exact.euler_riemann_star`), u with the tangential components
+        :func:`granframe.theory.euler.euler_riemann_star`), u with the tangential components
         of its side. Hotter or colder than f0 behind a shock or a rarefaction, and moving:
         the grid must hold them too. Empty for other initial conditions, and for states
         that open a vacuum."""
