@@ -307,8 +307,8 @@ class RescaledBoltzmann(HomogeneousBoltzmann):
         transport = self._weighted(self.drift(flat))
         dissipation = numpy.concatenate(gather(dissipation))
         transport = numpy.concatenate(gather(transport))
-        rate = cooling_rate(float(dissipation.sum()) / self.knudsen, float(transport.sum()),
-                            is_elastic(operator.restitution, grid), owner)
+        rate = rescaling_rate(float(dissipation.sum()) / self.knudsen, float(transport.sum()),
+                              is_elastic(operator.restitution, grid), owner)
         self.rescaling = Rescaling(rate, degree, mean)
         self._drift_radius = rate * self.drift.unit_radius
         self.invariants = ("mass",) if self.invariants else ()
@@ -365,9 +365,11 @@ def check_drift_velocity(kernel, velocity, owner: str, name: str) -> None:
                      "(E = int |v|^2/2 f then does not scale with omega)")
 
 
-def cooling_rate(dissipation: float, transport: float, elastic: bool, owner: str) -> float:
-    r"""a_0 = dissipation / transport (the module notes), refused unless finite and >= 0;
-    0 for an ``elastic`` gas (:func:`~granframe.model.restitution.is_elastic`), whose
+def rescaling_rate(dissipation: float, transport: float, elastic: bool, owner: str) -> float:
+    r"""a_0 = dissipation / transport (the module notes), refused unless finite and >= 0:
+    the rate of the rescaling, the discrete operator's dissipation of f0 over the drift's
+    energy weight (not the cooling rate of a Maxwellian in closed form,
+    :func:`granframe.theory.cooling.maxwellian_cooling_rate`); 0 for an ``elastic`` gas (:func:`~granframe.model.restitution.is_elastic`), whose
     dissipation is round-off of either sign."""
     rate = 0.0 if elastic or not transport else dissipation / transport
     if not (math.isfinite(rate) and rate >= 0.0):
