@@ -284,7 +284,7 @@ class FastSpectral(CollisionOperator):
         self.batch = plan.batch
         self._tables = _PhaseTables(self, plan.precompute_tables)
         self._bounds = numpy.linspace(0, len(rho), pipelines + 1).round().astype(int)
-        self._executor = (concurrent.futures.ThreadPoolExecutor(pipelines, "granframe-fast")
+        self._executor = (concurrent.futures.ThreadPoolExecutor(pipelines - 1, "granframe-fast")
                           if pipelines > 1 else None)
         self._stack = None
         self._size_stack(1)
@@ -342,13 +342,17 @@ class FastSpectral(CollisionOperator):
             gain = self._pipelines[0].run(spectrum, f_n)
         else:
             # one BLAS thread per pipeline: a threaded BLAS called from both pipelines at
-            # once contends for its own pool and made evaluation 2.5x slower (N = 64, 3D)
+            # once contends for its own pool and made evaluation 2.5x slower (N = 64, 3D).
+            # The calling thread runs the first pipeline itself and wakes one worker per
+            # other pipeline: a caller that waited instead had both workers woken at once,
+            # and the scheduler stacked them on one core whenever no core was idle at the
+            # wake-up (the slow mode of docs/benchmarks.md, "Thread placement")
             with _BLAS.limit(limits=1, user_api="blas"):
-                parts = list(self._executor.map(lambda p: p.run(spectrum, f_n),
-                                                self._pipelines))
-            gain = parts[0]
-            for part in parts[1:]:
-                gain += part
+                others = [self._executor.submit(p.run, spectrum, f_n)
+                          for p in self._pipelines[1:]]
+                gain = self._pipelines[0].run(spectrum, f_n)
+                for part in others:
+                    gain += part.result()
         # loss: f_N(v) L(f)(v) with L(f) = IDFT(G_loss * DFT(f))
         fft.spectrum[...] = spectrum * self._g_loss
         fft.real[...] = f_n * fft.inverse()
