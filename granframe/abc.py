@@ -646,7 +646,7 @@ class CollisionModel(abc.ABC):
     cells a run gives it.
 
     A factory is called as ``factory(context, **params)``, ``context`` holding the run's
-    ``equation`` (:class:`~granframe.space.collisions.CellCollisions`: the operator, the
+    ``equation`` (:class:`~granframe.equations.homogeneous.HomogeneousBoltzmann`: the operator, the
     Knudsen number, the heat bath), its time ``integrator`` and ``temperature``, the mass
     weighted mean temperature of f0. The levels of a hierarchy are ordered from the
     cheapest to the full operator; the last must have ``full`` true.

@@ -14,7 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import granframe as gf
-from granframe.space.collisions import CellCollisions
+from granframe.equations.homogeneous import HomogeneousBoltzmann as CellCollisions
 from granframe.velocity.equilibrium import discrete_maxwellians
 
 

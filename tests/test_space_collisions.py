@@ -7,7 +7,7 @@ import pytest
 
 import granframe as gf
 from granframe.equations.homogeneous import HomogeneousBoltzmann
-from granframe.space.collisions import CellCollisions
+from granframe.equations.homogeneous import HomogeneousBoltzmann as CellCollisions
 from granframe.velocity.moments import FieldMoments
 
 GRID = gf.VelocityGrid(2, 16, 3.5)

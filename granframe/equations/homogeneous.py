@@ -18,6 +18,7 @@ from granframe.equations.conservative import ConservativeCorrection
 from granframe.model.restitution import is_elastic
 from granframe.stepping.integrators import Equation
 from granframe.velocity.equilibrium import discrete_maxwellians
+from granframe.velocity.guard import guard_moments
 from granframe.velocity.heatbath import HeatBath
 from granframe.velocity.moments import FieldMoments
 
@@ -172,15 +173,11 @@ class HomogeneousBoltzmann(Equation):
         grid, xp = self.operator.grid, self.operator.backend.xp
         d = grid.dimension
         flat = f.reshape((-1,) + tuple(grid.shape))
-        rho, velocity, temperature, energy = self.moments.primitives(flat, node="periodic")
-        valid = xp.isfinite(rho) & (rho > 0) & xp.isfinite(temperature) & (temperature > 0)
-        safe_rho = xp.where(valid, rho, 1.0)
-        safe_t = xp.where(valid, temperature, 1.0)
-        safe_e = xp.where(valid & (energy > 0), energy, 1.0)
-        rate = xp.where(valid, self.penalty * self.frequencies(safe_rho, safe_t, safe_e), 0.0)
-        target, _ = discrete_maxwellians(
-            grid, safe_rho, safe_rho[:, None] * xp.where(valid[:, None], velocity, 0.0),
-            xp.where(valid, 2.0 * energy, d * safe_t), xp, self.moments.points)
+        guarded = guard_moments(*self.moments.primitives(flat, node="periodic"), xp)
+        rate = xp.where(guarded.valid, self.penalty * self.frequencies(
+            guarded.density, guarded.temperature, guarded.energy), 0.0)
+        target, _ = discrete_maxwellians(grid, guarded.density, guarded.momentum,
+                                         guarded.second, xp, self.moments.points)
         shape = f.shape[:-d] + (1,) * d
         return (rate * (1.0 / self.knudsen)).reshape(shape), target.reshape(f.shape)
 

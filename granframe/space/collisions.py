@@ -8,6 +8,7 @@ One step of length dt is Strang's splitting (G. Strang, SIAM J. Numer. Anal. 5 (
 second order when both parts are: T is the transport sub-step
 (:mod:`granframe.space.transport`, three-stage SSP Runge-Kutta) and C one step of the
 run's time integrator on the space-homogeneous equation d_t f = Q(f, f)/eps + tau Delta_v f
+(:class:`~granframe.equations.homogeneous.HomogeneousBoltzmann` on the batch of cells)
 in every cell at once. Each stage of C is one batched call of the collision operator on
 all cells (f of shape (blocks, block_cells, *grid.shape)). With a penalised integrator
 (``penalised_euler``, ``penalised_ars222``) the collision step is stable for any dt/eps
@@ -17,15 +18,7 @@ alone; an explicit integrator keeps its own limit O(eps).
 
 from __future__ import annotations
 
-
-
-from granframe.equations.homogeneous import HomogeneousBoltzmann
 from granframe.space.conserving import conserving_step
-
-
-class CellCollisions(HomogeneousBoltzmann):
-    """d_t f = Q(f, f)/eps + tau Delta_v f in every cell: f of shape (..., *grid.shape),
-    :class:`~granframe.equations.homogeneous.HomogeneousBoltzmann` on a batch of cells."""
 
 
 class SingleModel:

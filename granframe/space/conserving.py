@@ -1,6 +1,6 @@
 r"""The collision step's pattern conserve, step, restore, written once
 (:func:`conserving_step`): one step of a time integrator on a
-:class:`~granframe.space.collisions.CellCollisions` equation with the cell moments it
+:class:`~granframe.equations.homogeneous.HomogeneousBoltzmann` equation with the cell moments it
 conserves set back against round-off,
 
 .. math:: f^{n+1} = R\bigl(S_{\Delta t}(f^n);\ m(f^n)\bigr),
@@ -26,7 +26,7 @@ def conserving_step(equation, integrator, t: float, f, dt: float):
     Parameters
     ----------
     equation : HomogeneousBoltzmann
-        E.g. :class:`~granframe.space.collisions.CellCollisions`; has ``invariants``,
+        E.g. :class:`~granframe.equations.homogeneous.HomogeneousBoltzmann`; has ``invariants``,
         ``conserved(f)`` and ``restore(f, before)``.
     integrator : TimeIntegrator
         Has ``step(equation, t, f, dt)``.

@@ -62,7 +62,7 @@ def time_step_limit(description):
     u = (+-1, 0)), at 2D N = 32 with fast_spectral on 16 x 8 points by 1e-5 (Maxwell,
     T0 = 8, S = 10). None when the equation has no part the scheme treats explicitly. A
     space run's limit is that of the collisions in its stiffest cell
-    (:class:`~granframe.space.collisions.CellCollisions`); the transport's CFL limit is
+    (:class:`~granframe.equations.homogeneous.HomogeneousBoltzmann`); the transport's CFL limit is
     :meth:`~granframe.run.description.Space.transport_limit`. At 3D N = 32 it takes a few
     tenths of a second, where building the run's operator takes seconds
     (tests/test_frictions.py).

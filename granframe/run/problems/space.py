@@ -28,6 +28,7 @@ import numpy
 from granframe.abc import Problem, deferred_checks
 from granframe.backends import NumpyBackend, to_host
 from granframe.equations.conservative import ConservativeCorrection
+from granframe.equations.homogeneous import HomogeneousBoltzmann
 from granframe.equations.rescaled import RescaledBoltzmann
 from granframe.memory import check_run_memory
 from granframe.model.initial import check_fits, check_projection
@@ -35,8 +36,7 @@ from granframe.parallel import CellLayout, Halo, SerialCommunicator, world
 from granframe.run.monitors import CELL_INDICATORS, CellEdgeMonitors, cell_resolution_report
 from granframe.run.problems.parts import build_operator, check_step
 from granframe.run.storage import STEP_RECORDS, Layout, RecordArray
-from granframe.space.collisions import (CellCollisions, FreeFlight, LevelledModels,
-                                         SingleModel, SplitStep)
+from granframe.space.collisions import FreeFlight, LevelledModels, SingleModel, SplitStep
 from granframe.space.domain import Domain
 from granframe.registry import default_registries
 from granframe.velocity.moments import FIELDS, TOTALS, FieldMoments
@@ -144,7 +144,7 @@ class SpaceProblem(Problem):
         self.projection = None
         self.f0 = self._initial(check=not outline)
         self.equation = (None if not collide else self._rescaled(outline) if d.rescaled
-                         else CellCollisions(self.operator, d.heat_bath, d.knudsen))
+                         else HomogeneousBoltzmann(self.operator, d.heat_bath, d.knudsen))
         #: the map of a rescaled run to physical variables (kept in the store), or None
         self.rescaling = self.equation.rescaling if collide and d.rescaled else None
         self.fields = FieldMoments(grid, self.domain.dx, xp)

@@ -20,7 +20,7 @@ from granframe.space.hierarchy.rates import relaxation_rate
 @attrs.define(slots=False)
 class HierarchyContext:
     """What a :class:`~granframe.abc.CollisionModel` factory receives: the run's
-    ``equation`` (:class:`~granframe.space.collisions.CellCollisions`), its time
+    ``equation`` (:class:`~granframe.equations.homogeneous.HomogeneousBoltzmann`), its time
     ``integrator`` and ``temperature``, the mass-weighted mean temperature of f0."""
 
     equation: object

@@ -130,7 +130,7 @@ class EllipsoidalLevel(RelaxationLevel):
 class BoltzmannLevel(CollisionModel):
     """The full level: the run's time integrator on the run's collision operator (with the
     conservative correction and the round-off restoration of
-    :meth:`~granframe.space.collisions.CellCollisions.restore`:
+    :meth:`~granframe.equations.homogeneous.HomogeneousBoltzmann.restore`:
     :func:`~granframe.space.conserving.conserving_step`)."""
 
     name = "boltzmann"

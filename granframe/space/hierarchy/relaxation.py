@@ -2,7 +2,7 @@ r"""The relaxation equations of the fluid levels of the hierarchy
 (:mod:`granframe.space.hierarchy`): the granular BGK equation (:class:`RelaxationEquation`)
 and the ellipsoidal statistical BGK equation (:class:`EllipsoidalEquation`) of every cell,
 with the anisotropic Gaussians of exact grid moments that the latter relaxes to
-(:func:`discrete_gaussians`). Both are :class:`~granframe.space.collisions.CellCollisions`
+(:func:`discrete_gaussians`). Both are :class:`~granframe.equations.homogeneous.HomogeneousBoltzmann`
 equations for the run's own time integrator; everything on the backend.
 """
 
@@ -12,19 +12,19 @@ import math
 
 import numpy
 
-from granframe.space.collisions import CellCollisions
+from granframe.equations.homogeneous import HomogeneousBoltzmann
 from granframe.space.hierarchy.rates import scaled_rates
 from granframe.velocity.equilibrium import discrete_maxwellians
 from granframe.velocity.guard import guard_moments
 
 
-class RelaxationEquation(CellCollisions):
+class RelaxationEquation(HomogeneousBoltzmann):
     r"""The BGK equation of every cell, d_t f = nu_s (M[f] - f)/eps + tau Delta_v f, for the
     run's time integrator: M[f] the discrete Maxwellian of the cell's grid mass, momentum and
     energy, nu_s = c rho T^(lambda/2) E^gamma (``coefficient`` c from
     :func:`~granframe.space.hierarchy.rates.relaxation_rate`). The heat bath and the
     penalisation of the penalised schemes are those of the full equation
-    (:class:`CellCollisions`). Cells without an equilibrium (rho or T not positive and
+    (:class:`~granframe.equations.homogeneous.HomogeneousBoltzmann`). Cells without an equilibrium (rho or T not positive and
     finite, or no converged target) relax at the rate 0."""
 
     def __init__(self, equation, coefficient: float):

@@ -39,7 +39,7 @@ def check_collision_model(factory, options) -> None:
     rho d (T' - T) of :class:`~granframe.space.hierarchy.CoolingRate`, within 5%."""
     from granframe.equations.conservative import ConservativeCorrection
     from granframe.registry import default_registries
-    from granframe.space.collisions import CellCollisions
+    from granframe.equations.homogeneous import HomogeneousBoltzmann
     from granframe.space.hierarchy import CoolingRate, HierarchyContext
 
     registries = default_registries()
@@ -49,7 +49,7 @@ def check_collision_model(factory, options) -> None:
         operator = ConservativeCorrection(registries.create(
             "collision_operators", "fast_spectral", grid=grid, kernel=kernel, restitution=law,
             backend=backend), "maxwellian")
-        equation = CellCollisions(operator, 0.0, 0.1)
+        equation = HomogeneousBoltzmann(operator, 0.0, 0.1)
         integrator = registries.create("time_integrators", "penalised_ars222")
         model = factory(HierarchyContext(equation, integrator, 1.0), **options)
         name = f"{type(model).__name__} (e = {restitution:g})"
