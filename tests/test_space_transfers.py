@@ -93,15 +93,22 @@ HIERARCHY = ('conservative = true\n' + TOML).replace(
     'realizability = [0.002, 0.01]\ndistance = [0.05, 0.1]\nfree_paths = 0.0')
 
 
-def _counted_steps(toml):
-    """(counts of STEPS steps after two, the number of levels in use in each step)."""
+def _warmed(toml):
+    """(problem, backend, state, dt) on the counting backend after two steps and their
+    records (the caches fill, the levels spread)."""
     description = RunDescription.from_toml(toml)
     problem, backend = counting_problem(description)
     state = problem.state(problem.f0)
     dt = description.time_step
-    for k in range(2):                                   # caches fill, levels spread
+    for k in range(2):
         state = problem.step(k * dt, state, dt)
         problem.record(state)
+    return problem, backend, state, dt
+
+
+def _counted_steps(toml):
+    """(counts of STEPS steps after two, the number of levels in use in each step)."""
+    problem, backend, state, dt = _warmed(toml)
     backend.reset()
     used = []
     for k in range(2, 2 + STEPS):
@@ -115,8 +122,8 @@ def _counted_steps(toml):
 def test_a_hybrid_step_adds_the_copies_of_the_indicators_and_the_level_indices():
     """With a hierarchy (every level in use; the heat bath makes the fluid levels integrate
     the temperature law by substeps, whose count is read from the device once per level),
-    against the same run without one (both with the conservative correction, which copies
-    its small Gram systems to the host in every call): per step at most one more
+    against the same run without one (both with the conservative correction): per step at
+    most one more
     device->host copy (the indicators of the cells) and one per fluid level (the substep
     count), and one host->device copy of the cell indices per level in use."""
     baseline, _, _ = _counted_steps(HIERARCHY.split("[space.hierarchy]")[0])
@@ -138,13 +145,7 @@ def test_a_hybrid_step_brings_one_vector_to_the_host_and_copies_nothing_from_it(
     host->device copy of the cell indices per level in use in every step."""
     toml = HIERARCHY.replace("heat_bath = 0.05", f"heat_bath = {heat_bath}")
     assert f"heat_bath = {heat_bath}" in toml
-    description = RunDescription.from_toml(toml)
-    problem, backend = counting_problem(description)
-    state = problem.state(problem.f0)
-    dt = description.time_step
-    for k in range(2):                                   # caches fill, levels spread
-        state = problem.step(k * dt, state, dt)
-        problem.record(state)
+    problem, backend, state, dt = _warmed(toml)
     used = set()
     for k in range(2, 2 + STEPS):
         before = len(backend.log)
