@@ -31,6 +31,11 @@ def _positive(owner, name, value):
     return float(value)
 
 
+def _check_dimension(owner, dimension):
+    if not check.is_integer(dimension) or dimension not in (2, 3):
+        check.reject(owner, "dimension", dimension, "must be 2 or 3")
+
+
 # -- Free-molecular flow between two diffuse walls -------------------------------------------
 
 
@@ -67,8 +72,7 @@ def free_molecular_walls(dimension: int, T1: float, T2: float, density: float) -
         (length d), ``q1``.
     """
     owner = "free_molecular_walls"
-    if not check.is_integer(dimension) or dimension not in (2, 3):
-        check.reject(owner, "dimension", dimension, "must be 2 or 3")
+    _check_dimension(owner, dimension)
     T1, T2, rho = _walls_arguments(owner, T1, T2, density)
     s1, s2 = math.sqrt(T1), math.sqrt(T2)
     temperature = s1 * s2
@@ -129,10 +133,23 @@ def free_molecular_walls_grid(grid, T1: float, T2: float, density: float, rest=N
         ``f`` (the grid's shape), ``n1``, ``n2``, and the grid moments of f
         (:meth:`VelocityGrid.moments`): ``rho``, ``u``, ``T``, ``P``, ``P11``, ``q``, ``q1``.
     """
-    from granframe.space.transport import upwind_speeds
-
     owner = "free_molecular_walls_grid"
     T1, T2, rho = _walls_arguments(owner, T1, T2, density)
+    positive, negative, shared, resting = nodes = _half_range_nodes(grid)
+    m1, m2 = grid.maxwellian(1.0, None, T1), grid.maxwellian(1.0, None, T2)
+    n1, n2, kept = _walls_grid_densities(owner, grid, rho, rest, m1, m2, nodes)
+    f = numpy.where(positive, n1 * m1, numpy.where(negative, n2 * m2, kept))
+    f = numpy.where(shared, 0.5 * (n1 * m1 + n2 * m2), f)
+    moments = grid.moments(f)
+    return {"f": f, "n1": float(n1), "n2": float(n2), "rho": moments["mass"],
+            "u": moments["bulk_velocity"], "T": moments["temperature"],
+            "P": moments["pressure_tensor"], "P11": float(moments["pressure_tensor"][0, 0]),
+            "q": moments["heat_flux"], "q1": float(moments["heat_flux"][0])}
+
+
+def _half_range_nodes(grid):
+    """Masks of the grid's shape of its v_1 nodes: v_1 > 0 (j > N/2), v_1 < 0
+    (0 < j < N/2), the node -L that moves both ways (j = 0) and v_1 = 0 (j = N/2)."""
     n = grid.n_modes
     index = numpy.broadcast_to(numpy.arange(n).reshape((-1,) + (1,) * (grid.dimension - 1)),
                                grid.shape)
@@ -140,9 +157,17 @@ def free_molecular_walls_grid(grid, T1: float, T2: float, density: float, rest=N
     negative = (index > 0) & (index < n // 2)
     shared = index == 0
     resting = index == n // 2
+    return positive, negative, shared, resting
+
+
+def _walls_grid_densities(owner, grid, rho, rest, m1, m2, nodes):
+    """n1, n2 of :func:`free_molecular_walls_grid` from zero mass flux and the grid mass,
+    and the values ``kept`` at the nodes v_1 = 0 (``rest`` checked, or the default)."""
+    from granframe.space.transport import upwind_speeds
+
+    positive, negative, shared, resting = nodes
     h = grid.cell_volume
     c_plus, c_minus = (numpy.broadcast_to(c, grid.shape) for c in upwind_speeds(grid))
-    m1, m2 = grid.maxwellian(1.0, None, T1), grid.maxwellian(1.0, None, T2)
     flux1 = h * float(numpy.sum(c_plus * m1))          # emitted by the left wall
     flux2 = h * float(numpy.sum(-c_minus * m2))        # by the right one
     mass1 = h * (float(numpy.sum(m1[positive])) + 0.5 * float(numpy.sum(m1[shared])))
@@ -165,13 +190,7 @@ def free_molecular_walls_grid(grid, T1: float, T2: float, density: float, rest=N
             check.reject(owner, "rest (grid mass at the nodes v_1 = 0)", rho - remaining,
                          f"must be below density = {rho:.6g}; the moving nodes would need "
                          "a negative mass")
-    f = numpy.where(positive, n1 * m1, numpy.where(negative, n2 * m2, kept))
-    f = numpy.where(shared, 0.5 * (n1 * m1 + n2 * m2), f)
-    moments = grid.moments(f)
-    return {"f": f, "n1": float(n1), "n2": float(n2), "rho": moments["mass"],
-            "u": moments["bulk_velocity"], "T": moments["temperature"],
-            "P": moments["pressure_tensor"], "P11": float(moments["pressure_tensor"][0, 0]),
-            "q": moments["heat_flux"], "q1": float(moments["heat_flux"][0])}
+    return n1, n2, kept
 
 
 def _couette_arguments(owner, temperature, velocity, density, accommodation):
@@ -242,9 +261,13 @@ def free_molecular_couette(dimension: int, temperature: float, velocity: float,
         records as ``wall_momentum`` / ``dt``).
     """
     owner = "free_molecular_couette"
-    if not check.is_integer(dimension) or dimension not in (2, 3):
-        check.reject(owner, "dimension", dimension, "must be 2 or 3")
+    _check_dimension(owner, dimension)
     T, U, rho, alpha = _couette_arguments(owner, temperature, velocity, density, accommodation)
+    return _couette_state(dimension, T, U, rho, alpha)
+
+
+def _couette_state(dimension, T, U, rho, alpha):
+    """:func:`free_molecular_couette`'s closed form, from its checked arguments."""
     shear = -alpha / (2.0 - alpha) * rho * U * math.sqrt(T / (2.0 * math.pi))
     P = rho * T * numpy.eye(dimension)
     P[0, 1] = P[1, 0] = shear
@@ -307,6 +330,20 @@ def free_molecular_couette_grid(grid, temperature: float, velocity: float, densi
 
     owner = "free_molecular_couette_grid"
     T, U, rho, alpha = _couette_arguments(owner, temperature, velocity, density, accommodation)
+    normal, plus, minus, unit, resting = _couette_unit_state(grid, T, U, alpha)
+    n, f = _couette_grid_scale(owner, grid, rho, rest, normal, plus, minus, unit, resting)
+    fields = FieldMoments(grid, 1.0)(f[None])
+    P, u, mass = fields["pressure_tensor"][0], fields["velocity"][0], fields["density"][0]
+    flux = P[0] + mass * u[0] * u                       # h^d sum_v v_1 v f
+    return {"f": f, "n": float(n), "rho": float(mass), "u": u,
+            "T": float(fields["temperature"][0]), "P": P,
+            "P11": float(P[0, 0]), "P12": float(P[0, 1]), "q": fields["heat_flux"][0],
+            "wall_momentum": numpy.stack([flux, -flux])}
+
+
+def _couette_unit_state(grid, T, U, alpha):
+    """A_i (shaped (N, 1, ..., 1)), t^+, t^- of :func:`free_molecular_couette_grid`, its
+    state for n = 1 (0 at v_1 = 0) and the mask of the nodes v_1 = 0."""
     n_modes, d = grid.n_modes, grid.dimension
     points = grid.points()
     along = (-1,) + (1,) * (d - 1)
@@ -328,10 +365,16 @@ def free_molecular_couette_grid(grid, temperature: float, velocity: float, densi
                                                         minus)))
     unit = numpy.broadcast_to(unit, grid.shape)
     resting = numpy.broadcast_to(index == n_modes // 2, grid.shape)
+    return normal, plus, minus, unit, resting
+
+
+def _couette_grid_scale(owner, grid, rho, rest, normal, plus, minus, unit, resting):
+    """n and f of :func:`free_molecular_couette_grid` from the grid mass rho, with ``rest``
+    (checked) or the default at the nodes v_1 = 0."""
     h = grid.cell_volume
     if rest is None:
-        n = rho / (h * float(unit.sum()) + h * float(numpy.sum(normal[n_modes // 2]
-                                                             * 0.5 * (plus + minus))))
+        n = rho / (h * float(unit.sum()) + h * float(numpy.sum(normal[grid.n_modes // 2]
+                                                               * 0.5 * (plus + minus))))
         f = numpy.where(resting, n * normal * 0.5 * (plus + minus), n * unit)
     else:
         kept = numpy.asarray(rest, dtype=float)
@@ -345,13 +388,7 @@ def free_molecular_couette_grid(grid, temperature: float, velocity: float, densi
                          "a negative mass")
         n = remaining / (h * float(unit.sum()))
         f = numpy.where(resting, kept, n * unit)
-    fields = FieldMoments(grid, 1.0)(f[None])
-    P, u, mass = fields["pressure_tensor"][0], fields["velocity"][0], fields["density"][0]
-    flux = P[0] + mass * u[0] * u                       # h^d sum_v v_1 v f
-    return {"f": f, "n": float(n), "rho": float(mass), "u": u,
-            "T": float(fields["temperature"][0]), "P": P,
-            "P11": float(P[0, 0]), "P12": float(P[0, 1]), "q": fields["heat_flux"][0],
-            "wall_momentum": numpy.stack([flux, -flux])}
+    return n, f
 
 
 # -- Free transport ------------------------------------------------------------------------
@@ -521,8 +558,7 @@ def mean_free_path(kernel, dimension: int, density: float, temperature: float,
     from granframe.equations.homogeneous import collision_frequency
 
     owner = "mean_free_path"
-    if not check.is_integer(dimension) or dimension not in (2, 3):
-        check.reject(owner, "dimension", dimension, "must be 2 or 3")
+    _check_dimension(owner, dimension)
     density = _positive(owner, "density", density)
     temperature = _positive(owner, "temperature", temperature)
     knudsen = _positive(owner, "knudsen", knudsen)
@@ -575,8 +611,7 @@ def half_range_maxwellian_fluxes(dimension: int, temperature: float,
         J_0(u), J_2(u).
     """
     owner = "half_range_maxwellian_fluxes"
-    if not check.is_integer(dimension) or dimension not in (2, 3):
-        check.reject(owner, "dimension", dimension, "must be 2 or 3")
+    _check_dimension(owner, dimension)
     temperature = _positive(owner, "temperature", temperature)
     if not check.is_real(velocity) or not math.isfinite(float(velocity)):
         check.reject(owner, "velocity", velocity, "must be a finite real number")
@@ -594,6 +629,14 @@ def half_range_maxwellian_fluxes(dimension: int, temperature: float,
 #: <J_2/J_0> = (d+1) T_w / 2 + T_w (c_2 eps^2 + c_4 eps^4 + O(eps^6)), eps = A omega / sqrt(T_w)
 VIBRATING_WALL_COEFFICIENTS = (0.5 - math.pi / 8.0,
                                3.0 * math.pi / 16.0 - 0.125 - 3.0 * math.pi ** 2 / 64.0)
+
+
+def _incoming_arguments(owner, incoming_flux, incoming_energy_flux):
+    flux = _positive(owner, "incoming_flux", incoming_flux)
+    if not check.is_real(incoming_energy_flux) or not 0.0 <= float(incoming_energy_flux) < math.inf:
+        check.reject(owner, "incoming_energy_flux", incoming_energy_flux,
+                     "must be a finite real number >= 0")
+    return flux, float(incoming_energy_flux)
 
 
 def _period_mean(energy, speed):
@@ -672,21 +715,17 @@ def vibrating_wall_energy_per_period(dimension: int, temperature: float, amplitu
         fluxes, and ``expansion``: Delta E from the series through eps^4.
     """
     owner = "vibrating_wall_energy_per_period"
-    if not check.is_integer(dimension) or dimension not in (2, 3):
-        check.reject(owner, "dimension", dimension, "must be 2 or 3")
+    _check_dimension(owner, dimension)
     temperature, amplitude, frequency = _wall_arguments(owner, temperature, amplitude, frequency)
-    flux = _positive(owner, "incoming_flux", incoming_flux)
-    if not check.is_real(incoming_energy_flux) or not 0.0 <= float(incoming_energy_flux) < math.inf:
-        check.reject(owner, "incoming_energy_flux", incoming_energy_flux,
-                     "must be a finite real number >= 0")
+    flux, energy_flux = _incoming_arguments(owner, incoming_flux, incoming_energy_flux)
 
     def energy(u):
         j0, j2 = half_range_maxwellian_fluxes(dimension, temperature, u)
         return j2 / j0
 
     mean = _period_mean(energy, amplitude * frequency)
-    return _vibrating_wall_result(mean, flux, float(incoming_energy_flux), temperature,
-                                  amplitude, frequency, dimension)
+    return _vibrating_wall_result(mean, flux, energy_flux, temperature, amplitude, frequency,
+                                  dimension)
 
 
 def vibrating_wall_energy_per_period_grid(grid, temperature: float, amplitude: float,
@@ -727,17 +766,8 @@ def vibrating_wall_energy_per_period_grid(grid, temperature: float, amplitude: f
 
     owner = "vibrating_wall_energy_per_period_grid"
     temperature, amplitude, frequency = _wall_arguments(owner, temperature, amplitude, frequency)
-    f = numpy.asarray(incoming, dtype=float)
-    if f.shape != tuple(grid.shape) or not numpy.isfinite(f).all():
-        check.reject(owner, "incoming", incoming, f"must be a finite array of the grid's "
-                     f"shape {tuple(grid.shape)}")
     positive, negative = upwind_speeds(grid)
-    arriving = -negative * grid.cell_volume
-    flux = float(numpy.sum(arriving * f))
-    if not flux > 0.0:
-        check.reject(owner, "incoming", incoming, "must have a positive arriving flux "
-                     "sum |c^-| f dv (values > 0 at v_1 < 0)")
-    energy_flux = float(numpy.sum(arriving * 0.5 * grid.speed_squared() * f))
+    flux, energy_flux = _arriving_fluxes(owner, grid, incoming, negative)
     c = positive.ravel()
     leaving = c > 0.0
     w = numpy.abs(grid.points())[leaving]
@@ -753,3 +783,17 @@ def vibrating_wall_energy_per_period_grid(grid, temperature: float, amplitude: f
     mean = _period_mean(energy, amplitude * frequency)
     return _vibrating_wall_result(mean, flux, energy_flux, temperature, amplitude, frequency,
                                   grid.dimension)
+
+
+def _arriving_fluxes(owner, grid, incoming, negative):
+    """Phi_in, E_in of :func:`vibrating_wall_energy_per_period_grid`, ``incoming`` checked."""
+    f = numpy.asarray(incoming, dtype=float)
+    if f.shape != tuple(grid.shape) or not numpy.isfinite(f).all():
+        check.reject(owner, "incoming", incoming, f"must be a finite array of the grid's "
+                     f"shape {tuple(grid.shape)}")
+    arriving = -negative * grid.cell_volume
+    flux = float(numpy.sum(arriving * f))
+    if not flux > 0.0:
+        check.reject(owner, "incoming", incoming, "must have a positive arriving flux "
+                     "sum |c^-| f dv (values > 0 at v_1 < 0)")
+    return flux, float(numpy.sum(arriving * 0.5 * grid.speed_squared() * f))
