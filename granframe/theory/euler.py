@@ -186,35 +186,52 @@ def euler_riemann(left, right, gamma: float, x, t: float, x0: float = 0.5) -> di
         rho, u, p = (numpy.where(is_left, a, b) for a, b in ((rl, rr), (ul, ur), (pl, pr)))
         return {"rho": rho, "u": u, "p": p, "T": p / rho}
     s = (x - x0) / t
-    ps, us = star["p"], star["u"]
-    g4, g5, g7 = 2.0 / (gamma - 1.0), 2.0 / (gamma + 1.0), 0.5 * (gamma - 1.0)
-    g3 = 2.0 * gamma / (gamma - 1.0)
-    al, ar = math.sqrt(gamma * pl / rl), math.sqrt(gamma * pr / rr)
-    speeds = star["speeds"]
     with numpy.errstate(invalid="ignore"):
-        # left of the contact
-        if star["left_wave"] == "shock":
-            outside_l, fan_l = s < speeds[0], numpy.zeros(s.shape, dtype=bool)
-        else:
-            outside_l, fan_l = s < speeds[0], (s >= speeds[0]) & (s < speeds[1])
-        cl = numpy.clip(g5 * (al + g7 * (ul - s)), 0.0, None) / al
-        rho_l = numpy.where(outside_l, rl, numpy.where(fan_l, rl * cl ** g4, star["rho_left"]))
-        u_l = numpy.where(outside_l, ul, numpy.where(fan_l, g5 * (al + g7 * ul + s), us))
-        p_l = numpy.where(outside_l, pl, numpy.where(fan_l, pl * cl ** g3, ps))
-        # right of the contact
-        if star["right_wave"] == "shock":
-            outside_r, fan_r = s > speeds[-1], numpy.zeros(s.shape, dtype=bool)
-        else:
-            outside_r, fan_r = s > speeds[-1], (s <= speeds[-1]) & (s > speeds[-2])
-        cr = numpy.clip(g5 * (ar - g7 * (ur - s)), 0.0, None) / ar
-        rho_r = numpy.where(outside_r, rr, numpy.where(fan_r, rr * cr ** g4, star["rho_right"]))
-        u_r = numpy.where(outside_r, ur, numpy.where(fan_r, g5 * (-ar + g7 * ur + s), us))
-        p_r = numpy.where(outside_r, pr, numpy.where(fan_r, pr * cr ** g3, ps))
-    is_left = s < us
+        rho_l, u_l, p_l = _left_of_contact(s, (rl, ul, pl), star, gamma)
+        rho_r, u_r, p_r = _right_of_contact(s, (rr, ur, pr), star, gamma)
+    is_left = s < star["u"]
     rho = numpy.where(is_left, rho_l, rho_r)
     u = numpy.where(is_left, u_l, u_r)
     p = numpy.where(is_left, p_l, p_r)
     return {"rho": rho, "u": u, "p": p, "T": p / rho}
+
+
+def _left_of_contact(s, left, star, gamma):
+    """rho, u, p of :func:`euler_riemann` at S = (x - x0)/t as if left of the contact: the
+    left state, the left fan (if the left wave is one) or the star state."""
+    rl, ul, pl = left
+    g4, g5, g7 = 2.0 / (gamma - 1.0), 2.0 / (gamma + 1.0), 0.5 * (gamma - 1.0)
+    g3 = 2.0 * gamma / (gamma - 1.0)
+    al = math.sqrt(gamma * pl / rl)
+    speeds = star["speeds"]
+    if star["left_wave"] == "shock":
+        outside_l, fan_l = s < speeds[0], numpy.zeros(s.shape, dtype=bool)
+    else:
+        outside_l, fan_l = s < speeds[0], (s >= speeds[0]) & (s < speeds[1])
+    cl = numpy.clip(g5 * (al + g7 * (ul - s)), 0.0, None) / al
+    rho_l = numpy.where(outside_l, rl, numpy.where(fan_l, rl * cl ** g4, star["rho_left"]))
+    u_l = numpy.where(outside_l, ul, numpy.where(fan_l, g5 * (al + g7 * ul + s), star["u"]))
+    p_l = numpy.where(outside_l, pl, numpy.where(fan_l, pl * cl ** g3, star["p"]))
+    return rho_l, u_l, p_l
+
+
+def _right_of_contact(s, right, star, gamma):
+    """rho, u, p of :func:`euler_riemann` at S = (x - x0)/t as if right of the contact: the
+    right state, the right fan (if the right wave is one) or the star state."""
+    rr, ur, pr = right
+    g4, g5, g7 = 2.0 / (gamma - 1.0), 2.0 / (gamma + 1.0), 0.5 * (gamma - 1.0)
+    g3 = 2.0 * gamma / (gamma - 1.0)
+    ar = math.sqrt(gamma * pr / rr)
+    speeds = star["speeds"]
+    if star["right_wave"] == "shock":
+        outside_r, fan_r = s > speeds[-1], numpy.zeros(s.shape, dtype=bool)
+    else:
+        outside_r, fan_r = s > speeds[-1], (s <= speeds[-1]) & (s > speeds[-2])
+    cr = numpy.clip(g5 * (ar - g7 * (ur - s)), 0.0, None) / ar
+    rho_r = numpy.where(outside_r, rr, numpy.where(fan_r, rr * cr ** g4, star["rho_right"]))
+    u_r = numpy.where(outside_r, ur, numpy.where(fan_r, g5 * (-ar + g7 * ur + s), star["u"]))
+    p_r = numpy.where(outside_r, pr, numpy.where(fan_r, pr * cr ** g3, star["p"]))
+    return rho_r, u_r, p_r
 
 
 def euler_riemann_cell_averages(left, right, gamma: float, edges, t: float, x0: float = 0.5,
@@ -343,6 +360,55 @@ def _hll(left, right, dimension):
     return (hi * fluxes[0] - lo * fluxes[1] + hi * lo * (states[1] - states[0])) / (hi - lo)
 
 
+def _cool(q, dt, c, dimension):
+    """The cooling over dt by its exact solution at fixed rho: T <- T exp(-c rho dt)."""
+    rho, u, temperature = _primitive(q, dimension)
+    temperature = temperature * numpy.exp(-c * rho * dt)
+    return numpy.array([rho, rho * u, 0.5 * rho * u * u + 0.5 * dimension * rho * temperature])
+
+
+def _transport_rate(q, dx, dimension):
+    """-d_x of the Euler fluxes of q: MUSCL with the minmod limiter on (rho, u, T), two
+    ghost cells at each wall (mirrored: u reversed), the HLL flux at every face.
+
+    At x = 0 the two ghost cells are in the wrong order (the mirror of cell 1 next to the
+    wall, of cell 0 beyond it; at x = ell they are in mirror order): a known bug, recorded
+    by a strict xfail in tests/test_theory.py and kept, since the studies' outputs depend
+    on it."""
+    prim = numpy.array(_primitive(q, dimension))
+    mirror = prim[:, [1, 0]] * numpy.array([[1.0], [-1.0], [1.0]])
+    far = prim[:, [-1, -2]] * numpy.array([[1.0], [-1.0], [1.0]])
+    padded = numpy.concatenate([mirror[:, ::-1], prim, far], axis=1)
+    slope = _minmod(padded[:, 1:-1] - padded[:, :-2], padded[:, 2:] - padded[:, 1:-1])
+    centre = padded[:, 1:-1]
+    left = (centre + 0.5 * slope)[:, :-1]
+    right = (centre - 0.5 * slope)[:, 1:]
+    flux = _hll(tuple(left), tuple(right), dimension)
+    return -(flux[:, 1:] - flux[:, :-1]) / dx
+
+
+def _piston_step(q, dt, c, dx, dimension):
+    """One step dt of the granular Euler solver: half a step of cooling, the transport by
+    SSP RK2, half a step of cooling (Strang splitting)."""
+    q = _cool(q, 0.5 * dt, c, dimension)
+    stage = q + dt * _transport_rate(q, dx, dimension)
+    q = 0.5 * (q + stage + dt * _transport_rate(stage, dx, dimension))
+    return _cool(q, 0.5 * dt, c, dimension)
+
+
+def _piston_advance(q, t, target, c, dx, cfl, dimension):
+    """q and t of the granular Euler solver advanced from t to ``target`` by steps
+    cfl dx / max(|u| + sqrt(gamma T)), the last shortened to land on it."""
+    gamma = (dimension + 2) / dimension
+    while t < target - 1e-14:
+        rho, u, temperature = _primitive(q, dimension)
+        dt = min(cfl * dx / float(numpy.max(abs(u) + numpy.sqrt(gamma * temperature))),
+                 target - t)
+        q = _piston_step(q, dt, c, dx, dimension)
+        t += dt
+    return q, t
+
+
 def granular_euler_piston(speed: float, restitution: float, knudsen: float, length: float,
                           times, cells: int = 4000, cfl: float = 0.4,
                           dimension: int = 2) -> dict:
@@ -390,41 +456,14 @@ def granular_euler_piston(speed: float, restitution: float, knudsen: float, leng
         ``x`` (cell centres) and, one row per time, ``time``, ``density``, ``velocity``,
         ``temperature``.
     """
-    gamma = (dimension + 2) / dimension
     dx = length / cells
     x = (numpy.arange(cells) + 0.5) * dx
     rho = numpy.ones(cells)
     q = numpy.array([rho, -speed * rho, 0.5 * speed * speed * rho + 0.5 * dimension * rho])
     c = maxwellian_cooling_rate(restitution) / knudsen
-
-    def cool(q, dt):
-        rho, u, temperature = _primitive(q, dimension)
-        temperature = temperature * numpy.exp(-c * rho * dt)
-        return numpy.array([rho, rho * u, 0.5 * rho * u * u + 0.5 * dimension * rho * temperature])
-
-    def rate(q):
-        prim = numpy.array(_primitive(q, dimension))
-        mirror = prim[:, [1, 0]] * numpy.array([[1.0], [-1.0], [1.0]])
-        far = prim[:, [-1, -2]] * numpy.array([[1.0], [-1.0], [1.0]])
-        padded = numpy.concatenate([mirror[:, ::-1], prim, far], axis=1)
-        slope = _minmod(padded[:, 1:-1] - padded[:, :-2], padded[:, 2:] - padded[:, 1:-1])
-        centre = padded[:, 1:-1]
-        left = (centre + 0.5 * slope)[:, :-1]
-        right = (centre - 0.5 * slope)[:, 1:]
-        flux = _hll(tuple(left), tuple(right), dimension)
-        return -(flux[:, 1:] - flux[:, :-1]) / dx
-
     out, t = {"x": x, "time": [], "density": [], "velocity": [], "temperature": []}, 0.0
     for target in sorted(times):
-        while t < target - 1e-14:
-            rho, u, temperature = _primitive(q, dimension)
-            dt = min(cfl * dx / float(numpy.max(abs(u) + numpy.sqrt(gamma * temperature))),
-                     target - t)
-            q = cool(q, 0.5 * dt)
-            stage = q + dt * rate(q)
-            q = 0.5 * (q + stage + dt * rate(stage))
-            q = cool(q, 0.5 * dt)
-            t += dt
+        q, t = _piston_advance(q, t, target, c, dx, cfl, dimension)
         rho, u, temperature = _primitive(q, dimension)
         for name, value in (("time", t), ("density", rho), ("velocity", u),
                             ("temperature", temperature)):
