@@ -81,66 +81,23 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
     notes); ``quadrature`` (``auto`` or ``review``) takes the rules of that preset instead
     of ``radial_points`` and ``sphere_points``."""
     import granframe as gf
-    from granframe.velocity.quadratures import CircleTrapezoid, SphereProduct
 
     baseline = peak_rss_kib()
     grid = gf.VelocityGrid(dimension, n_modes, 4.0)
-    factory = gf.default_registries().get("array_backends", backend).factory
-    takes_threads = "threads" in inspect.signature(factory).parameters
-    array_backend = gf.array_backend(backend, **({"threads": threads} if takes_threads else {}),
-                                     **(options or {}))
-    if quadrature is not None:
-        rules = {"quadrature": quadrature}
-    elif dimension == 2:
-        rules = {"radial_points": radial_points, "sphere": CircleTrapezoid(sphere_points)}
-    else:
-        n_polar = int(round((sphere_points / 2) ** 0.5))
-        if 2 * n_polar ** 2 != sphere_points:
-            raise ValueError(f"bench: parameter 'sphere_points' = {sphere_points} is invalid; "
-                             "in 3D it must be 2 n^2 (Gauss product rule), e.g. 32")
-        rules = {"radial_points": radial_points, "sphere": SphereProduct(n_polar)}
+    array_backend = _array_backend(backend, threads, options)
+    rules = _rules(dimension, radial_points, sphere_points, quadrature)
     start = time.perf_counter()
     operator = gf.collision_operator(method, grid, gf.collision_kernel("hard_spheres"),
                                      gf.restitution_law("constant", value=0.8),
                                      backend=array_backend, **rules,
                                      **({} if precision == "float64" else {"precision": precision}))
     precompute = time.perf_counter() - start
-    if distributions == 1:
-        f = array_backend.asarray(grid.maxwellian(temperature=1.0))
-    else:       # distinct distributions: temperatures 0.8 to 1.2
-        f = array_backend.asarray(numpy.stack([
-            grid.maxwellian(temperature=t) for t in numpy.linspace(0.8, 1.2, distributions)]))
+    f = _distributions(grid, array_backend, distributions)
     transforms = operator.stack_transforms(distributions)
-    fft = array_backend.real_fft((transforms,) + grid.shape, tuple(range(1, dimension + 1)),
-                                 threads=threads, precision=precision)
-    fft.real[...] = f.reshape((-1,) + grid.shape)[:1]
-    # the floor's calls per round: as many transforms as one evaluation makes (at least one)
-    calls = max(1, math.ceil(distributions * operator.transform_pairs / transforms))
-
-    def floor_round():
-        for _ in range(calls):
-            fft.forward()
-            fft.inverse()
-
-    operator(f)
-    floor_round()
-    array_backend.synchronize()
-    # alternating blocks of evaluations and floor rounds, so that both medians come from the
-    # same minutes of a machine whose speed drifts; an evaluation right after a floor round
-    # is not timed: FFTW's threads keep spinning after it and took a core from the operator
-    # (2D N = 64: 10.5 ms against 5.8 ms)
-    evaluations, pair_times = [], []
-    blocks = min(repeats, 2)
-    for block in range(blocks):
-        count = repeats // blocks + (1 if block < repeats % blocks else 0)
-        operator(f)
-        array_backend.synchronize()
-        for _ in range(count):
-            evaluations.append(array_backend.elapsed(lambda: operator(f)) / distributions)
-        for _ in range(count):
-            pair_times.append(array_backend.elapsed(floor_round) / calls)
-    evaluation = float(numpy.median(evaluations))
-    single = float(numpy.median(pair_times))
+    floor_round, calls = _floor_round(operator, grid, array_backend, f, distributions,
+                                      transforms, threads, precision)
+    evaluation, single = _alternating_medians(operator, f, floor_round, calls, repeats,
+                                              distributions, array_backend)
     batch = operator.batch
     floor = single * operator.transform_pairs / transforms
     peak = peak_rss_kib()
@@ -159,6 +116,87 @@ def measure(dimension: int, n_modes: int, radial_points: int, sphere_points: int
         "baseline_rss_gib": baseline / 2 ** 20,
         "device_memory_gib": None if device is None else device / 2 ** 30,
     }
+
+
+def _array_backend(backend: str, threads: int, options: dict | None):
+    """The array backend ``backend`` with ``options``, and ``threads`` if it takes them."""
+    import granframe as gf
+
+    factory = gf.default_registries().get("array_backends", backend).factory
+    takes_threads = "threads" in inspect.signature(factory).parameters
+    return gf.array_backend(backend, **({"threads": threads} if takes_threads else {}),
+                            **(options or {}))
+
+
+def _rules(dimension: int, radial_points: int, sphere_points: int,
+           quadrature: str | None) -> dict:
+    """The operator's quadrature options: the preset ``quadrature``, or N_rho and the
+    sphere rule of M points (the circle's trapezoid rule in 2D, the Gauss product rule of
+    M = 2 n^2 points in 3D)."""
+    from granframe.velocity.quadratures import CircleTrapezoid, SphereProduct
+
+    if quadrature is not None:
+        return {"quadrature": quadrature}
+    if dimension == 2:
+        return {"radial_points": radial_points, "sphere": CircleTrapezoid(sphere_points)}
+    n_polar = int(round((sphere_points / 2) ** 0.5))
+    if 2 * n_polar ** 2 != sphere_points:
+        raise ValueError(f"bench: parameter 'sphere_points' = {sphere_points} is invalid; "
+                         "in 3D it must be 2 n^2 (Gauss product rule), e.g. 32")
+    return {"radial_points": radial_points, "sphere": SphereProduct(n_polar)}
+
+
+def _distributions(grid, array_backend, distributions: int):
+    """What the operator evaluates: the Maxwellian of T = 1, or a stack of D distinct ones
+    (temperatures 0.8 to 1.2)."""
+    if distributions == 1:
+        return array_backend.asarray(grid.maxwellian(temperature=1.0))
+    return array_backend.asarray(numpy.stack([
+        grid.maxwellian(temperature=t) for t in numpy.linspace(0.8, 1.2, distributions)]))
+
+
+def _floor_round(operator, grid, array_backend, f, distributions: int, transforms: int,
+                 threads: int, precision: str):
+    """One round of the FFT floor (module notes) and its number of transform calls: as
+    many forward + inverse transforms of the operator's batch of ``transforms`` grids as
+    one evaluation makes (at least one)."""
+    fft = array_backend.real_fft((transforms,) + grid.shape,
+                                 tuple(range(1, grid.dimension + 1)), threads=threads,
+                                 precision=precision)
+    fft.real[...] = f.reshape((-1,) + grid.shape)[:1]
+    calls = max(1, math.ceil(distributions * operator.transform_pairs / transforms))
+
+    def floor_round():
+        for _ in range(calls):
+            fft.forward()
+            fft.inverse()
+
+    return floor_round, calls
+
+
+def _alternating_medians(operator, f, floor_round, calls: int, repeats: int,
+                         distributions: int, array_backend) -> tuple[float, float]:
+    """The medians of ``repeats`` evaluations per distribution and of ``repeats`` floor
+    rounds per transform call, after one warm-up of each.
+
+    They are timed in alternating blocks, so that both medians come from the same minutes
+    of a machine whose speed drifts; an evaluation right after a floor round is not timed:
+    FFTW's threads keep spinning after it and took a core from the operator (2D N = 64:
+    10.5 ms against 5.8 ms)."""
+    operator(f)
+    floor_round()
+    array_backend.synchronize()
+    evaluations, pair_times = [], []
+    blocks = min(repeats, 2)
+    for block in range(blocks):
+        count = repeats // blocks + (1 if block < repeats % blocks else 0)
+        operator(f)
+        array_backend.synchronize()
+        for _ in range(count):
+            evaluations.append(array_backend.elapsed(lambda: operator(f)) / distributions)
+        for _ in range(count):
+            pair_times.append(array_backend.elapsed(floor_round) / calls)
+    return float(numpy.median(evaluations)), float(numpy.median(pair_times))
 
 
 def check_options(backend: str, threads: int, repeats: int) -> None:
@@ -338,16 +376,43 @@ def measure_space(dimension: int, n_modes: int, cells: int, radial_points: int,
     cells); the ratio (step + record) / (cells x that x 4 calls), at most 1.1 by target;
     and the peak resident memory.
     """
-    from granframe.run.description import RunDescription
     from granframe.run.problems import make_problem
 
     baseline = peak_rss_kib()
+    description = _space_description(dimension, n_modes, cells, radial_points, sphere_points,
+                                     backend, threads, reconstruction)
+    start = time.perf_counter()
+    problem = make_problem(description)
+    precompute = time.perf_counter() - start
+    parts, dt = _space_parts(problem)
+    medians = _medians(parts, repeats, problem.backend)
+    per_distribution = medians["operator"] / cells
+    target = cells * per_distribution * 4
+    return {"dimension": dimension, "n_modes": n_modes, "cells": cells,
+            "radial_points": radial_points, "sphere_points": sphere_points,
+            "reconstruction": reconstruction, "backend": backend, "threads": threads,
+            "repeats": repeats, "precompute_s": precompute, "time_step": dt,
+            "step_s": medians["step"], "collisions_s": medians["collisions"],
+            "transport_s": medians["transport"], "walls_s": medians["walls"],
+            "moments_s": medians["moments"], "operator_per_distribution_s": per_distribution,
+            "operator_calls_per_step": 4, "target_s": target,
+            "step_over_target": (medians["step"] + medians["moments"]) / target,
+            "others_share": (medians["transport"] + medians["moments"])
+            / (medians["step"] + medians["moments"]),
+            "peak_rss_gib": peak_rss_kib() / 2 ** 20, "baseline_rss_gib": baseline / 2 ** 20}
+
+
+def _space_description(dimension: int, n_modes: int, cells: int, radial_points: int,
+                       sphere_points: int, backend: str, threads: int, reconstruction: str):
+    """The run :func:`measure_space` times, as a :class:`RunDescription`."""
+    from granframe.run.description import RunDescription
+
     grid = {"dimension": dimension, "n_modes": n_modes, "support_radius": 4.0}
     if dimension == 2:
         sphere = {"name": "circle_trapezoid", "n_points": sphere_points}
     else:
         sphere = {"name": "sphere_product", "n_polar": int(round((sphere_points / 2) ** 0.5))}
-    description = RunDescription.from_dict({
+    return RunDescription.from_dict({
         "final_time": 1.0, "time_step": 1e-6, "grid": grid, "kernel": "hard_spheres",
         "restitution": {"name": "constant", "value": 0.8},
         "initial": {"name": "sinusoidal_mode", "field": "density", "amplitude": 0.2},
@@ -356,9 +421,11 @@ def measure_space(dimension: int, n_modes: int, cells: int, radial_points: int,
         "space": {"cells": cells, "reconstruction": reconstruction, "left": "diffuse",
                   "right": "diffuse"},
         "health": {"step_limit": False}})
-    start = time.perf_counter()
-    problem = make_problem(description)
-    precompute = time.perf_counter() - start
+
+
+def _space_parts(problem):
+    """The parts of a space step that :func:`measure_space` times, by name, each a function
+    of no arguments, and the time step dt they take (the transport's CFL limit)."""
     array_backend = problem.backend
     split = problem.integrator                  # the Strang step: its stages are timed
     transport = split.transport
@@ -392,27 +459,19 @@ def measure_space(dimension: int, n_modes: int, cells: int, radial_points: int,
 
     parts = {"step": step, "collisions": collisions, "transport": transport_both,
              "walls": walls, "moments": moments, "operator": operator}
+    return parts, dt
+
+
+def _medians(parts, repeats: int, array_backend) -> dict:
+    """The median time of each part over ``repeats`` alternating rounds (one call of every
+    part a round), after one warm-up call of each."""
     for function in parts.values():       # warm-up
         function()
     times = {name: [] for name in parts}
     for _ in range(repeats):
         for name, function in parts.items():
             times[name].append(array_backend.elapsed(function))
-    medians = {name: float(numpy.median(values)) for name, values in times.items()}
-    per_distribution = medians["operator"] / cells
-    target = cells * per_distribution * 4
-    return {"dimension": dimension, "n_modes": n_modes, "cells": cells,
-            "radial_points": radial_points, "sphere_points": sphere_points,
-            "reconstruction": reconstruction, "backend": backend, "threads": threads,
-            "repeats": repeats, "precompute_s": precompute, "time_step": dt,
-            "step_s": medians["step"], "collisions_s": medians["collisions"],
-            "transport_s": medians["transport"], "walls_s": medians["walls"],
-            "moments_s": medians["moments"], "operator_per_distribution_s": per_distribution,
-            "operator_calls_per_step": 4, "target_s": target,
-            "step_over_target": (medians["step"] + medians["moments"]) / target,
-            "others_share": (medians["transport"] + medians["moments"])
-            / (medians["step"] + medians["moments"]),
-            "peak_rss_gib": peak_rss_kib() / 2 ** 20, "baseline_rss_gib": baseline / 2 ** 20}
+    return {name: float(numpy.median(values)) for name, values in times.items()}
 
 
 def run_space(configs, backend: str, threads: int, repeats: int,
