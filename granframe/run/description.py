@@ -7,6 +7,12 @@ round-trips through TOML (:meth:`RunDescription.to_toml`,
 Everything is checked when the description is made, before any file is
 written; messages name the parameter, the value and what is allowed.
 
+The description is split by concern: :mod:`granframe.run.components` (:class:`Component`,
+its TOML form, :func:`check_component` and the attrs helpers of the fields),
+:mod:`granframe.run.space_description` (:class:`Space` and its :class:`Hierarchy`) and this
+module (the run's times and their limits, :class:`Output`, :class:`Health` and
+:class:`RunDescription`), whose names include those of the other two.
+
 Example (the review's heated Maxwell-molecule test)::
 
     title = "heated Maxwell molecules"
@@ -41,7 +47,6 @@ from __future__ import annotations
 import json
 import math
 import tomllib
-from typing import Any
 
 import attrs
 import numpy
@@ -49,17 +54,21 @@ import tomli_w
 
 from granframe import validators as check
 from granframe.abc import PRECISIONS
-from granframe.errors import UnknownParameterError
 from granframe.backends import AUTO, resolve_backend
-from granframe.parallel import store_chunk
 from granframe.velocity.grid import VelocityGrid
-from granframe.model.initial import callable_reference, resolve_callable
+from granframe.model.initial import resolve_callable
 from granframe.registry import default_registries
 from granframe.equations.rescaled import check_rescalable
 from granframe.equations.conservative import WEIGHTS as CONSERVATIVE_WEIGHTS
 from granframe.space.initial import SpaceCondition
-from granframe.space.transport import step_limit
-from granframe.velocity.grid import SCALE_RANGE
+from granframe.run.components import (Component, check_component, coerce_component,
+                                      component_field, instance_of, table_of, to_plain)
+from granframe.run.space_description import MAX_CELLS, Hierarchy, Space
+
+__all__ = ["COMPONENT_FAMILIES", "LIGHT_COMPONENTS", "MAX_CELLS", "MAX_SNAPSHOTS", "MAX_STEPS",
+           "RATE_RANGE", "TIME_RANGE", "TOLERANCE_FLOOR_EPSILONS", "Component", "Health",
+           "Hierarchy", "Output", "RunDescription", "Space", "check_component",
+           "coerce_component", "component_field", "fixed_steps", "instance_of"]
 
 #: Tolerance on "final_time and snapshot_interval are whole multiples of time_step".
 _MULTIPLE_TOLERANCE = 1e-9
@@ -114,78 +123,6 @@ def _in(lower: float, upper: float):
 def _optional_in(lower: float, upper: float):
     """attrs validator: None or a finite real number in [lower, upper]."""
     return attrs.validators.optional(check.real(lower, upper))
-
-
-def _is_json_scalar(value) -> bool:
-    return value is None or isinstance(value, (str, bool, int, float))
-
-
-def _plain(owner: str, key: str, value) -> Any:
-    """A parameter in TOML/JSON form: callables by reference, tuples as lists."""
-    if isinstance(value, dict):
-        return {k: _plain(owner, f"{key}.{k}", v) for k, v in value.items() if v is not None}
-    if isinstance(value, (list, tuple)):
-        return [_plain(owner, key, v) for v in value]
-    if attrs.has(type(value)):
-        return _plain(owner, key, attrs.asdict(value, recurse=False))
-    if callable(value):
-        reference = callable_reference(value)
-        if reference is None:
-            check.reject(owner, key, value, "is a callable that cannot be written to TOML or a "
-                         "store: use a module-level function or a 'module:function' string")
-        return reference
-    if isinstance(value, float) and not math.isfinite(value):
-        check.reject(owner, key, value, "must be finite")
-    if not _is_json_scalar(value):
-        check.reject(owner, key, value, "must be a number, string, boolean, list or table",
-                     error=TypeError)
-    return value
-
-
-@attrs.frozen
-class Component:
-    """A registered implementation: ``name`` in a family, with its parameters."""
-
-    name: str = attrs.field()
-    params: dict = attrs.field(factory=dict)
-
-    @name.validator
-    def _check_name(self, attribute, value):
-        if not isinstance(value, str) or not value:
-            check.reject("Component", "name", value, "must be a non-empty string", error=TypeError)
-
-    @params.validator
-    def _check_params(self, attribute, value):
-        if not isinstance(value, dict) or not all(isinstance(k, str) for k in value):
-            check.reject("Component", "params", value, "must be a table of named parameters",
-                         error=TypeError)
-
-    @classmethod
-    def coerce(cls, value) -> "Component":
-        """A Component from itself, a name, or a table ``{name = ..., <params>}``."""
-        if isinstance(value, Component):
-            return value
-        if isinstance(value, str):
-            return cls(value)
-        if isinstance(value, dict):
-            params = dict(value)
-            if "name" not in params:
-                check.reject("Component", "name", None, f"is missing from the table {value!r}")
-            return cls(params.pop("name"), params)
-        check.reject("Component", "value", value, "must be a name or a table with a 'name' key",
-                     error=TypeError)
-
-    def to_dict(self, owner: str) -> dict:
-        return {"name": self.name, **_plain(owner, owner, self.params)}
-
-
-def coerce_component(value):
-    """:meth:`Component.coerce` for an attrs converter: a value it cannot take is returned
-    as it is, for the field's validator (:func:`instance_of`) to report against the field."""
-    try:
-        return Component.coerce(value)
-    except (TypeError, ValueError):
-        return value
 
 
 @attrs.frozen(kw_only=True)
@@ -286,262 +223,6 @@ class Health:
 _LATER_HEALTH = ("accuracy_tolerance", "stop_on_accuracy")
 
 
-def _table(cls):
-    def convert(value):
-        return check.from_table(cls, value, "RunDescription") if isinstance(value, dict) else value
-    return convert
-
-
-def instance_of(cls, what, owner="RunDescription"):
-    """An attrs validator refusing a value that is not a ``cls`` (``what`` says so in words)."""
-    def validate(instance, attribute, value):
-        if not isinstance(value, cls):
-            check.reject(owner, attribute.name, value, f"must be {what}", error=TypeError)
-    return validate
-
-
-def component_field(**kwargs):
-    """An attrs field holding a :class:`Component`, given as one, a name or a table."""
-    return attrs.field(converter=coerce_component,
-                       validator=instance_of(Component, "a name or a table"), **kwargs)
-
-
-#: Most cells of a space run: 1e9 cells of the smallest grid (2D N = 4) already hold 128 GB
-#: per copy of f, so more is a mistake (and it keeps dx = length / cells a float).
-MAX_CELLS = 10 ** 9
-
-
-def _levels(value):
-    """The hierarchy's levels as a tuple of :class:`Component` (names or tables)."""
-    if isinstance(value, (str, dict, Component)):
-        value = [value]
-    try:
-        return tuple(coerce_component(v) for v in value)
-    except TypeError:
-        return value
-
-
-def _floats(value):
-    """A tuple of floats from a list (a number alone as one), unchanged when not numbers."""
-    if check.is_real(value):
-        value = [value]
-    try:
-        return tuple(check.to_float(v) for v in value)
-    except TypeError:
-        return value
-
-
-@attrs.frozen(kw_only=True)
-class Hierarchy:
-    r"""Collision models chosen cell by cell (docs/space.md, "The hierarchy";
-    :mod:`granframe.space.hierarchy`).
-
-    Parameters
-    ----------
-    levels : list of Component
-        Registered ``collision_models``, from the cheapest to the full operator (the last
-        must be one, ``boltzmann``; the others must not): by default
-        ``["euler", "esbgk", "boltzmann"]``.
-    realizability : list of float
-        For each level after the first, the Navier-Stokes realizability indicator kappa
-        (the stress and heat flux of the Navier-Stokes closure relative to the pressure)
-        above which a cell needs at least that level; positive, non-decreasing, at most 1.
-    distance : list of float
-        For each level after the first, the relative L1 distance delta of f from its local
-        Maxwellian above which a cell (not at the first level) needs at least that level;
-        positive, non-decreasing, at most 2 (the largest distance of two densities).
-    hysteresis : float
-        In (0, 1]: a cell leaves a level downwards only when its indicators are below this
-        share of the thresholds.
-    buffer : int
-        Cells (0 to 64) each level is widened by on each side, at least.
-    free_paths : float
-        Mean free paths eps sqrt(2T)/nu_s (0 to 100) each level is widened by on each side
-        when that is more than ``buffer`` cells: the particles a kinetic cell sends out fly
-        about that far before they collide.
-    interval : int
-        Steps between choices of the levels (1 to 1000).
-    """
-
-    levels: tuple = attrs.field(default=(Component("euler"), Component("esbgk"),
-                                         Component("boltzmann")), converter=_levels)
-    realizability: tuple = attrs.field(default=(0.002, 0.02), converter=_floats)
-    distance: tuple = attrs.field(default=(0.002, 0.05), converter=_floats)
-    hysteresis: float = attrs.field(default=0.5, converter=check.to_float,
-                                    validator=check.real(0.0, 1.0, lower_open=True))
-    buffer: int = attrs.field(default=2, converter=check.to_int,
-                              validator=check.integer(0, 64))
-    free_paths: float = attrs.field(default=2.0, converter=check.to_float,
-                                    validator=check.real(0.0, 100.0))
-    interval: int = attrs.field(default=1, converter=check.to_int,
-                                validator=check.integer(1, 1000))
-
-    def __attrs_post_init__(self):
-        owner = "Space"
-        levels = self.levels
-        if (not isinstance(levels, tuple) or not levels
-                or not all(isinstance(c, Component) for c in levels)):
-            check.reject(owner, "hierarchy.levels", levels, "must be a list of registered "
-                         "collision model names (or tables with a name)", error=TypeError)
-        registries = default_registries()
-        names = registries.names("collision_models")
-        for level in levels:
-            if level.name not in names:
-                check.reject(owner, "hierarchy.levels", level.name,
-                             f"must be one of {names}{check.did_you_mean(level.name, names)}")
-        chosen = [c.name for c in levels]
-        if len(set(chosen)) != len(chosen):
-            check.reject(owner, "hierarchy.levels", chosen, "must not name a level twice")
-        full = [registries.get("collision_models", c.name).factory.full for c in levels]
-        if len(levels) < 2 or not full[-1] or any(full[:-1]):
-            check.reject(owner, "hierarchy.levels", chosen,
-                         "must be at least two levels from the cheapest to the full collision "
-                         f"operator, which comes last and only last (full: "
-                         f"{[c for c, f in zip(chosen, full) if f] or 'none'}); e.g. "
-                         "['euler', 'bgk', 'boltzmann']")
-        for field, top in (("realizability", 1.0), ("distance", 2.0)):
-            values = getattr(self, field)
-            if (not isinstance(values, tuple) or len(values) != len(levels) - 1
-                    or not all(check.is_real(v) for v in values)):
-                check.reject(owner, f"hierarchy.{field}", values,
-                             f"must be a list of {len(levels) - 1} numbers, one for each "
-                             f"level after the first of {chosen}", error=TypeError)
-            if not all(0.0 < v <= top and math.isfinite(v) for v in values) or any(
-                    b < a for a, b in zip(values, values[1:])):
-                check.reject(owner, f"hierarchy.{field}", list(values),
-                             f"must be non-decreasing numbers in (0, {top:g}]")
-
-    def to_dict(self) -> dict:
-        return {"levels": [c.to_dict("space.hierarchy.levels") for c in self.levels],
-                "realizability": list(self.realizability), "distance": list(self.distance),
-                "hysteresis": self.hysteresis, "buffer": self.buffer,
-                "free_paths": self.free_paths, "interval": self.interval}
-
-
-@attrs.frozen(kw_only=True)
-class Space:
-    r"""The space interval of d_t f + v_1 d_x f = Q(f, f)/eps (+ tau Delta_v f) (docs/space.md).
-
-    Parameters
-    ----------
-    cells : int
-        Finite-volume cells on [0, length]; at least the reconstruction's stencil,
-        2 ghost + 1 (3 for ``upwind``, 5 for ``muscl``, 7 for ``weno5``), at most
-        :data:`MAX_CELLS`.
-    length : float
-        ell, in the velocity grid's scale range (1e-50 to 1e50).
-    block_cells : int or None
-        The width along x of the store's chunks of f and of the fields; a divisor of
-        ``cells``, at least the reconstruction's ghost width. A run on several processes
-        gives each whole chunks, so it runs on at most cells / block_cells of them. None:
-        :meth:`blocks` (about 16 chunks or more, at most 64 cells each).
-    reconstruction : Component
-        Registered reconstruction of the cell averages (``muscl``, ``weno5``, ``upwind``).
-    left, right : Component
-        Registered boundaries (``periodic``, ``specular``, ``diffuse`` with
-        ``temperature``, ``velocity``, ``accommodation``); periodic at both ends or at
-        neither.
-
-    collisions : bool
-        False: a collisionless gas (free-molecular flow, d_t f + v_1 d_x f = 0); the
-        kernel, the restitution law and the operator are then not built.
-    hierarchy : Hierarchy or None
-        Collision models chosen cell by cell (a ``[space.hierarchy]`` table); None: the
-        full operator in every cell.
-
-    The Knudsen number eps is the description's ``knudsen``.
-    """
-
-    cells: int = attrs.field(converter=check.to_int, validator=check.integer(1, MAX_CELLS))
-    length: float = attrs.field(default=1.0, converter=check.to_float,
-                                validator=_in(*SCALE_RANGE))
-    block_cells: int | None = attrs.field(default=None, converter=check.to_int)
-    reconstruction: Component = component_field(default=Component("muscl"))
-    left: Component = component_field(default=Component("periodic"))
-    right: Component = component_field(default=Component("periodic"))
-    collisions: bool = attrs.field(default=True, validator=check.boolean)
-    hierarchy: Hierarchy | None = attrs.field(default=None, converter=_table(Hierarchy))
-
-    @hierarchy.validator
-    def _check_hierarchy(self, attribute, value):
-        if value is None:
-            return
-        if not isinstance(value, Hierarchy):
-            check.reject("Space", "hierarchy", value, "must be a table (levels, thresholds) "
-                         "or absent", error=TypeError)
-        if not self.collisions:
-            check.reject("Space", "hierarchy", "a table", "needs collisions: a collisionless "
-                         "run (collisions = false) has no collision models to choose")
-
-    @block_cells.validator
-    def _check_block(self, attribute, value):
-        if value is not None and not (check.is_integer(value) and 1 <= value <= self.cells
-                                      and self.cells % value == 0):
-            check.reject("Space", "block_cells", value, f"must be a divisor of cells = "
-                         f"{self.cells} (or None)")
-
-    def build(self, field: str):
-        """The registered reconstruction (``reconstruction``) or boundary (``left``,
-        ``right``)."""
-        component = getattr(self, field)
-        family = "reconstructions" if field == "reconstruction" else "boundaries"
-        return default_registries().create(family, component.name, **component.params)
-
-    def blocks(self, ghost: int) -> int:
-        """The store's chunk width along x (:func:`granframe.parallel.store_chunk` of
-        ``cells`` and ``block_cells``)."""
-        return store_chunk(self.cells, ghost, self.block_cells)
-
-    def check(self, grid, time_step, step_limit: bool) -> dict:
-        """Build and check the reconstruction and the boundaries against the cells, the
-        grid and the time step (the transport's CFL limit); returns them."""
-        owner = "RunDescription"
-        built = {field: self.build(field) for field in ("reconstruction", "left", "right")}
-        ghost = built["reconstruction"].ghost
-        if self.cells < 2 * ghost + 1:
-            check.reject(owner, "space.cells", self.cells,
-                         f"must be >= {2 * ghost + 1}, the stencil of the reconstruction "
-                         f"'{self.reconstruction.name}' (2 x {ghost} ghost cells + 1)")
-        block = self.blocks(ghost)
-        if block < ghost:
-            check.reject(owner, "space.block_cells", block,
-                         f"must be >= {ghost}, the ghost width of the reconstruction "
-                         f"'{self.reconstruction.name}' (a block fills its neighbour's ghosts)")
-        left, right = built["left"], built["right"]
-        if left.periodic != right.periodic:
-            check.reject(owner, "space.left" if not left.periodic else "space.right",
-                         (self.left if not left.periodic else self.right).name,
-                         "must be periodic too: an interval is periodic at both ends or at "
-                         "neither")
-        for side in ("left", "right"):
-            built[side].check(grid)
-        if step_limit and time_step is not None:
-            limit = self.transport_limit(grid, built["reconstruction"])
-            if time_step > limit * (1 + 1e-12):
-                check.reject(owner, "time_step", time_step,
-                             f"must be <= {limit:.6g}, the transport's CFL limit: each half "
-                             f"step dt/2 moves the fastest node (max|v_1| = L - h = "
-                             f"{grid.half_width - grid.spacing:.6g}) at most cfl = "
-                             f"{built['reconstruction'].cfl:g} cells of dx = "
-                             f"{self.length / self.cells:.6g} ('{self.reconstruction.name}' "
-                             "with SSP RK3); lower time_step, or use fewer space.cells")
-        return built
-
-    def transport_limit(self, grid, reconstruction=None) -> float:
-        """The largest time step of the transport: each half step dt/2 moves the fastest
-        node (max|v_1| = L - h) at most the reconstruction's ``cfl`` cells,
-        dt <= 2 cfl dx / (L - h) (:func:`granframe.space.transport.step_limit`)."""
-        reconstruction = reconstruction or self.build("reconstruction")
-        return step_limit(grid, self.length / self.cells, reconstruction.cfl)
-
-    def to_dict(self) -> dict:
-        return {"cells": self.cells, "length": self.length, "block_cells": self.block_cells,
-                **({} if self.collisions else {"collisions": False}),
-                **({} if self.hierarchy is None else {"hierarchy": self.hierarchy.to_dict()}),
-                **{field: getattr(self, field).to_dict(f"space.{field}")
-                   for field in ("reconstruction", "left", "right")}}
-
-
 #: The registry family (:mod:`granframe.registry`) of each component of a description.
 COMPONENT_FAMILIES = {"kernel": "collision_kernels", "restitution": "restitution_laws",
                       "initial": "initial_conditions", "operator": "collision_operators",
@@ -551,53 +232,6 @@ COMPONENT_FAMILIES = {"kernel": "collision_kernels", "restitution": "restitution
 #: attrs validators are the checks). The operator and the backend are only checked
 #: (:func:`check_component`); :class:`~granframe.run.runner.Simulation` builds them.
 LIGHT_COMPONENTS = ("kernel", "restitution", "initial", "integrator")
-
-
-def check_component(family: str, component: Component, owner: str = "RunDescription",
-                    **arguments) -> None:
-    """Check ``component`` against its registered factory without calling it.
-
-    The name must be registered in ``family``; the parameters (with ``arguments``, the
-    ones the caller passes besides them) must bind to the factory's signature; and for an
-    attrs class each parameter goes through its converter and validators (as in
-    ``__init__``, but without ``__attrs_post_init__``, where a backend imports its array
-    module). Nothing is built: a description naming a backend that this machine lacks
-    (``cupy``) is valid here.
-    """
-    entry = default_registries().get(family, component.name)   # unknown names: clear error
-    params = {**arguments, **component.params}
-    try:
-        entry.check_parameters(component.params, arguments)   # names the closest parameter
-    except UnknownParameterError as exc:
-        if family == "collision_operators":
-            check.reject(owner, "operator", component.params, f"has an unknown option: {exc}",
-                         error=TypeError)
-        raise
-    if isinstance(entry.factory, type) and attrs.has(entry.factory):
-        _check_fields(entry.factory, params)
-
-
-def _check_fields(cls, params: dict) -> None:
-    """Run the converters and validators of the attrs class ``cls`` on ``params`` on an
-    instance that is never initialised (so that the validators name ``cls``)."""
-    stub = object.__new__(cls)
-    for field in attrs.fields(cls):
-        if not field.init:
-            continue
-        key = field.alias or field.name
-        if key in params:
-            value = params[key]
-        elif isinstance(field.default, attrs.Factory):
-            value = (field.default.factory(stub) if field.default.takes_self
-                     else field.default.factory())
-        else:
-            value = field.default
-        if field.converter is not None:
-            value = field.converter(value)
-        object.__setattr__(stub, field.name, value)
-    for field in attrs.fields(cls):
-        if field.init and field.validator is not None:
-            field.validator(stub, field, getattr(stub, field.name))
 
 
 def _conservative_weight(value):
@@ -667,7 +301,7 @@ class RunDescription:
         default) for a space-homogeneous one.
     """
 
-    grid: VelocityGrid = attrs.field(converter=_table(VelocityGrid),
+    grid: VelocityGrid = attrs.field(converter=table_of(VelocityGrid),
                                      validator=instance_of(VelocityGrid, "a VelocityGrid"))
     final_time: float = attrs.field(converter=check.to_float, validator=_in(*TIME_RANGE))
     kernel: Component = component_field()
@@ -687,12 +321,12 @@ class RunDescription:
     rescaled: bool = attrs.field(default=False, validator=check.boolean)
     conservative: str | None = attrs.field(default=None, converter=_conservative_weight,
                                            validator=_check_conservative)
-    output: Output = attrs.field(factory=Output, converter=_table(Output),
+    output: Output = attrs.field(factory=Output, converter=table_of(Output),
                                  validator=instance_of(Output, "an Output table"))
-    health: Health = attrs.field(factory=Health, converter=_table(Health),
+    health: Health = attrs.field(factory=Health, converter=table_of(Health),
                                  validator=instance_of(Health, "a Health table"))
     title: str = attrs.field(default="", validator=instance_of(str, "a string"))
-    space: Space | None = attrs.field(default=None, converter=_table(Space),
+    space: Space | None = attrs.field(default=None, converter=table_of(Space),
                                       validator=attrs.validators.optional(
                                           instance_of(Space, "a Space table")))
     #: what validating built: the light components (:data:`LIGHT_COMPONENTS`), which
@@ -879,7 +513,7 @@ class RunDescription:
                 **{field: getattr(self, field).to_dict(field) for field in COMPONENT_FAMILIES},
                 "output": attrs.asdict(self.output), "health": self.health.to_dict(),
                 **({} if self.space is None else {"space": self.space.to_dict()})}
-        return json.loads(json.dumps(_plain("RunDescription", "description", data)))
+        return json.loads(json.dumps(to_plain("RunDescription", "description", data)))
 
     @classmethod
     def from_dict(cls, data: dict) -> "RunDescription":
