@@ -388,24 +388,10 @@ def run_sweep(sweep: Sweep, out, *, client=None, scheduler: str | None = None,
         Runs finished and failed, among them those that had ended before (skipped) and
         the points refused before and not submitted again (refused).
     """
-    if not isinstance(sweep, Sweep):
-        check.reject("run_sweep", "sweep", sweep, "must be a Sweep", error=TypeError)
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
-                                or workers < 1):
-        check.reject("run_sweep", "workers", workers, "must be a whole number >= 1 (worker "
-                     "processes of the LocalCluster), or None for one per core")
+    _check_run_arguments(sweep, workers)
     start = time.perf_counter()
     out = pathlib.Path(out)
-    kind = store_kind(out)
-    if kind == "other" and {p.name for p in out.iterdir()} == {"runs"}:
-        kind = "sweep"             # run stores written before the sweep's own metadata
-    if overwrite:
-        check_replaceable(out, protect)          # refused before anything is touched
-    elif kind not in ("missing", "empty", "sweep"):
-        what = {"run": "a granframe run store (--overwrite replaces it)",
-                "file": "a file"}.get(kind, "not a sweep store")
-        check.reject("run_sweep", "out", str(out), f"must be a new path, an empty directory or "
-                     f"a sweep store; it is {what}")
+    _check_out(out, overwrite, protect)
     points = sweep.points()
     names = [run_name(p) for p in points]
     if len(set(names)) != len(names):
@@ -416,6 +402,34 @@ def run_sweep(sweep: Sweep, out, *, client=None, scheduler: str | None = None,
             _clear(out, protect)
         return _drive(sweep, out, points, names, client, scheduler, workers, progress,
                       retry_failed, start)
+
+
+def _check_run_arguments(sweep, workers) -> None:
+    """Refuse a ``sweep`` that is not a :class:`Sweep` and ``workers`` that are not None or
+    a whole number >= 1."""
+    if not isinstance(sweep, Sweep):
+        check.reject("run_sweep", "sweep", sweep, "must be a Sweep", error=TypeError)
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
+                                or workers < 1):
+        check.reject("run_sweep", "workers", workers, "must be a whole number >= 1 (worker "
+                     "processes of the LocalCluster), or None for one per core")
+
+
+def _check_out(out: pathlib.Path, overwrite: bool, protect) -> None:
+    """Refuse an ``out`` that a sweep may not write: with ``overwrite``, what
+    :func:`check_replaceable` refuses; without it, anything but a new path, an empty
+    directory or a sweep store (or a directory of run stores only, written before the
+    sweep's own metadata)."""
+    kind = store_kind(out)
+    if kind == "other" and {p.name for p in out.iterdir()} == {"runs"}:
+        kind = "sweep"             # run stores written before the sweep's own metadata
+    if overwrite:
+        check_replaceable(out, protect)          # refused before anything is touched
+    elif kind not in ("missing", "empty", "sweep"):
+        what = {"run": "a granframe run store (--overwrite replaces it)",
+                "file": "a file"}.get(kind, "not a sweep store")
+        check.reject("run_sweep", "out", str(out), f"must be a new path, an empty directory or "
+                     f"a sweep store; it is {what}")
 
 
 def _clear(out: pathlib.Path, protect) -> None:
@@ -633,7 +647,6 @@ def open_sweep(path) -> "xarray.Dataset":
     xarray.Dataset
         Also for a sweep under way: its points not yet run are ``pending``.
     """
-    import tomli_w
     import xarray
 
     meta = _sweep_metadata(path, "open_sweep")
@@ -641,10 +654,22 @@ def open_sweep(path) -> "xarray.Dataset":
     sweep = Sweep.from_dict(meta["sweep"])
     names = [run_name(p) for p in sweep.points()]
     dims = _grid(sweep)
+    stored = _stored_rows(path)
+    variables = _grid_variables(dims, names, [stored.get(name, _PENDING) for name in names])
+    coordinates = _grid_coordinates(dims)
+    taken = [_variable(key) for key in (*sweep.product, *sweep.zip)]
+    if len(set(taken)) < len(taken) or set(taken) & set(variables):
+        check.reject("open_sweep", "path", str(path), f"holds a sweep whose parameters "
+                     f"{sorted([*sweep.product, *sweep.zip])} do not give distinct variable "
+                     f"names (dots become underscores; {sorted(variables)} are taken)")
+    return xarray.Dataset(variables, coordinates, _dataset_attributes(meta, sweep))
+
+
+def _grid_variables(dims, names, rows) -> dict:
+    """The variables of :func:`open_sweep`: the run names and the table's columns
+    (:data:`_RESULTS`) on the sweep's grid, the final moments NaN unless finished."""
     shape = tuple(len(next(iter(axes.values()))) for _, _, axes in dims)
     dimensions = tuple(name for name, _, _ in dims)
-    stored = _stored_rows(path)
-    rows = [stored.get(name, _PENDING) for name in names]
     finished = numpy.array([row["status"] == "finished" for row in rows])
     variables = {"run": (dimensions, numpy.array(names, dtype=str).reshape(shape),
                          {"long_name": "name of the run store (STORE/runs/<run>)"})}
@@ -657,6 +682,12 @@ def open_sweep(path) -> "xarray.Dataset":
         elif key in TABLE_MOMENTS:
             values = numpy.where(finished, values.astype(numpy.float64), math.nan)
         variables[key] = (dimensions, values.reshape(shape), dict(attributes))
+    return variables
+
+
+def _grid_coordinates(dims) -> dict:
+    """The coordinates of :func:`open_sweep`: every swept parameter along its dimension,
+    in its own type (:func:`_coordinate`)."""
     coordinates = {}
     for dimension, kind, axes in dims:
         for key, values in axes.items():
@@ -665,21 +696,23 @@ def open_sweep(path) -> "xarray.Dataset":
                           "parameter": key, **({"units": "1"} if values.dtype.kind in "if"
                                                else {})}
             coordinates[_variable(key)] = ((dimension,), values, attributes)
-    taken = [_variable(key) for key in (*sweep.product, *sweep.zip)]
-    if len(set(taken)) < len(taken) or set(taken) & set(variables):
-        check.reject("open_sweep", "path", str(path), f"holds a sweep whose parameters "
-                     f"{sorted([*sweep.product, *sweep.zip])} do not give distinct variable "
-                     f"names (dots become underscores; {sorted(variables)} are taken)")
+    return coordinates
+
+
+def _dataset_attributes(meta: dict, sweep: Sweep) -> dict:
+    """The flat root attributes of :func:`open_sweep`: title, source, history, conventions,
+    the store schema, and the sweep as TOML text."""
+    import tomli_w
+
     version = meta.get("version", "(version not recorded)")
     schema = meta.get("schema", SCHEMA)
     history = [f"{meta[key]} {what} by granframe sweep (granframe {version}, store schema "
                f"{schema})" for key, what in (("created", "created"), ("updated", "last written"))
                if key in meta]
-    attributes = {"title": sweep.base.get("title") or "granframe sweep",
-                  "source": f"granframe {version}", "history": "\n".join(history),
-                  "Conventions": "CF-1.10", "granframe_schema": schema,
-                  "sweep_toml": tomli_w.dumps(sweep.to_dict())}
-    return xarray.Dataset(variables, coordinates, attributes)
+    return {"title": sweep.base.get("title") or "granframe sweep",
+            "source": f"granframe {version}", "history": "\n".join(history),
+            "Conventions": "CF-1.10", "granframe_schema": schema,
+            "sweep_toml": tomli_w.dumps(sweep.to_dict())}
 
 
 def describe_sweep(path) -> str:
