@@ -31,7 +31,7 @@ _EXPORTS = {
     "open_run": "granframe.run.dataset",
     "open_sweep": "granframe.run.sweep",
     "ConservativeCorrection": "granframe.equations.conservative",
-    "run_in_memory": "granframe.run.runner",
+    "run_in_memory": "granframe.run.runner", "Simulation": "granframe.run.runner",
     "time_step_limit": "granframe.run.problems",
     "Problem": "granframe.abc", "make_problem": "granframe.run.problems",
 }
@@ -104,5 +104,6 @@ __all__ = [
     "open_sweep",
     "ConservativeCorrection",
     "run_in_memory",
+    "Simulation",
     "time_step_limit", "Problem", "make_problem",
 ]
