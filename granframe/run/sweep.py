@@ -467,6 +467,23 @@ def _check_extension(previous: dict, sweep: Sweep, names, out) -> None:
                      f"by adding axis values ({advice})")
 
 
+def _sorted_points(sweep, names, points, paths, refused, retry_failed):
+    """(rows, todo, kept): the table rows of the runs that ended (finished, or failed and
+    not retried), of which ``kept`` the points refused before and not retried, and the
+    (name, description) of the runs to submit."""
+    rows, todo, kept = {}, [], 0
+    for name, point in zip(names, points):
+        status = _status(paths[name])
+        if status == "finished" or (status == "failed" and not retry_failed):
+            rows[name] = _row(paths[name])
+        elif status is None and name in refused and not retry_failed:
+            rows[name] = _failed(refused[name])
+            kept += 1
+        else:
+            todo.append((name, apply(sweep.base, point)))
+    return rows, todo, kept
+
+
 def _drive(sweep, out, points, names, client, scheduler, workers, progress, retry_failed,
            start):
     """run_sweep with the sweep store's writer lock held (one driver, one table writer)."""
@@ -481,16 +498,7 @@ def _drive(sweep, out, points, names, client, scheduler, workers, progress, retr
     meta = {"schema": SCHEMA, "version": __version__, "sweep": sweep.to_dict(),
             "runs": names, "refused": refused, "created": previous.get("created", now())}
     root.attrs[SWEEP_SCHEMA_KEY] = {**meta, "updated": now()}
-    rows, todo, kept = {}, [], 0
-    for name, point in zip(names, points):
-        status = _status(paths[name])
-        if status == "finished" or (status == "failed" and not retry_failed):
-            rows[name] = _row(paths[name])
-        elif status is None and name in refused and not retry_failed:
-            rows[name] = _failed(refused[name])
-            kept += 1
-        else:
-            todo.append((name, apply(sweep.base, point)))
+    rows, todo, kept = _sorted_points(sweep, names, points, paths, refused, retry_failed)
     skipped = len(rows) - kept
     _write_table(root, names, points, rows)
     with contextlib.ExitStack() as made:           # a client or cluster made here is closed
@@ -715,6 +723,19 @@ def _dataset_attributes(meta: dict, sweep: Sweep) -> dict:
             "sweep_toml": tomli_w.dumps(sweep.to_dict())}
 
 
+def _axes_lines(dims) -> list[str]:
+    """The lines of :func:`describe_sweep` that name the axes of the grid ``dims``
+    (:func:`_grid`), at most 8 values of each."""
+    lines = []
+    for i, (dimension, kind, axes) in enumerate(dims):
+        values = next(iter(axes.values()))
+        shown = "; ".join(f"{key} = " + ", ".join(_text(v) for v in vals[:8])
+                          + (", ..." if len(vals) > 8 else "") for key, vals in axes.items())
+        lines.append(f"{'axes' if i == 0 else '':<12s}{dimension} ({kind}, {len(values)} "
+                     f"values): {shown}")
+    return lines
+
+
 def describe_sweep(path) -> str:
     """What a sweep store holds, in words (``granframe info``): its axes, its points and
     how many finished, failed or are pending, its failures, where its table is, its base.
@@ -743,12 +764,7 @@ def describe_sweep(path) -> str:
              + (f", created {meta['created']}" if "created" in meta else "")
              + (f", updated {meta['updated']}" if "updated" in meta else "")]
     dims = _grid(sweep)
-    for i, (dimension, kind, axes) in enumerate(dims):
-        values = next(iter(axes.values()))
-        shown = "; ".join(f"{key} = " + ", ".join(_text(v) for v in vals[:8])
-                          + (", ..." if len(vals) > 8 else "") for key, vals in axes.items())
-        lines.append(f"{'axes' if i == 0 else '':<12s}{dimension} ({kind}, {len(values)} "
-                     f"values): {shown}")
+    lines.extend(_axes_lines(dims))
     counts = {}
     for row in rows.values():
         counts[row["status"]] = counts.get(row["status"], 0) + 1
