@@ -395,24 +395,11 @@ class _Plan:
     memory_bytes: int
 
 
-def _plan(grid, kernel, backend, radial_points, sphere, sigma, quadrature, batch,
-          memory_budget, precision, distributions=1) -> _Plan:
-    """Validate the options and size everything the operator will allocate for stacks of
-    D = ``distributions`` distributions.
-
-    Counted, in bytes (r and c the real and complex item sizes, h the points of the half
-    spectrum, N_rho radial points, P pairs): the radial weights, loss multiplier,
-    accumulators and the operator's own transform, c h (N_rho + 4 + 2 pipelines), of
-    which c h (3 + 2 pipelines) again for each further distribution; per grid of a
-    pipeline's transform (:func:`_stack_transforms` of them), a real grid, its spectrum
-    and the weighted spectrum of the generic ``lowrank_accumulate``, r N^d + 2 c h; the
-    phase tables, precomputed when
-    they fit in a quarter of the budget, else one block per pipeline; and the transients
-    of the precomputation (|k|, the loss multiplier and its terms), 56 h. The pair batch
-    (for D = 1) shrinks until the tables and buffers fit ``memory_budget``; what still
-    does not fit is refused here, before anything of the grid's size is allocated (a
-    stack, D > 1, that does not fit is refused naming ``f``).
-    """
+def _checked_options(grid, radial_points, sphere, sigma, quadrature, batch, memory_budget,
+                     precision) -> tuple:
+    """The operator's options checked, each refused by name, with the defaults of the
+    ``quadrature`` preset and of the memory budget filled in: (radial_points, sphere,
+    sigma, memory_budget)."""
     owner, d = "fast_spectral", grid.dimension
     if not isinstance(quadrature, str) or quadrature not in QUADRATURES:
         check.reject(owner, "quadrature", quadrature, f"must be one of {list(QUADRATURES)}")
@@ -435,6 +422,30 @@ def _plan(grid, kernel, backend, radial_points, sphere, sigma, quadrature, batch
         check.reject(owner, "memory_budget", memory_budget, "must be a positive number of bytes")
     if precision not in PRECISIONS:
         check.reject(owner, "precision", precision, f"must be one of {list(PRECISIONS)}")
+    return radial_points, sphere, sigma, memory_budget
+
+
+def _plan(grid, kernel, backend, radial_points, sphere, sigma, quadrature, batch,
+          memory_budget, precision, distributions=1) -> _Plan:
+    """Validate the options and size everything the operator will allocate for stacks of
+    D = ``distributions`` distributions.
+
+    Counted, in bytes (r and c the real and complex item sizes, h the points of the half
+    spectrum, N_rho radial points, P pairs): the radial weights, loss multiplier,
+    accumulators and the operator's own transform, c h (N_rho + 4 + 2 pipelines), of
+    which c h (3 + 2 pipelines) again for each further distribution; per grid of a
+    pipeline's transform (:func:`_stack_transforms` of them), a real grid, its spectrum
+    and the weighted spectrum of the generic ``lowrank_accumulate``, r N^d + 2 c h; the
+    phase tables, precomputed when
+    they fit in a quarter of the budget, else one block per pipeline; and the transients
+    of the precomputation (|k|, the loss multiplier and its terms), 56 h. The pair batch
+    (for D = 1) shrinks until the tables and buffers fit ``memory_budget``; what still
+    does not fit is refused here, before anything of the grid's size is allocated (a
+    stack, D > 1, that does not fit is refused naming ``f``).
+    """
+    owner, d = "fast_spectral", grid.dimension
+    radial_points, sphere, sigma, memory_budget = _checked_options(
+        grid, radial_points, sphere, sigma, quadrature, batch, memory_budget, precision)
     real = numpy.dtype(PRECISIONS[precision][0]).itemsize
     complex_ = 2 * real
     radial_points, budget = int(radial_points), int(memory_budget)
