@@ -288,13 +288,21 @@ class SpaceProblem(Problem):
 
     def record(self, state) -> dict:
         """The fields of the owned cells, the totals over all cells and the wall totals
-        since the last record: one device vector (:meth:`FieldMoments.packed`) and one
-        device->host transfer, then one reduction over the processes
+        since the last record, with what the hierarchy's step left to bring to the host
+        (:meth:`~granframe.space.hierarchy.HybridCollisions.pending`): one device vector
+        (:meth:`FieldMoments.packed`) and one device->host transfer, then one reduction over
+        the processes
         (:meth:`~granframe.abc.Communicator.allgather` of the partial totals, combined in
         rank order by :meth:`FieldMoments.combine`, the same in every process)."""
         cells = self.domain.to_cells(state)
-        walls = self.transport.take_wall_totals()
-        vector = to_host(self.fields.packed(cells, walls))
+        extra = self.transport.take_wall_totals().reshape(-1)
+        carried = None if self.hierarchy is None else self.hierarchy.pending()
+        if carried is not None:          # the hierarchy's step vector rides along
+            extra = self.backend.xp.concatenate([extra, carried])
+        vector = to_host(self.fields.packed(cells, extra))
+        if carried is not None:
+            self.hierarchy.receive(vector[len(vector) - len(carried):])
+            vector = vector[:len(vector) - len(carried)]
         record = self.fields.unpack(vector, len(cells))
         began = time.perf_counter()
         rows = self.communicator.allgather(self.fields.partial_totals(vector, record))

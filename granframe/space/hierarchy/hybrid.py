@@ -108,6 +108,8 @@ class HybridCollisions:
         self._measured = None       # (kappa, delta, reach) in choice_xp, or None
         self._next = None           # the levels chosen ahead for the next step, or None
         self._order = None          # the owned cells sorted by level, on the backend
+        self._pending = None        # what the last step leaves to bring to the host, or None
+        self._chosen = None         # the levels it chose for the next step, in choice_xp
 
     @property
     def owned_levels(self) -> numpy.ndarray:
@@ -137,10 +139,42 @@ class HybridCollisions:
     def _fetch(self, **arrays) -> dict:
         """The arrays (in :attr:`choice_xp`) on the host, in one copy of one vector; the
         integer ones (levels, reach) come back as int64."""
-        xp = self.choice_xp
-        vector = to_host(xp.concatenate([a.astype(float) for a in arrays.values()]))
+        return self._split(arrays, to_host(self._joined(arrays)))
+
+    def _joined(self, arrays: dict):
+        """The arrays (in :attr:`choice_xp`) as one float vector, in :attr:`choice_xp`."""
+        return self.choice_xp.concatenate([a.astype(float) for a in arrays.values()])
+
+    @staticmethod
+    def _split(arrays: dict, vector) -> dict:
+        """The host ``vector`` of :meth:`_joined` cut back into the arrays, each with its
+        own dtype."""
         parts = numpy.split(vector, numpy.cumsum([len(a) for a in arrays.values()])[:-1])
         return {name: part.astype(a.dtype) for (name, a), part in zip(arrays.items(), parts)}
+
+    def pending(self):
+        """What the last step leaves to bring to the host (its indicators and, when the next
+        step chooses, the levels chosen), as one device vector for the caller to take to
+        the host with its own copy and hand back to :meth:`receive`; None when nothing is
+        left (with several processes the choice runs on the host and nothing is left)."""
+        return None if self._pending is None else self._joined(self._pending)
+
+    def receive(self, vector) -> None:
+        """Take the host copy of :meth:`pending`'s vector: the indicators, reach and the
+        levels chosen for the next step."""
+        arrays, self._pending = self._pending, None
+        self._take(self._split(arrays, numpy.asarray(vector, dtype=float)), "levels" in arrays)
+
+    def _settle(self) -> None:
+        """Bring what the last step left to the host now (one copy), if no one took it."""
+        if self._pending is not None:
+            self.receive(to_host(self.pending()))
+
+    def _take(self, host: dict, chosen: bool) -> None:
+        """The indicators and reach of ``host`` as the last measured ones on the host, and
+        its levels (with ``chosen``) as those of the next step."""
+        self.kappa, self.delta, self.reach = host["kappa"], host["delta"], host["reach"]
+        self._next = (self._chosen, host["levels"]) if chosen else None
 
     def _bring(self, measured: bool, chosen=None):
         """One copy to the host: with ``measured`` the indicators last measured
@@ -168,12 +202,14 @@ class HybridCollisions:
         """The indicators kappa and delta of all cells (:attr:`kappa`, :attr:`delta`;
         delta is NaN where there is no equilibrium) and the reach of every cell from f of
         this process's cells, on the host."""
+        self._settle()
         self._measured, self._next = self._measure(f), None
         self._bring(True)
 
     def choose(self) -> None:
         """The levels of all cells (:attr:`levels`) from the indicators of the last
         :meth:`measure` or step."""
+        self._settle()
         levels, self._next = self._choose(), None
         self._adopt(levels, self._bring(False, levels))
 
@@ -182,6 +218,7 @@ class HybridCollisions:
         it: what the store keeps (``level``, ``realizability``, ``distance``, ``reach``)
         and a resumed run takes up (:meth:`take_up`); NaN indicators and the buffer as
         reach before the first step."""
+        self._settle()
         owned = self.owned
         count = owned.stop - owned.start
         if self.kappa is None:
@@ -196,6 +233,7 @@ class HybridCollisions:
         """Continue after ``steps`` steps with the recorded levels, indicators and reach of
         all cells (NaN indicators: none measured yet), copied to the device at the resume."""
         xp = self.choice_xp
+        self._pending = None
         self.steps = int(steps)
         self.levels = numpy.asarray(levels, dtype=numpy.int64)
         self._adopt(xp.asarray(self.levels), self.levels)
@@ -214,9 +252,12 @@ class HybridCollisions:
         first step, or after :meth:`take_up`, chosen now from the indicators measured after
         the previous collision step, of f itself before the first), then each level
         advances its cells, the indicators of the result are measured and, when the next
-        step chooses, its levels chosen from them; all of it comes to the host in one copy.
+        step chooses, its levels chosen from them. All of it comes to the host in one copy:
+        the record's, when the caller takes :meth:`pending` with it (a space run's record,
+        which follows every step), else its own at the next step or :meth:`records`.
         """
         began = time.perf_counter()
+        self._settle()
         if self.steps % self.settings.interval == 0:
             if self._next is not None:
                 self._adopt(*self._next)
@@ -230,8 +271,12 @@ class HybridCollisions:
         began = time.perf_counter()
         self._measured = self._measure(out)
         chosen = self._choose() if self.steps % self.settings.interval == 0 else None
-        host = self._bring(True, chosen)
-        self._next = None if chosen is None else (chosen, host)
+        arrays = dict(zip(("kappa", "delta", "reach"), self._measured))
+        if chosen is not None:
+            arrays["levels"] = chosen
+        self._pending, self._chosen = arrays, chosen
+        if self.choice_xp is not self.xp:        # on the host already: nothing to carry
+            self._settle()
         self.choice_seconds += time.perf_counter() - began
         return out
 
