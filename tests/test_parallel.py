@@ -473,7 +473,7 @@ class Aborting(SerialCommunicator):
 @pytest.mark.parametrize("error, code", [(ValueError("bad"), 2), (OSError("disk"), 2),
                                          (RuntimeError("bug"), 1)])
 def test_an_error_in_one_process_aborts_them_all_and_never_goes_on(error, code, capfd):
-    """granframe.tools.cli._together: the error is printed with the process's number and
+    """granframe.tools.cli_run.together: the error is printed with the process's number and
     ends every process (abort with status 2 for granframe's refusals, 1 otherwise); the
     run does not carry on past it even where abort returns."""
     from granframe.tools.cli_run import together as _together
