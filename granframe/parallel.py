@@ -238,7 +238,6 @@ class CellLayout:
 
     def __init__(self, cells: int, ghost: int, communicator: Communicator,
                  block_cells: int | None = None, counts=None):
-        self.cells, self.ghost = cells, ghost
         self.chunk = store_chunk(cells, ghost, block_cells)
         self.ranges = partition(cells, self.chunk, communicator.size, ghost, counts)
         self.start, self.stop = self.ranges[communicator.rank]

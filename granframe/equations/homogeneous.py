@@ -9,7 +9,6 @@ the moment service (:class:`~granframe.velocity.moments.FieldMoments`) on the ba
 
 from __future__ import annotations
 
-
 import numpy
 
 from granframe.abc import Part
@@ -95,15 +94,10 @@ class HomogeneousBoltzmann(Equation):
     def propagate(self, f, dt):
         return self.heat.propagate(f, dt)
 
-    def collision_frequency(self, density: float, temperature: float, energy: float) -> float:
-        """:func:`collision_frequency` of the operator's kernel (its angular factor cached)."""
-        return collision_frequency(self.operator.kernel, self.operator.grid.dimension, density,
-                                   temperature, energy, self._frequency_constant)
-
     def frequencies(self, density, temperature, energy):
-        r""":meth:`collision_frequency` of every distribution of a batch at once, on the
+        r"""The mean loss frequency of every distribution of a batch at once, on the
         arrays' device: nu_c = C int b dsigma rho_c <s(|g|)>(T_c) phi(E_c)
-        (:func:`collision_frequency`), with
+        (:func:`collision_frequency`, its angular factor cached), with
         :meth:`~granframe.abc.CollisionKernel.mean_speed_parts`."""
         kernel, d = self.operator.kernel, self.operator.grid.dimension
         speed = kernel.mean_speed_parts(d, temperature, self.operator.backend.xp)

@@ -315,14 +315,14 @@ class RescaledBoltzmann(HomogeneousBoltzmann):
 
     def _mean_velocity(self, flat, gather, transport_axes: int, owner: str) -> tuple:
         """u of all the distributions (the class notes), refused where it does not vanish
-        along the transport axes."""
-        halves, periodic = (
-            [to_host(a) for a in self.moments.primitives(flat, node=node)[:3]]
-            for node in ("halves", "periodic"))
+        along the transport axes: both readings of the node -L from one raw product."""
+        raw = to_host(self.moments.raw(flat))
+        halves, periodic = (self.moments.fields_of(self.moments.central(raw, node))
+                            for node in ("halves", "periodic"))
         rho = numpy.concatenate(gather(halves[0]))
         along, across = (numpy.concatenate(gather(part[0][:, None] * part[1]))
                          for part in (halves, periodic))
-        heat = numpy.concatenate(gather(halves[0] * halves[2]))
+        heat = numpy.concatenate(gather(halves[0] * halves[3]))
         thermal = math.sqrt(float(heat.sum() / rho.sum()))
         for axis in range(transport_axes):
             value = float(along[:, axis].sum() / rho.sum())
@@ -369,8 +369,9 @@ def rescaling_rate(dissipation: float, transport: float, elastic: bool, owner: s
     r"""a_0 = dissipation / transport (the module notes), refused unless finite and >= 0:
     the rate of the rescaling, the discrete operator's dissipation of f0 over the drift's
     energy weight (not the cooling rate of a Maxwellian in closed form,
-    :func:`granframe.theory.cooling.maxwellian_cooling_rate`); 0 for an ``elastic`` gas (:func:`~granframe.model.restitution.is_elastic`), whose
-    dissipation is round-off of either sign."""
+    :func:`granframe.theory.cooling.maxwellian_cooling_rate`); 0 for an ``elastic`` gas
+    (:func:`~granframe.model.restitution.is_elastic`), whose dissipation is round-off of
+    either sign."""
     rate = 0.0 if elastic or not transport else dissipation / transport
     if not (math.isfinite(rate) and rate >= 0.0):
         check.reject(owner, "initial", "f0",

@@ -3,7 +3,8 @@ r"""The moment service: the moments of a batch of distributions in one pass on t
 For f of shape (cells, *grid.shape) (a space run's cells; a space-homogeneous run or a
 single distribution is a batch of one) the raw moments of each are one matrix product
 f (cells x N^d) times the basis (N^d x m) of 1, v_i, v_i v_j (i <= j), v_i |v|^2, |v|^4
-and the indicator of the node v_1 = -L, weighted by the cell volume of the velocity grid;
+and the content of the node v_1 = -L times 1, v_j (j > 1) and |v|^2, weighted by the cell
+volume of the velocity grid;
 from them, with rho u = J,
 
 .. math:: P_{ij} = M_{ij} - \rho u_i u_j,\qquad T = \frac{\operatorname{tr} P}{d\,\rho},\qquad
@@ -12,7 +13,7 @@ from them, with rho u = J,
 
 the central moments of granframe's conventions. The node v_1 = -L, which the periodic
 grid shares between -L and +L, has one documented rule, with two readings of the same
-raw moments (the last basis column, the node's content, turns one into the other):
+raw moments (the node's columns turn one into the other, :meth:`FieldMoments.central`):
 
 - ``"halves"``, the fields of a space run: the node counts as its two halves, v_1 = 0 in
   the odd powers of v_1 (momentum, P_1j for j != 1, q_i) and v_1^2 = L^2 in the even ones,
@@ -100,7 +101,7 @@ class FieldMoments:
         "periodic": as -L, the periodic grid's own convention, in which the collision
         operator conserves momentum (:meth:`~granframe.velocity.grid.VelocityGrid.momentum`;
         the BGK penalisation takes these, so that it conserves what Q conserves). Both come
-        from the same raw moments: the last column is the content of the node -L.
+        from the same raw moments: the node's content turns one into the other.
         """
         d = self.d
         raw = self.raw(f)
@@ -133,7 +134,7 @@ class FieldMoments:
         on the host; the values beyond them as ``extra``."""
         m = self.basis.shape[1]
         minimum, negative, absolute = vector[cells * m:cells * m + 3]
-        rho, u, pressure, temperature, heat, trace = self._fields(
+        rho, u, pressure, temperature, heat, trace = self.fields_of(
             self.central(vector[:cells * m].reshape(cells, m), "halves"))
         return {"density": rho, "velocity": u, "temperature": temperature,
                 "pressure_tensor": pressure, "heat_flux": heat,
@@ -170,7 +171,7 @@ class FieldMoments:
                 "third": third, "fourth": raw[:, columns["fourth"]]}
 
     @staticmethod
-    def _fields(moments: dict) -> tuple:
+    def fields_of(moments: dict) -> tuple:
         """rho, u, P, T, q and tr M of every cell from :meth:`central`'s moments (host)."""
         rho, second = moments["density"], moments["second"]
         d = second.shape[1]
@@ -205,7 +206,7 @@ class FieldMoments:
         vector = numpy.asarray(to_host(self.packed(f[None])), dtype=float)
         minimum, negative, absolute = vector[m:m + 3]
         moments = self.central(vector[:m].reshape(1, m), "periodic")
-        rho, u, pressure, temperature, heat, trace = (a[0] for a in self._fields(moments))
+        rho, u, pressure, temperature, heat, trace = (a[0] for a in self.fields_of(moments))
         if rho == 0.0:          # no mass: no velocity, nor any central moment
             u, pressure, temperature, heat = (numpy.full_like(a, numpy.nan) for a in
                                               (u, pressure, temperature, heat))

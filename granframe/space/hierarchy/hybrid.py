@@ -173,8 +173,12 @@ class HybridCollisions:
     def _take(self, host: dict, chosen: bool) -> None:
         """The indicators and reach of ``host`` as the last measured ones on the host, and
         its levels (with ``chosen``) as those of the next step."""
-        self.kappa, self.delta, self.reach = host["kappa"], host["delta"], host["reach"]
+        self._take_measured(host)
         self._next = (self._chosen, host["levels"]) if chosen else None
+
+    def _take_measured(self, host: dict) -> None:
+        """The indicators and reach of ``host`` as the last measured ones on the host."""
+        self.kappa, self.delta, self.reach = host["kappa"], host["delta"], host["reach"]
 
     def _bring(self, measured: bool, chosen=None):
         """One copy to the host: with ``measured`` the indicators last measured
@@ -185,7 +189,7 @@ class HybridCollisions:
             arrays["levels"] = chosen
         host = self._fetch(**arrays)
         if measured:
-            self.kappa, self.delta, self.reach = host["kappa"], host["delta"], host["reach"]
+            self._take_measured(host)
         return host.get("levels")
 
     def _adopt(self, levels, host) -> None:
