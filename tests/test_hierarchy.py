@@ -13,8 +13,8 @@ from granframe.run.description import RunDescription
 from granframe.run.problems import make_problem
 from granframe.run.runner import Simulation, StorageObserver
 from granframe.run.storage import RunStore
-from granframe.space.hierarchy import (CoolingRate, choose_levels, relaxation_rate,
-                                       speed_average)
+from granframe.space.hierarchy import CoolingRate, choose_levels, relaxation_rate
+from granframe.theory.cooling import relative_speed_average as speed_average
 from granframe.velocity.grid import VelocityGrid
 
 from conftest import mutated

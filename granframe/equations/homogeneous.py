@@ -40,9 +40,9 @@ def collision_frequency(kernel, dimension: int, density: float, temperature: flo
 
 
 class HomogeneousBoltzmann(Equation):
-    r"""d_t f = Q_I(f, f)/\varepsilon + \tau \Delta_v f (review, eq. (homo_heat), with Knudsen \varepsilon)
-    for f of shape (..., *grid.shape): one distribution or a batch (the cells of a space
-    run).
+    r"""d_t f = Q_I(f, f)/\varepsilon + \tau \Delta_v f (review, eq. (homo_heat), with
+    Knudsen \varepsilon) for f of shape (..., *grid.shape): one distribution or a batch
+    (the cells of a space run).
 
     N(t, f) = Q(f, f)/eps is the explicit part; L = tau Delta_v is the linear
     part, exact through :meth:`HeatBath.propagate` in integrating-factor schemes. The

@@ -150,14 +150,15 @@ class SpaceProblem(Problem):
         self.fields = FieldMoments(grid, self.domain.dx, xp)
         #: the hierarchy of collision models (None: the full operator in every cell)
         self.hierarchy = None if outline else self._hierarchy()
-        collide = (FreeFlight() if not collide else SingleModel(self.collision_integrator,
-                                                                self.equation)
-                   if self.hierarchy is None else LevelledModels(self.hierarchy))
-        self.integrator = SplitStep(collide, self.transport, self.rescaling)
+        stage = (FreeFlight() if not collide else
+                 SingleModel(self.collision_integrator, self.equation) if self.hierarchy is None
+                 else LevelledModels(self.hierarchy))
+        self.integrator = SplitStep(stage, self.transport, self.rescaling)
 
     def _rescaled(self, outline: bool):
         """The :class:`~granframe.equations.rescaled.RescaledBoltzmann` of the owned cells of
-        f0 (u = 0 along x); with ``outline`` its a_0 from the closed-form dissipation of every cell
+        f0 (u = 0 along x); with ``outline`` its a_0 from the closed-form dissipation of
+        every cell
         (:meth:`~granframe.equations.conservative.ConservativeCorrection.dissipation` of the
         :class:`~granframe.stepping.stability.OperatorOutline`)."""
         d, xp = self.description, self.backend.xp

@@ -66,8 +66,7 @@ from granframe.space.hierarchy.indicators import (CellIndicators, equilibrium_di
                                                   realizability)
 from granframe.space.hierarchy.levels import (BoltzmannLevel, EllipsoidalLevel, EulerLevel,
                                               FluidParts, RelaxationLevel)
-from granframe.space.hierarchy.rates import (CoolingRate, relaxation_rate, scaled_rates,
-                                             speed_average)
+from granframe.space.hierarchy.rates import CoolingRate, relaxation_rate, scaled_rates
 from granframe.space.hierarchy.relaxation import (EllipsoidalEquation, RelaxationEquation,
                                                   discrete_gaussians)
 
@@ -75,4 +74,4 @@ __all__ = ["BoltzmannLevel", "CellIndicators", "CoolingRate", "EllipsoidalEquati
            "EllipsoidalLevel", "EulerLevel", "FluidParts", "HierarchyContext",
            "HybridCollisions", "RelaxationEquation", "RelaxationLevel", "choose_levels",
            "discrete_gaussians", "equilibrium_distance", "realizability", "relaxation_rate",
-           "scaled_rates", "speed_average", "spread_levels"]
+           "scaled_rates", "spread_levels"]

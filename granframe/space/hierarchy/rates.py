@@ -9,27 +9,10 @@ from __future__ import annotations
 import math
 
 import numpy
-import scipy.special
 
 from granframe.backends import to_host
 from granframe.model.restitution import is_elastic
-
-#: Gauss-Laguerre nodes of the averages over the relative speeds of a Maxwellian
-_LAGUERRE = 96
-
-
-def speed_average(function, dimension: int, temperature: float) -> float:
-    r"""<F(s)> over the relative speeds s = |v - v_*| of two particles of a Maxwellian at
-    temperature T (s is the speed of a d-dimensional Maxwellian at 2T):
-
-    .. math:: \langle F\rangle = \frac{\int_0^\infty F(s)\, s^{d-1} e^{-s^2/4T}\,ds}
-                                      {\int_0^\infty s^{d-1} e^{-s^2/4T}\,ds}
-              = \frac{1}{\Gamma(d/2)}\sum_i w_i F\bigl(2\sqrt{T y_i}\bigr),
-
-    with (y_i, w_i) the generalised Gauss-Laguerre rule of weight y^{d/2-1} e^{-y}."""
-    y, w = scipy.special.roots_genlaguerre(_LAGUERRE, dimension / 2 - 1)
-    return float(w @ function(2.0 * numpy.sqrt(temperature * y))) / math.gamma(dimension / 2)
-
+from granframe.theory.cooling import relative_speed_average
 
 class CoolingRate:
     r"""The granular cooling rate zeta(rho, T, E) of a Maxwellian, d T/dt = -zeta T / eps.
@@ -43,7 +26,8 @@ class CoolingRate:
               \beta = \int_{S^{d-1}} b(\hat g\cdot\sigma)(1 - \hat g\cdot\sigma)\,d\sigma .
 
     For a Maxwellian of density rho and temperature T, the double integral is rho^2 times
-    the average over its relative speeds (:func:`speed_average`), and with
+    the average over its relative speeds
+    (:func:`~granframe.theory.cooling.relative_speed_average`), and with
     d/dt int |v|^2 f = rho d dT/dt,
 
     .. math:: \zeta = \frac{C\beta\,E^\gamma \rho}{8 d T}
@@ -81,7 +65,7 @@ class CoolingRate:
             self.coefficient = None
             top = float(grid.half_width) ** 2
             temperatures = top * numpy.logspace(-12.0, 0.0, 241)
-            values = [self._constant * speed_average(
+            values = [self._constant * relative_speed_average(
                 lambda s: s ** (lam + 2) * (1.0 - numpy.asarray(restitution(s)) ** 2), d, t) / t
                 for t in temperatures]
             self.table = (numpy.log(temperatures), numpy.log(numpy.maximum(values, 1e-300)))

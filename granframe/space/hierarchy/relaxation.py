@@ -2,8 +2,9 @@ r"""The relaxation equations of the fluid levels of the hierarchy
 (:mod:`granframe.space.hierarchy`): the granular BGK equation (:class:`RelaxationEquation`)
 and the ellipsoidal statistical BGK equation (:class:`EllipsoidalEquation`) of every cell,
 with the anisotropic Gaussians of exact grid moments that the latter relaxes to
-(:func:`discrete_gaussians`). Both are :class:`~granframe.equations.homogeneous.HomogeneousBoltzmann`
-equations for the run's own time integrator; everything on the backend.
+(:func:`discrete_gaussians`). Both are
+:class:`~granframe.equations.homogeneous.HomogeneousBoltzmann` equations for the run's own
+time integrator; everything on the backend.
 """
 
 from __future__ import annotations
@@ -24,8 +25,9 @@ class RelaxationEquation(HomogeneousBoltzmann):
     energy, nu_s = c rho T^(lambda/2) E^gamma (``coefficient`` c from
     :func:`~granframe.space.hierarchy.rates.relaxation_rate`). The heat bath and the
     penalisation of the penalised schemes are those of the full equation
-    (:class:`~granframe.equations.homogeneous.HomogeneousBoltzmann`). Cells without an equilibrium (rho or T not positive and
-    finite, or no converged target) relax at the rate 0."""
+    (:class:`~granframe.equations.homogeneous.HomogeneousBoltzmann`). Cells without an
+    equilibrium (rho or T not positive and finite, or no converged target) relax at the
+    rate 0."""
 
     def __init__(self, equation, coefficient: float):
         super().__init__(equation.operator, equation.heat.tau, equation.knudsen,
