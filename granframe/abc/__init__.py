@@ -29,7 +29,8 @@ import types
 from granframe.abc.arrays import PRECISIONS, ArrayBackend, RealFFT
 from granframe.abc.model import CollisionKernel, InitialCondition, RestitutionLaw
 from granframe.abc.operators import CollisionOperator, check_arguments, check_restitution
-from granframe.abc.run import Communicator, Pending, Problem, checks_deferred, deferred_checks
+from granframe.abc.run import (Communicator, Pending, Problem, checked_energy_factors,
+                                checks_deferred, deferred_checks)
 from granframe.abc.space import Boundary, CollisionModel, Reconstruction
 from granframe.abc.stepping import AdaptiveIntegrator, Equation, Part, TimeIntegrator
 from granframe.abc.velocity import Grid, Quadrature, SurfaceQuadrature
@@ -38,7 +39,8 @@ __all__ = ["PRECISIONS", "AdaptiveIntegrator", "ArrayBackend", "Boundary", "Coll
            "CollisionModel", "CollisionOperator", "Communicator", "Equation", "Grid",
            "InitialCondition", "Part", "Pending", "Problem", "Quadrature", "RealFFT",
            "Reconstruction", "RestitutionLaw", "SurfaceQuadrature", "TimeIntegrator",
-           "check_arguments", "check_restitution", "checks_deferred", "deferred_checks"]
+           "check_arguments", "check_restitution", "checked_energy_factors", "checks_deferred",
+           "deferred_checks"]
 
 for _name in __all__:
     if isinstance(globals()[_name], (type, types.FunctionType)):

@@ -50,6 +50,18 @@ def checks_deferred(backend) -> bool:
                                     and bool(getattr(backend, "on_device", False)))
 
 
+def checked_energy_factors(kernel, energy, backend):
+    """phi(E) = E^gamma of ``kernel`` at every energy of the backend array ``energy``, on
+    the backend. Each E is refused by name unless positive and finite
+    (:meth:`CollisionKernel.energy_factor`) where the operand checks are made; within a
+    run's step (:func:`checks_deferred`) that check, which copies E to the host, is left
+    out, and a non-positive E gives a NaN that the run's health check reports."""
+    if not checks_deferred(backend):
+        for value in backend.to_numpy(energy):
+            kernel.energy_factor(float(value))
+    return kernel.energy_factors(energy)
+
+
 # -- Processes: a run spread over several ------------------------------------------------------
 
 

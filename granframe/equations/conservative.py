@@ -32,7 +32,7 @@ import numpy
 import scipy.special
 
 from granframe import validators as check
-from granframe.abc import CollisionOperator, checks_deferred
+from granframe.abc import CollisionOperator, checked_energy_factors
 from granframe.velocity.quadratures import MAX_GAUSS_POINTS, GaussLegendre
 
 #: The weights w(v) of the correction Q + w (lambda_0 + lambda.v + lambda_{d+1} |v|^2),
@@ -217,10 +217,7 @@ class ConservativeCorrection(CollisionOperator):
         if not self.kernel.energy_exponent:
             return sums.astype(xp.float64, copy=False)
         energy = 0.5 * grid.cell_volume * moments[:, -1] * grid.half_width ** 2
-        if not checks_deferred(self.backend):
-            for value in self.backend.to_numpy(energy):    # refuses E <= 0 by name
-                self.kernel.energy_factor(float(value))
-        return self.kernel.energy_factors(energy) * sums
+        return checked_energy_factors(self.kernel, energy, self.backend) * sums
 
     # -- the correction ------------------------------------------------------------------
     def __call__(self, f):

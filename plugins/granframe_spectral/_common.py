@@ -14,7 +14,7 @@ import numpy
 import scipy.special
 
 from granframe import validators as check
-from granframe.abc import checks_deferred
+from granframe.abc import checked_energy_factors, checks_deferred
 from granframe.errors import NonFiniteError
 from granframe.velocity.quadratures import GaussLegendre
 
@@ -36,21 +36,16 @@ def energy_factor(kernel, cell_volume: float, squared, f, backend):
 
     with Delta v the cell volume and ``squared`` the backend array |v_j|^2 (the grid's
     :meth:`~granframe.velocity.grid.VelocityGrid.speed_squared`, made once by the
-    operator). Returns None when gamma = 0 (no moment taken, every
-    factor 1), else a backend array of B factors computed on the backend: no copy to the
-    host, except for the check that every E is positive, which is made only where checks
-    are not deferred (:func:`granframe.abc.checks_deferred`; within a run's step a
-    non-positive E gives a NaN that the run's health check reports).
+    operator). Returns None when gamma = 0 (no moment taken, every factor 1), else a
+    backend array of B factors computed on the backend
+    (:func:`granframe.abc.checked_energy_factors`: no copy to the host within a run's step).
     """
     if kernel.energy_exponent == 0.0:
         return None
     axes = tuple(range(1, f.ndim))
     xp = backend.xp
     energy = 0.5 * xp.sum(squared * f, axis=axes) * cell_volume
-    if not checks_deferred(backend):
-        for value in backend.to_numpy(energy):        # refuses E <= 0 by name
-            kernel.energy_factor(float(value))
-    return kernel.energy_factors(energy)
+    return checked_energy_factors(kernel, energy, backend)
 
 
 def check_operands(owner: str, grid, f, backend):
