@@ -135,8 +135,8 @@ class Problem(abc.ABC):
     The runner (:class:`granframe.run.runner.Simulation`), ``granframe limits``,
     ``granframe bench`` and resume use a problem through these members only, in a
     space-homogeneous run as in a space run on any number of processes (the communicator
-    and the ranges are always there); the space-homogeneous and the space problems
-    implement it (:mod:`granframe.run.problems`).
+    and the ranges are always there); one class implements it for zero and one space
+    dimensions (:class:`granframe.run.problems.SpaceProblem`).
 
     A run goes: :attr:`f0` (checked and projected when the problem is built) becomes the
     stepped state by :meth:`state`; each step is :meth:`step`; after it :meth:`record`

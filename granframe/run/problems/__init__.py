@@ -1,6 +1,6 @@
-"""The problems a run steps (:class:`granframe.abc.Problem`): space-homogeneous and in space.
+"""The problem a run steps (:class:`granframe.abc.Problem`), of zero or one space dimensions.
 
-:func:`make_problem` builds the one a description asks for; the runner, ``granframe
+:func:`make_problem` builds it from a description; the runner, ``granframe
 limits`` (:func:`time_step_limit`), ``granframe bench`` and resume use it through the
 contract only; :func:`run_cost` times one step of a built problem, for the cost that
 ``granframe run`` and ``granframe limits`` print before a run starts.
@@ -15,33 +15,25 @@ import attrs
 
 from granframe import validators as check
 from granframe.backends import available_cpus
-from granframe.parallel import SerialCommunicator, world
 from granframe.run.description import RunDescription, fixed_steps
-from granframe.run.problems.homogeneous import HomogeneousProblem, moments
 from granframe.run.problems.space import SpaceProblem
+from granframe.run.problems.spaces import Interval, Point, moments
 
-__all__ = ["HomogeneousProblem", "RunCost", "SpaceProblem", "make_problem", "moments",
+__all__ = ["Interval", "Point", "RunCost", "SpaceProblem", "make_problem", "moments",
            "run_cost", "time_step_limit"]
 
 
 def make_problem(description, outline: bool = False, communicator=None, partition=None):
-    """The problem of ``description``: a :class:`SpaceProblem` when it has a ``space``
-    section, else a :class:`HomogeneousProblem`. ``outline``: without the operator's
-    precomputation (for :func:`time_step_limit`). A space problem is spread over the
-    processes of ``communicator`` (by default :func:`granframe.parallel.world`), with
+    """The :class:`SpaceProblem` of ``description``: of one space dimension when it has a
+    ``space`` section, else of zero (a space-homogeneous run). ``outline``: without the
+    operator's precomputation (for :func:`time_step_limit`). A run in space is spread over
+    the processes of ``communicator`` (by default :func:`granframe.parallel.world`), with
     ``partition`` the cells of each (:func:`granframe.parallel.partition`); a
     space-homogeneous one runs in one process."""
     if not isinstance(description, RunDescription):
         check.reject("make_problem", "description", description, "must be a RunDescription",
                      error=TypeError)
-    if description.space is not None:
-        return SpaceProblem(description, outline, communicator, partition)
-    processes = (communicator or (SerialCommunicator() if outline else world())).size
-    if processes > 1 or partition is not None:
-        check.reject("make_problem", "processes", processes, "must be 1 for a "
-                     "space-homogeneous run (it has no cells to share): run it without "
-                     "mpiexec, or give the description a space section")
-    return HomogeneousProblem(description, outline)
+    return SpaceProblem(description, outline, communicator, partition)
 
 
 def time_step_limit(description):

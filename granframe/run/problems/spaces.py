@@ -1,0 +1,387 @@
+"""The space a run's cells fill: a point (zero space dimensions) or an interval (one).
+
+A run is one :class:`~granframe.run.problems.space.SpaceProblem`; what depends on the
+number of space dimensions is here, behind one interface, so that a further axis is a
+further shape and not a further problem:
+
+============================  ============================  ===================================
+member                        :class:`Point` (no ``space``)  :class:`Interval` (``[space]``)
+============================  ============================  ===================================
+cells, owned                  one, f itself (no cell axis)   ``cells`` along x, a range per process
+processes, ranges             one, ``((0, 1),)``             :class:`~granframe.parallel.CellLayout`
+state                         f on the backend               the blocks of a :class:`Domain`
+step                          the run's time integrator      Strang: transport, collisions, transport
+record                        the moments of f               fields, totals, wall totals
+store                         f (time, v)                    f (time, x, v), chunked by block
+report and monitors           f's indicators, drifts         every cell's, the worst named
+============================  ============================  ===================================
+
+Both take f0 as cells from :meth:`initial` (the point's one cell has no cell axis), check it
+against the grid and project it onto the Nyquist-free modes before anything is written.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy
+
+from granframe.backends import to_host
+from granframe.model.initial import check_fits, check_projection
+from granframe.parallel import CellLayout, Halo, SerialCommunicator, world
+from granframe.run.monitors import (CELL_INDICATORS, AccuracyMonitors, CellEdgeMonitors,
+                                    cell_resolution_report)
+from granframe.run.storage import (RECORDED_MOMENTS, STEP_RECORDS, Layout, RecordArray,
+                                   homogeneous_layout)
+from granframe.space.collisions import SplitStep
+from granframe.space.domain import Domain
+from granframe.space.initial import initial_cells
+from granframe.space.transport import Transport
+from granframe.validators import reject
+from granframe.velocity.estimators import resolution_report
+from granframe.velocity.moments import FIELDS, TOTALS, FieldMoments
+
+#: what entered the interval through each wall over each step: mass, energy, and the d
+#: components of momentum (normal v1, tangential v2 .. vd)
+WALL_RECORDS = ("wall_mass", "wall_energy", "wall_momentum")
+
+#: with a hierarchy of collision models, after every step for every cell: its level (the
+#: index in the hierarchy's levels), the indicators that choose the next levels, measured
+#: after the collision step, and how many cells each side its level reaches
+#: (:class:`~granframe.space.hierarchy.HybridCollisions`)
+LEVEL_RECORDS = {"level": "i8", "realizability": "f8", "distance": "f8", "reach": "i8"}
+
+
+def moments(grid, f, xp) -> dict:
+    """Mass, momentum, temperature, energy, min f, negative-mass share, kurtosis, a2,
+    pressure tensor and heat flux of f.
+
+    One fused pass over f and one transfer to the host (:meth:`VelocityGrid.moments`);
+    NaN where a moment is undefined (a zero mass).
+    """
+    fused = grid.moments(f, xp)
+    return {name: fused[name] for name in RECORDED_MOMENTS}
+
+
+class Point:
+    """Zero space dimensions: one cell, f itself, in one process, without transport.
+
+    The run's step is its time integrator on the equation (Strang's splitting of a step
+    without transport is the collision step), fixed or adaptive; the record is the moments
+    of f (:func:`moments`), the store f (time, v) (:func:`homogeneous_layout`).
+    """
+
+    dimension = 0
+    collisions = True
+    owned = slice(None)
+    owned_cells = None
+    ranges = ((0, 1),)
+    domain = transport = fields = left = right = reconstruction = cell_layout = None
+
+    def __init__(self, description, outline: bool = False, communicator=None,
+                 partition_cells=None):
+        processes = (communicator or (SerialCommunicator() if outline else world())).size
+        if processes > 1 or partition_cells is not None:
+            reject("make_problem", "processes", processes, "must be 1 for a "
+                   "space-homogeneous run (it has no cells to share): run it without "
+                   "mpiexec, or give the description a space section")
+        self.description = description
+        self.communicator = SerialCommunicator()
+
+    def build(self, grid, xp) -> None:
+        """Nothing to build: the point has no cells to lay out."""
+
+    def initial(self, check: bool):
+        """f0 sampled on the grid, checked (:func:`check_fits`) and projected; with the
+        moments before and after the projection (:func:`check_projection`, which refuses
+        f0 the grid does not resolve), or None without ``check``."""
+        d = self.description
+        grid, initial = d.grid, d.build("initial")
+        sampled = initial.sample(grid)
+        if check:
+            check_fits(grid, sampled, initial, d.health.edge_tolerance,
+                       d.health.initial_mass_tolerance)
+        f0 = grid.project(sampled)
+        projection = None if not check else check_projection(
+            grid, sampled, f0, initial, d.health.projection_tolerance,
+            d.health.projection_kurtosis_tolerance, d.health.positivity_tolerance)
+        return f0, projection
+
+    def integrator(self, stage, collision_integrator, rescaling):
+        """The run's time integrator itself."""
+        return collision_integrator
+
+    def layout(self, grid, hierarchy: bool):
+        return homogeneous_layout(grid)
+
+    def record_names(self, hierarchy: bool) -> tuple:
+        return RECORDED_MOMENTS
+
+    def state(self, f_host, backend):
+        return backend.asarray(f_host)
+
+    def snapshot(self, state, backend):
+        return backend.to_numpy(state)
+
+    def record(self, state, backend, hierarchy) -> dict:
+        """The moments of f (:func:`moments`: one fused pass, one transfer)."""
+        return moments(self.description.grid, state, backend.xp)
+
+    def monitors(self, store, operator) -> AccuracyMonitors:
+        """The accuracy monitors from the store's first record (t = 0) and, for a resumed
+        run, their state at its last commit."""
+        group = store.group
+        initial = {name: group[name][0] for name in ("mass", "momentum", "temperature")}
+        return AccuracyMonitors(self.description, operator, initial,
+                                store.progress.get("accuracy"))
+
+    def report(self, state, record, monitors, backend):
+        """The resolution indicators of f (an FFT of f and one of |f| padded to 2N,
+        :func:`~granframe.velocity.estimators.resolution_report`), then the edge shares and
+        the spectral tail into the accuracy monitors."""
+        xp = backend.xp
+        d = self.description
+        resolution = resolution_report(d.grid, state.f, record["negative_mass_fraction"],
+                                       d.health.resolution_tolerance, xp)
+        problem = monitors.update(monitors.shape(state.f, record, resolution, xp),
+                                  state.step, state.t)
+        return resolution, problem
+
+    def progress_text(self, record, mass0) -> str:
+        return (f"T={record['temperature']:.6g}, "
+                f"mass drift {record['mass'] / mass0 - 1:+.1e}")
+
+
+def space_layout(grid, domain: Domain, block: int, levels: bool = False) -> Layout:
+    """The store of a space run: f (time, x, v1, ..., vd) chunked by snapshot and by
+    ``block`` cells along x, the coordinates v1 ... vd and x (the cell centres), and after
+    every step the totals, the fields (step_time, x, ...) chunked by ``block`` along x,
+    and the wall records (step_time, wall; ``wall_momentum`` (step_time, wall, axis));
+    with ``levels`` (a hierarchy of collision models) the level of every cell,
+    ``level`` (step_time, x), an integer: its index in the hierarchy's levels."""
+    d = grid.dimension
+    axes = tuple(f"v{i + 1}" for i in range(d))
+    cells = domain.cells
+    chunk = max(1, 4096 // block)
+    fields = tuple(RecordArray(name, (cells,) + tuple(d if c == "d" else c for c in shape),
+                               ("x",) + dims, chunk=chunk, cells_chunk=block)
+                   for name, (shape, dims) in FIELDS.items())
+    walls = tuple(RecordArray(name, (2, d) if name == "wall_momentum" else (2,),
+                              ("wall", "axis") if name == "wall_momentum" else ("wall",))
+                  for name in WALL_RECORDS)
+    if levels:
+        walls += tuple(RecordArray(name, (cells,), ("x",), dtype=dtype, chunk=chunk,
+                                   cells_chunk=block) for name, dtype in LEVEL_RECORDS.items())
+    points = grid.points()
+    return Layout(tuple((name, points, (name,)) for name in axes)
+                  + (("x", domain.centres(), ("x",)),),
+                  (cells,) + tuple(grid.shape), (block,) + tuple(grid.shape),
+                  ("x",) + axes,
+                  STEP_RECORDS + tuple(RecordArray(n) for n in TOTALS) + fields + walls,
+                  space={"cells": cells, "length": domain.length, "block_cells": block})
+
+
+def _cell(condition, mass):
+    """One cell of ``condition`` for :func:`check_fits`: its intended mass, under the
+    condition's name (which the messages show)."""
+    return type(type(condition).__name__, (), {"intended_mass": mass})()
+
+
+class Interval:
+    """One space dimension: the cells of [0, ell] along x, spread over the processes of
+    ``communicator`` (by default :func:`granframe.parallel.world`; serial for an outline),
+    ``partition_cells`` the cells of each (:func:`granframe.parallel.partition`).
+
+    The state is the block array of a :class:`~granframe.space.domain.Domain` (the owned
+    cells, each block with its ghost cells), stepped by
+    :class:`~granframe.space.collisions.SplitStep`; after every step the fields of every
+    cell, the totals, and the mass, momentum and energy that entered through each wall over
+    the step are recorded (:func:`space_layout`), all from one device vector
+    (:class:`~granframe.velocity.moments.FieldMoments`) and one transfer; a snapshot is
+    f(x, v) of every cell, chunked by block; at each output point the resolution
+    indicators of every cell and the accuracy monitors, computed for every cell at once on
+    the backend; the worst cells are reported and kept with the commit
+    (:func:`~granframe.run.monitors.cell_resolution_report`,
+    :class:`~granframe.run.monitors.CellEdgeMonitors`).
+    """
+
+    dimension = 1
+
+    def __init__(self, description, outline: bool = False, communicator=None,
+                 partition_cells=None):
+        self.description = d = description
+        space = d.space
+        parts = d.build("space")
+        self.reconstruction, self.left, self.right = (parts["reconstruction"], parts["left"],
+                                                      parts["right"])
+        self.collisions = space.collisions
+        self.communicator = comm = (SerialCommunicator() if outline else
+                                    world() if communicator is None else communicator)
+        #: the store's chunks, the cells (start, stop) of every process in rank order and
+        #: this one's batch blocks
+        self.cell_layout = CellLayout(space.cells, self.reconstruction.ghost, comm,
+                                      space.block_cells, partition_cells)
+        self.ranges = self.cell_layout.ranges
+        self.owned_cells = self.cell_layout.stop - self.cell_layout.start
+        self.domain = self.transport = self.fields = None
+        #: wall seconds of the reductions of the records over the processes
+        self.reduction_seconds = 0.0
+
+    @property
+    def owned(self) -> slice:
+        """The cells this process owns and steps (all of them in a serial run)."""
+        return slice(self.cell_layout.start, self.cell_layout.stop)
+
+    def build(self, grid, xp) -> None:
+        """The domain of the owned cells on the array namespace ``xp``, its ghost exchange
+        with the other processes, the transport and the moment service."""
+        d, layout = self.description, self.cell_layout
+        self.domain = Domain(d.space.cells, d.space.length, layout.block,
+                             self.reconstruction.ghost, grid, xp,
+                             owned=(layout.start, layout.stop))
+        if self.communicator.size > 1:
+            self.domain.neighbours = Halo.of(self.communicator, self.ranges,
+                                             self.left.periodic)
+        self.transport = Transport(self.domain, self.reconstruction, self.left, self.right)
+        self.fields = FieldMoments(grid, self.domain.dx, xp)
+
+    def initial(self, check: bool):
+        """f0 as cell averages (cells, *grid.shape), checked and projected cell by cell,
+        with the moments before and after the Nyquist projection of the cell they change
+        most (:func:`~granframe.model.initial.check_projection`, which refuses a cell the
+        grid does not resolve), or None without ``check``."""
+        d = self.description
+        grid = d.grid
+        sampled, masses = initial_cells(d)
+        if not check:
+            return numpy.stack([grid.project(f) for f in sampled]), None
+        initial = d.build("initial")
+        edges = self.domain.edges()
+        projected, worst, projection = [], -1.0, None
+        for index, (f, mass) in enumerate(zip(sampled, masses)):
+            cell = _cell(initial, mass)
+            try:
+                check_fits(grid, f, cell, d.health.edge_tolerance,
+                           d.health.initial_mass_tolerance)
+                projected.append(grid.project(f))
+                moments = check_projection(grid, f, projected[-1], cell,
+                                           d.health.projection_tolerance,
+                                           d.health.projection_kurtosis_tolerance)
+            except ValueError as exc:
+                raise ValueError(f"{exc} (in cell {index} of {d.space.cells}, x = "
+                                 f"{0.5 * (edges[index] + edges[index + 1]):.6g})") from None
+            change = max(abs(m["after"] / m["before"] - 1.0) for m in moments.values())
+            if change > worst:
+                worst, projection = change, moments
+        projected = numpy.stack(projected)
+        self._check_positivity(projected, edges)
+        return projected, projection
+
+    def _check_positivity(self, f0, edges) -> None:
+        """Refuse f0 whose negative mass share over all cells, sum max(-f, 0) / sum |f| (what
+        the health check takes after every step), is above ``health.positivity_tolerance``,
+        naming the cell where it is largest."""
+        d = self.description
+        grid = d.grid
+        flat = f0.reshape(len(f0), -1)
+        negative = numpy.maximum(-flat, 0.0).sum(axis=1)
+        absolute = numpy.abs(flat).sum(axis=1)
+        share = float(negative.sum() / absolute.sum())
+        if share <= d.health.positivity_tolerance:
+            return
+        worst = int(numpy.argmax(negative / absolute))
+        reject(f"initial condition {type(d.build('initial')).__name__}",
+               "negative mass share of f0 after the Nyquist projection", share,
+               f"must be <= health.positivity_tolerance = {d.health.positivity_tolerance:g}, "
+               f"which the run checks after every step (largest in cell {worst} of "
+               f"{d.space.cells}, x = {0.5 * (edges[worst] + edges[worst + 1]):.6g}: "
+               f"{negative[worst] / absolute[worst]:.3g}): N = {grid.n_modes} modes (spacing "
+               f"h = {grid.spacing:.4g}) do not resolve f0, whose projection rings below zero; "
+               "use a larger grid.n_modes, or a smaller grid.support_radius if f0 is "
+               "negligible well inside the faces of the box (h = 2L/N falls with it)")
+
+    def integrator(self, stage, collision_integrator, rescaling):
+        """Strang's splitting of the transport and the collision ``stage``
+        (:class:`~granframe.space.collisions.SplitStep`)."""
+        return SplitStep(stage, self.transport, rescaling)
+
+    def layout(self, grid, hierarchy: bool):
+        return space_layout(grid, self.domain, self.cell_layout.chunk, levels=hierarchy)
+
+    def record_names(self, hierarchy: bool) -> tuple:
+        return TOTALS + tuple(FIELDS) + WALL_RECORDS + (tuple(LEVEL_RECORDS) if hierarchy
+                                                        else ())
+
+    def state(self, f_host, backend):
+        """The block array of the owned cells from f on the host: every cell (f0), or the
+        owned ones (a snapshot read by ``owned``)."""
+        f_host = f_host if len(f_host) == self.domain.owned_cells else f_host[self.owned]
+        return self.domain.from_cells(backend.asarray(f_host))
+
+    def snapshot(self, state, backend):
+        """f of the owned cells on the host."""
+        return backend.to_numpy(self.domain.to_cells(state))
+
+    def record(self, state, backend, hierarchy) -> dict:
+        """The fields of the owned cells, the totals over all cells and the wall totals
+        since the last record, with what the hierarchy's step left to bring to the host
+        (:meth:`~granframe.space.hierarchy.HybridCollisions.pending`): one device vector
+        (:meth:`FieldMoments.packed`) and one device->host transfer, then one reduction over
+        the processes (:meth:`~granframe.abc.Communicator.allgather` of the partial totals,
+        combined in rank order by :meth:`FieldMoments.combine`, the same in every
+        process)."""
+        cells = self.domain.to_cells(state)
+        extra = self.transport.take_wall_totals().reshape(-1)
+        carried = None if hierarchy is None else hierarchy.pending()
+        if carried is not None:          # the hierarchy's step vector rides along
+            extra = backend.xp.concatenate([extra, carried])
+        vector = to_host(self.fields.packed(cells, extra))
+        if carried is not None:
+            hierarchy.receive(vector[len(vector) - len(carried):])
+            vector = vector[:len(vector) - len(carried)]
+        record = self.fields.unpack(vector, len(cells))
+        began = time.perf_counter()
+        rows = self.communicator.allgather(self.fields.partial_totals(vector, record))
+        self.reduction_seconds += time.perf_counter() - began
+        record.update(self.fields.combine(rows))
+        extra = record.pop("walls").reshape(2, -1)
+        record["wall_mass"], record["wall_energy"] = extra[:, 0], extra[:, -1]
+        record["wall_momentum"] = extra[:, 1:-1]
+        if hierarchy is not None:
+            record.update(hierarchy.records())
+        return record
+
+    def monitors(self, store, operator) -> CellEdgeMonitors:
+        return CellEdgeMonitors(self.description, store.progress.get("accuracy"))
+
+    def report(self, state, record, monitors, backend):
+        """The resolution indicators of every cell
+        (:meth:`~granframe.velocity.moments.FieldMoments.resolution`) and the edge shares of
+        every cell about its own velocity, computed on the backend and taken to the host in
+        one transfer; the report names the worst cells
+        (:func:`~granframe.run.monitors.cell_resolution_report`), the largest values go into
+        the monitors."""
+        xp = backend.xp
+        cells = self.domain.to_cells(state.f)
+        count = cells.shape[0]
+        parts = [self.fields.resolution(cells, backend).reshape(-1)]
+        if monitors.radius > 0.0:
+            velocity = self.fields.primitives(cells)[1]
+            parts.append(self.fields.edge_shares(cells, velocity, monitors.radius).reshape(-1))
+        values = to_host(xp.concatenate(parts))
+        indicators = values[:count * len(CELL_INDICATORS)].reshape(count, -1)
+        shares = (values[count * len(CELL_INDICATORS):].reshape(count, 2)
+                  if monitors.radius > 0.0 else None)
+        if self.communicator.size > 1:     # every cell's, in every process, in cell order
+            gathered = self.communicator.allgather_object((indicators, shares))
+            indicators = numpy.concatenate([part[0] for part in gathered])
+            shares = None if shares is None else numpy.concatenate([p[1] for p in gathered])
+        resolution = cell_resolution_report(self.description.grid, indicators,
+                                            self.domain.centres(),
+                                            self.description.health.resolution_tolerance)
+        return resolution, monitors.update(monitors.shape(shares, resolution), state.step,
+                                           state.t)
+
+    def progress_text(self, record, mass0) -> str:
+        low, high = record["temperature_range"]
+        return f"T in [{low:.4g}, {high:.4g}], mass drift {record['mass'] / mass0 - 1:+.1e}"
