@@ -31,16 +31,17 @@ from granframe.abc.model import CollisionKernel, InitialCondition, RestitutionLa
 from granframe.abc.operators import CollisionOperator, check_arguments, check_restitution
 from granframe.abc.run import (Communicator, Pending, Problem, checked_energy_factors,
                                 checks_deferred, deferred_checks)
-from granframe.abc.space import Boundary, CollisionModel, Reconstruction
+from granframe.abc.space import (SIDE_NAMES, Boundary, CollisionModel, Reconstruction, Side,
+                                  reflect_nodes)
 from granframe.abc.stepping import AdaptiveIntegrator, Equation, Part, TimeIntegrator
 from granframe.abc.velocity import Grid, Quadrature, SurfaceQuadrature
 
 __all__ = ["PRECISIONS", "AdaptiveIntegrator", "ArrayBackend", "Boundary", "CollisionKernel",
            "CollisionModel", "CollisionOperator", "Communicator", "Equation", "Grid",
            "InitialCondition", "Part", "Pending", "Problem", "Quadrature", "RealFFT",
-           "Reconstruction", "RestitutionLaw", "SurfaceQuadrature", "TimeIntegrator",
-           "check_arguments", "check_restitution", "checked_energy_factors", "checks_deferred",
-           "deferred_checks"]
+           "Reconstruction", "RestitutionLaw", "SIDE_NAMES", "Side", "SurfaceQuadrature",
+           "TimeIntegrator", "check_arguments", "check_restitution", "checked_energy_factors", "checks_deferred",
+           "deferred_checks", "reflect_nodes"]
 
 for _name in __all__:
     if isinstance(globals()[_name], (type, types.FunctionType)):

@@ -42,8 +42,6 @@ from granframe import abc as contracts
 from granframe import validators as check
 from granframe.space.transport import reflect, upwind_speeds
 
-#: the normal velocity in a wall's own frame is the lab velocity along +x times this
-_NORMAL_SIGN = {"left": 1.0, "right": -1.0}
 
 
 @attrs.frozen
@@ -236,12 +234,16 @@ class Diffuse(contracts.Boundary):
 
 def _normal_sign(side) -> float:
     """+1 for the left wall, -1 for the right one: the normal velocity in the wall's own
-    frame is the lab velocity along +x times this."""
+    frame is the lab velocity along +x times this (:attr:`granframe.abc.Side.normal_sign`).
+    The sides of the interval only: a space run's walls are at the ends of x."""
     try:
-        return _NORMAL_SIGN[side]
-    except (KeyError, TypeError):
+        named = contracts.Side.named(side)
+    except ValueError:
+        named = None
+    if named is None or named.axis != 0:
         check.reject("Vibrating", "side", side, "must be 'left' (the wall at x = 0) or "
                      "'right' (the wall at x = ell)")
+    return named.normal_sign
 
 
 def _half_range_flux_error(grid, temperature: float, u: float) -> float:

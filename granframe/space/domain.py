@@ -22,13 +22,10 @@ from __future__ import annotations
 import numpy
 
 from granframe import validators as check
+from granframe.abc.space import Side
+from granframe.abc.space import reflect_nodes as reflect
 
-
-def reflect(f, dimension: int, xp=numpy):
-    """f(R v) with R: v_1 -> -v_1, exactly on the nodes: i -> (N - i) mod N along the v_1
-    axis (axis ``-dimension``)."""
-    axis = f.ndim - dimension
-    return xp.roll(xp.flip(f, axis=axis), 1, axis=axis)
+__all__ = ["Domain", "reflect"]
 
 
 class Domain:
@@ -84,6 +81,11 @@ class Domain:
         self.shape = (self.blocks, block_cells + 2 * ghost) + tuple(grid.shape)
         self.neighbours = None
 
+    #: the space axes, named as the store's cell coordinates; a side is an axis and an end
+    axes = ("x",)
+    #: the two sides of the interval, lower (x = 0) and upper (x = ell)
+    sides = (Side(0, 0), Side(0, 1))
+
     # -- geometry ---------------------------------------------------------------------------
     @property
     def dx(self) -> float:
@@ -97,6 +99,10 @@ class Domain:
     def centres(self) -> numpy.ndarray:
         """The global cell centres (j + 1/2) dx."""
         return (numpy.arange(self.cells) + 0.5) * self.dx
+
+    def coordinates(self) -> dict:
+        """The cell centres along every space axis, by the axis's name (:attr:`axes`)."""
+        return {"x": self.centres()}
 
     @property
     def owned(self) -> slice:
@@ -152,13 +158,15 @@ class Domain:
         if local:
             array[0, :g] = array[-1, n:n + g]
             array[-1, g + n:] = array[0, g:2 * g]
+        lower, upper = self.sides
         if self.touches_left and not left.periodic:
-            ghosts = left.ghosts(array[0, g:2 * g], self.grid, xp, t=t, side="left")
-            array[0, :g] = xp.flip(ghosts, axis=0)                # from the wall outwards
+            inside = lower.to_wall(array[0, g:2 * g], d, xp)
+            ghosts = left.ghosts(inside, self.grid, xp, t=t, side=lower)
+            array[0, :g] = xp.flip(lower.from_wall(ghosts, d, xp), axis=0)  # wall outwards
         if self.touches_right and not right.periodic:
-            inside = reflect(xp.flip(array[-1, n:n + g], axis=0), d, xp)   # as a left wall
-            array[-1, g + n:] = reflect(right.ghosts(inside, self.grid, xp, t=t,
-                                                     side="right"), d, xp)
+            inside = upper.to_wall(xp.flip(array[-1, n:n + g], axis=0), d, xp)
+            array[-1, g + n:] = upper.from_wall(right.ghosts(inside, self.grid, xp, t=t,
+                                                             side=upper), d, xp)
         if pending is not None:
             pending.wait()
 

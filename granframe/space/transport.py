@@ -36,23 +36,27 @@ import numpy
 
 from granframe.space.domain import Domain, reflect
 
+__all__ = ["Transport", "reflect", "step_limit", "transport_speeds", "upwind_speeds",
+           "wall_weights"]
 
-def transport_speeds(grid, xp=numpy):
-    """The net transport speed c = c^+ + c^- of each v_1 node (:func:`upwind_speeds`),
-    shaped to broadcast over f (N, 1, ..., 1): v_1, and 0 at the node -L."""
-    positive, negative = upwind_speeds(grid, xp)
+
+def transport_speeds(grid, xp=numpy, axis: int = 0):
+    """The net transport speed c = c^+ + c^- of each node of v_{axis+1}
+    (:func:`upwind_speeds`), shaped to broadcast over f: v_{axis+1}, and 0 at the node -L."""
+    positive, negative = upwind_speeds(grid, xp, axis)
     return positive + negative
 
 
-def upwind_speeds(grid, xp=numpy):
-    """(c^+, c^-) of each v_1 node, shaped (N, 1, ..., 1): max(v_1, 0) and min(v_1, 0),
-    except at the node -L, which stands for both -L and +L: half of what it holds moves
-    each way, c^+ = L/2 and c^- = -L/2 (see the module notes)."""
+def upwind_speeds(grid, xp=numpy, axis: int = 0):
+    """(c^+, c^-) of each node of the velocity component v_{axis+1}, the one that carries f
+    along space axis ``axis``, shaped to broadcast over f (N, 1, ..., 1 for x):
+    max(v, 0) and min(v, 0), except at the node -L, which stands for both -L and +L: half
+    of what it holds moves each way, c^+ = L/2 and c^- = -L/2 (see the module notes)."""
     points = numpy.array(grid.points(), dtype=float)
     positive, negative = numpy.maximum(points, 0.0), numpy.minimum(points, 0.0)
     positive[0] = negative[0] = 0.5 * grid.half_width
     negative[0] = -negative[0]
-    shape = (-1,) + (1,) * (grid.dimension - 1)
+    shape = tuple(-1 if j == axis else 1 for j in range(grid.dimension))
     return xp.asarray(positive.reshape(shape)), xp.asarray(negative.reshape(shape))
 
 
@@ -68,14 +72,14 @@ def step_limit(grid, dx: float, cfl: float) -> float:
     return 2.0 * cfl * dx / (grid.half_width - grid.spacing)
 
 
-def wall_weights(grid):
+def wall_weights(grid, axis: int = 0):
     r"""The weights w (d + 2, *grid.shape) of the wall totals sum_v w F Delta v of a face
-    flux F = c^+ f^- + c^- f^+: 1 (mass), v_1 .. v_d (momentum) and |v|^2/2 (energy),
-    times Delta v = h^d.
+    flux F = c^+ f^- + c^- f^+ across space axis ``axis``: 1 (mass), v_1 .. v_d
+    (momentum) and |v|^2/2 (energy), times Delta v = h^d.
 
-    The node -L counts as in the recorded fields (:mod:`granframe.velocity.moments`): v_1 = 0
-    in the momentum along x (its content moves half each way and carries no net v_1) and
-    v_1^2 = L^2 in the energy. With these weights the fluxes through the faces are those of
+    The node -L counts as in the recorded fields (:mod:`granframe.velocity.moments`): the
+    normal component v_{axis+1} = 0 there in the momentum (its content moves half each way
+    and carries no net normal velocity) and L^2 in the energy. With these weights the fluxes through the faces are those of
     the cells' mass, momentum and energy, so the change of the totals over a step equals
     what the walls let in, to round-off, wherever nothing else acts. Through a wall at
     rest, sum_v v_1 F Delta v = int v_1^2 f dv is the normal momentum flux (the pressure
@@ -83,8 +87,8 @@ def wall_weights(grid):
     tangential one (P_1t + rho u_1 u_t).
     """
     mesh = [numpy.broadcast_to(m, grid.shape) for m in grid.mesh()]
-    normal = numpy.where(mesh[0] == -grid.half_width, 0.0, mesh[0])
-    return numpy.stack([numpy.ones(grid.shape), normal, *mesh[1:],
+    mesh[axis] = numpy.where(mesh[axis] == -grid.half_width, 0.0, mesh[axis])
+    return numpy.stack([numpy.ones(grid.shape), *mesh,
                         0.5 * grid.speed_squared()]) * grid.cell_volume
 
 
@@ -106,8 +110,10 @@ class Transport:
         self.dx = domain.dx
         grid, xp = domain.grid, domain.xp
         self.grid, self.xp = grid, xp
-        self.positive, self.negative = upwind_speeds(grid, xp)
-        self._weights = xp.asarray(wall_weights(grid))
+        #: the space axis along which the cells lie, and the velocity component that carries f
+        self.axis = axis = domain.sides[0].axis
+        self.positive, self.negative = upwind_speeds(grid, xp, axis)
+        self._weights = xp.asarray(wall_weights(grid, axis))
         #: the mass, momentum (d components) and energy that entered through each wall since
         #: the last :meth:`take_wall_totals`, (wall, [mass, p_1 .. p_d, energy]) on the device
         self.wall_totals = xp.zeros((2, grid.dimension + 2))
@@ -132,15 +138,17 @@ class Transport:
         minus, plus = self.reconstruction.faces(xp.swapaxes(array, 0, 1), xp)
         flux = self.positive * minus + self.negative * plus     # (block_cells + 1, blocks, ...)
         walls = []
+        lower, upper = domain.sides
         if domain.touches_left and not self.left.periodic:
-            out = self.left.emit(plus[0, 0], self.grid, xp, t=t, side="left")
+            out = lower.from_wall(self.left.emit(lower.to_wall(plus[0, 0], d, xp), self.grid,
+                                                 xp, t=t, side=lower), d, xp)
             flux[0, 0] = self.positive * out + self.negative * plus[0, 0]
             walls.append(self._moments(flux[0, 0]))
         else:
             walls.append(xp.zeros(d + 2))
         if domain.touches_right and not self.right.periodic:
-            out = reflect(self.right.emit(reflect(minus[-1, -1], d, xp), self.grid, xp, t=t,
-                                          side="right"), d, xp)
+            out = upper.from_wall(self.right.emit(upper.to_wall(minus[-1, -1], d, xp),
+                                                  self.grid, xp, t=t, side=upper), d, xp)
             flux[-1, -1] = self.positive * minus[-1, -1] + self.negative * out
             walls.append(-self._moments(flux[-1, -1]))
         else:

@@ -158,25 +158,28 @@ def space_layout(grid, domain: Domain, block: int, levels: bool = False) -> Layo
     every step the totals, the fields (step_time, x, ...) chunked by ``block`` along x,
     and the wall records (step_time, wall; ``wall_momentum`` (step_time, wall, axis));
     with ``levels`` (a hierarchy of collision models) the level of every cell,
-    ``level`` (step_time, x), an integer: its index in the hierarchy's levels."""
+    ``level`` (step_time, x), an integer: its index in the hierarchy's levels. The cell
+    axes and their coordinates are the domain's (:attr:`Domain.axes`,
+    :meth:`Domain.coordinates`)."""
     d = grid.dimension
     axes = tuple(f"v{i + 1}" for i in range(d))
-    cells = domain.cells
+    cells, space = domain.cells, tuple(domain.axes)
     chunk = max(1, 4096 // block)
     fields = tuple(RecordArray(name, (cells,) + tuple(d if c == "d" else c for c in shape),
-                               ("x",) + dims, chunk=chunk, cells_chunk=block)
+                               space + dims, chunk=chunk, cells_chunk=block)
                    for name, (shape, dims) in FIELDS.items())
     walls = tuple(RecordArray(name, (2, d) if name == "wall_momentum" else (2,),
                               ("wall", "axis") if name == "wall_momentum" else ("wall",))
                   for name in WALL_RECORDS)
     if levels:
-        walls += tuple(RecordArray(name, (cells,), ("x",), dtype=dtype, chunk=chunk,
+        walls += tuple(RecordArray(name, (cells,), space, dtype=dtype, chunk=chunk,
                                    cells_chunk=block) for name, dtype in LEVEL_RECORDS.items())
     points = grid.points()
     return Layout(tuple((name, points, (name,)) for name in axes)
-                  + (("x", domain.centres(), ("x",)),),
+                  + tuple((name, values, (name,))
+                          for name, values in domain.coordinates().items()),
                   (cells,) + tuple(grid.shape), (block,) + tuple(grid.shape),
-                  ("x",) + axes,
+                  space + axes,
                   STEP_RECORDS + tuple(RecordArray(n) for n in TOTALS) + fields + walls,
                   space={"cells": cells, "length": domain.length, "block_cells": block})
 

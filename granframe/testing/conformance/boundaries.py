@@ -10,6 +10,7 @@ import math
 
 import numpy
 
+from granframe.abc import Side
 from granframe.testing.conformance.common import require, require_contract
 
 
@@ -18,8 +19,9 @@ from granframe.testing.conformance.common import require, require_contract
 WALL_GRIDS = ((2, 16, 1.5), (2, 32, 5.0), (3, 8, 1.5), (3, 16, 5.0))
 
 
-#: The walls a boundary is checked as: the left one (x = 0) and the right one (x = ell).
-WALL_SIDES = ("left", "right")
+#: The walls a boundary is checked as: the left one (x = 0) and the right one (x = ell),
+#: given as the core gives them (:class:`granframe.abc.Side`).
+WALL_SIDES = (Side(0, 0), Side(0, 1))
 
 
 #: The times at which a wall that declares no ``period`` is checked.

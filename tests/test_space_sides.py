@@ -1,0 +1,157 @@
+"""The sides of the space domain (granframe.abc.Side) and the one problem of every run.
+
+A side is a space axis and an end; a wall sees its side in its own frame (the normal velocity
+first, leaving with v_1 > 0). The transport's speeds and wall weights take the axis too. A
+space-homogeneous run is the problem of zero space dimensions.
+"""
+
+import numpy
+import pytest
+
+from granframe.abc import SIDE_NAMES, Side, reflect_nodes
+from granframe.parallel import SerialCommunicator
+from granframe.run.description import RunDescription
+from granframe.run.problems import Interval, Point, SpaceProblem, make_problem
+from granframe.space.boundaries import Diffuse, Specular, Vibrating
+from granframe.testing.conformance import WALL_SIDES
+from granframe.space.transport import upwind_speeds, wall_weights
+from granframe.velocity.grid import VelocityGrid
+
+SIDES = [Side(axis, end) for axis in range(3) for end in (0, 1)]
+
+
+@pytest.mark.parametrize("side", SIDES, ids=str)
+def test_a_side_is_named_as_the_walls_of_a_description(side):
+    assert Side.named(side.name) == side
+    assert Side.named(side) is side
+    assert str(side) == SIDE_NAMES[side.axis][side.end]
+    assert side.normal_sign == (1.0 if side.end == 0 else -1.0)
+
+
+@pytest.mark.parametrize("name", ["up", "", None, 3])
+def test_an_unknown_side_is_refused_by_name(name):
+    with pytest.raises(ValueError, match="side = .* must be one of 'left', 'right', 'bottom'"):
+        Side.named(name)
+
+
+@pytest.mark.parametrize("axis, end", [(3, 0), (-1, 0), (0, 2), (True, 0), (0, False)])
+def test_a_side_out_of_range_is_refused(axis, end):
+    with pytest.raises(ValueError, match="Side: (axis|end) = "):
+        Side(axis, end)
+
+
+@pytest.mark.parametrize("dimension", [2, 3])
+def test_the_wall_frame_is_a_permutation_of_the_nodes_and_its_inverse(dimension):
+    rng = numpy.random.default_rng(dimension)
+    f = rng.random((3,) + (8,) * dimension)
+    for side in SIDES[:2 * dimension]:
+        if side.axis >= dimension:
+            continue
+        wall = side.to_wall(f, dimension, numpy)
+        assert numpy.array_equal(side.from_wall(wall, dimension, numpy), f)
+        assert sorted(wall.ravel()) == sorted(f.ravel())
+    assert Side(0, 0).to_wall(f, dimension, numpy) is f
+    assert numpy.array_equal(Side(0, 1).to_wall(f, dimension, numpy),
+                             reflect_nodes(f, dimension, numpy))
+
+
+@pytest.mark.parametrize("dimension", [2, 3])
+def test_the_speeds_and_wall_weights_of_an_axis_are_those_of_x_with_the_axes_exchanged(
+        dimension):
+    grid = VelocityGrid(dimension, 16, 4.0)
+    for axis in range(1, dimension):
+        for along, along_x in zip(upwind_speeds(grid, numpy, axis),
+                                  upwind_speeds(grid, numpy, 0)):
+            assert numpy.array_equal(numpy.swapaxes(along, 0, axis), along_x)
+        weights, weights_x = wall_weights(grid, axis), wall_weights(grid, 0)
+        rows = list(range(dimension + 2))       # mass, momentum v_1 .. v_d, energy
+        rows[1], rows[1 + axis] = rows[1 + axis], rows[1]
+        # equal but for the order of the sum |v|^2 in the energy
+        assert numpy.allclose(numpy.swapaxes(weights, 1, 1 + axis)[rows], weights_x,
+                              rtol=1e-15, atol=0)
+
+
+@pytest.mark.parametrize("wall", [Diffuse(temperature=0.8, velocity=0.3),
+                                  Diffuse(temperature=1.2, accommodation=0.4), Specular()],
+                         ids=repr)
+@pytest.mark.parametrize("side", [Side(1, 0), Side(1, 1)], ids=str)
+def test_a_wall_across_y_lets_no_mass_through_along_v2(wall, side):
+    """A wall at the bottom or top, mapped by its side, emits along v_2 exactly the mass that
+    arrives along v_2 (the flux c^+ f^- + c^- f^+ of the y speeds sums to zero), as a wall
+    across x does along v_1."""
+    grid = VelocityGrid(2, 24, 4.0)
+    mesh = grid.mesh()
+    incoming = numpy.exp(-((mesh[0] - 0.4) ** 2 + (mesh[1] + 0.2) ** 2) / 1.3)
+    wall.check(grid)
+    out = side.from_wall(wall.emit(side.to_wall(incoming, 2, numpy), grid, numpy, t=0.03,
+                                   side=side), 2, numpy)
+    positive, negative = upwind_speeds(grid, numpy, axis=1)
+    flux = (positive * out + negative * incoming if side.end == 0
+            else positive * incoming + negative * out)
+    scale = float((positive * incoming).sum() - (negative * incoming).sum())
+    assert abs(float(flux.sum())) <= 1e-14 * scale
+
+
+def _description(space: bool) -> RunDescription:
+    text = """
+final_time = 0.02
+time_step = 0.01
+integrator = "rk4"
+[grid]
+dimension = 2
+n_modes = 16
+support_radius = 3.2
+[kernel]
+name = "maxwell"
+[restitution]
+name = "constant"
+value = 0.9
+[initial]
+name = "maxwellian"
+[operator]
+name = "direct_spectral"
+"""
+    if space:
+        text = text.replace("[grid]", "[space]\ncells = 8\nlength = 1.0\n[grid]")
+    return RunDescription.from_toml(text)
+
+
+def test_a_space_homogeneous_run_is_the_problem_of_zero_space_dimensions():
+    problem = make_problem(_description(space=False))
+    assert type(problem) is SpaceProblem and isinstance(problem.space, Point)
+    assert problem.space.dimension == 0
+    assert problem.owned == slice(None) and problem.ranges == ((0, 1),)
+    assert isinstance(problem.communicator, SerialCommunicator)
+    assert problem.integrator is problem.collision_integrator      # no transport to split
+    assert problem.domain is None and problem.transport is None
+    layout = problem.layout()
+    assert layout.snapshot_dimensions == ("v1", "v2")
+    state = problem.state(problem.f0)
+    assert numpy.array_equal(problem.snapshot(problem.step(0.0, state, 0.01)).shape,
+                             problem.f0.shape)
+    assert set(problem.record(state)) >= {"mass", "temperature", "kurtosis", "heat_flux"}
+
+
+def test_a_run_with_a_space_section_is_the_same_problem_on_an_interval():
+    problem = make_problem(_description(space=True), communicator=SerialCommunicator())
+    assert type(problem) is SpaceProblem and isinstance(problem.space, Interval)
+    assert problem.space.dimension == 1 and problem.domain.axes == ("x",)
+    assert [str(side) for side in problem.domain.sides] == ["left", "right"]
+    assert problem.transport.axis == 0
+    assert problem.layout().snapshot_dimensions == ("x", "v1", "v2")
+    assert problem.owned == slice(0, 8) and tuple(problem.ranges) == ((0, 8),)
+
+
+def test_a_side_equals_its_name_for_walls_written_against_names():
+    assert Side(0, 1) == "right" and Side(1, 0) == "bottom" and Side(0, 0) != "right"
+    assert {"left": 1.0, "right": -1.0}[Side(0, 1)] == -1.0
+    assert Side(1, 1) != Side(0, 1) and Side(1, 1) == Side(1, 1)
+
+
+def test_the_vibrating_wall_moves_along_x_only():
+    """Its normal velocity is that of a wall moving along x (the ends of the interval)."""
+    wall = Vibrating(amplitude=0.01, frequency=20.0)
+    assert wall.normal_velocity(0.0, Side(0, 1)) == -wall.normal_velocity(0.0, "left")
+    with pytest.raises(ValueError, match="parameter 'side' = Side.axis=1, end=0. is invalid"):
+        wall.normal_velocity(0.0, Side(1, 0))
+    assert WALL_SIDES == ("left", "right")
