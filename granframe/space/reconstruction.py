@@ -200,44 +200,8 @@ class WENO5(Reconstruction):
         # Cells j = 2 .. n + 3 (k = j - 2) read the windows j - 2, j - 1, j.
         cells = f.shape[0] - 4
         windows = [slice(i, i + cells) for i in range(3)]
-        # 1/s_j, s_j = max(|f_{j-2}|, ..., |f_{j+2}|, tiny)
-        size = xp.abs(f)
-        pair = xp.maximum(size[:-1], size[1:])
-        inverse = xp.maximum(pair[:-3], pair[2:-1])
-        del pair
-        xp.maximum(inverse, size[4:], out=inverse)
-        del size
-        xp.maximum(inverse, xp.finfo(f.dtype).tiny, out=inverse)
-        xp.divide(1.0, inverse, out=inverse)
-        # beta_0 (window j-2, 2 curve + slope), beta_1 (j-1, slope), beta_2 (j, 2 curve - slope)
-        beta = []
-        for window, lean in zip(windows, (1.0, 0.0, -1.0)):
-            c = curve[window] * inverse
-            s = slope[window] * inverse
-            if lean:
-                s *= lean
-                s += c
-                s += c
-            c *= c
-            c *= 13.0 / 12.0
-            s *= s
-            s *= 0.25
-            c += s
-            beta.append(c)
-        del c, s, inverse
-        if self.weights == "js":
-            for b in beta:                       # beta_k -> 1/(eps + beta_k)^2
-                b += 1e-6
-                b *= b
-                xp.divide(1.0, b, out=b)
-        else:
-            tau = xp.abs(beta[0] - beta[2])
-            for b in beta:                       # beta_k -> 1 + (tau/(eps + beta_k))^2
-                b += 1e-40
-                xp.divide(tau, b, out=b)
-                b *= b
-                b += 1.0
-            del tau
+        beta = _smoothness(curve, slope, _inverse_scale(f, xp), windows)
+        self._nonlinear_weights(beta, xp)
         # q_k - f_j in window quantities: f^- takes (7 curve + 3 slope, curve + 3 slope,
         # -5 curve + 3 slope)/12 on the windows j-2, j-1, j with d = (1, 6, 3)/10; f^+ the
         # mirror image (slope -> -slope, d reversed over the windows).
@@ -245,24 +209,77 @@ class WENO5(Reconstruction):
                  ((-5.0, -3.0, 0.3), (1.0, -3.0, 0.6), (7.0, -3.0, 0.1)))
         scratch = xp.empty_like(beta[0])
         term = xp.empty_like(beta[0])
-        out = []
-        for side in sides:
-            value = xp.zeros_like(beta[0])
-            total = xp.zeros_like(beta[0])
-            for b, window, (kc, ks, d) in zip(beta, windows, side):
-                xp.multiply(curve[window], kc, out=term)
-                xp.multiply(slope[window], ks, out=scratch)
-                term += scratch                          # 12 (q_k - f_j)
-                xp.multiply(b, d, out=scratch)           # alpha_k
-                total += scratch
-                term *= scratch
-                value += term
-            value /= total
-            value *= 1.0 / 12.0
-            value += f[2:-2]
-            out.append(value)
-        minus, plus = out
+        minus, plus = (_face_value(f, curve, slope, beta, windows, side, scratch, term, xp)
+                       for side in sides)
         return minus[:-1], plus[1:]
+
+    def _nonlinear_weights(self, beta, xp) -> None:
+        """beta_k -> the unnormalised weight of stencil k, in place: 1/(eps + beta_k)^2
+        (Jiang-Shu) or 1 + (tau/(eps + beta_k))^2 (WENO-Z)."""
+        if self.weights == "js":
+            for b in beta:
+                b += 1e-6
+                b *= b
+                xp.divide(1.0, b, out=b)
+            return
+        tau = xp.abs(beta[0] - beta[2])
+        for b in beta:
+            b += 1e-40
+            xp.divide(tau, b, out=b)
+            b *= b
+            b += 1.0
+
+
+def _inverse_scale(f, xp):
+    """1/s_j, s_j = max(|f_{j-2}|, ..., |f_{j+2}|, tiny) for the cells j = 2 .. n + 3."""
+    size = xp.abs(f)
+    pair = xp.maximum(size[:-1], size[1:])
+    inverse = xp.maximum(pair[:-3], pair[2:-1])
+    del pair
+    xp.maximum(inverse, size[4:], out=inverse)
+    del size
+    xp.maximum(inverse, xp.finfo(f.dtype).tiny, out=inverse)
+    xp.divide(1.0, inverse, out=inverse)
+    return inverse
+
+
+def _smoothness(curve, slope, inverse, windows) -> list:
+    """The indicators beta_0 (window j-2, 2 curve + slope), beta_1 (j-1, slope) and beta_2
+    (j, 2 curve - slope) of f / s_j: 13/12 c^2 + 1/4 s^2."""
+    beta = []
+    for window, lean in zip(windows, (1.0, 0.0, -1.0)):
+        c = curve[window] * inverse
+        s = slope[window] * inverse
+        if lean:
+            s *= lean
+            s += c
+            s += c
+        c *= c
+        c *= 13.0 / 12.0
+        s *= s
+        s *= 0.25
+        c += s
+        beta.append(c)
+    return beta
+
+
+def _face_value(f, curve, slope, beta, windows, side, scratch, term, xp):
+    """f_j + sum_k alpha_k (q_k - f_j) / sum_k alpha_k on one side of every cell, alpha_k
+    = d_k w_k with ``side`` the (curve, slope, d) coefficients of the three stencils."""
+    value = xp.zeros_like(beta[0])
+    total = xp.zeros_like(beta[0])
+    for b, window, (kc, ks, d) in zip(beta, windows, side):
+        xp.multiply(curve[window], kc, out=term)
+        xp.multiply(slope[window], ks, out=scratch)
+        term += scratch                          # 12 (q_k - f_j)
+        xp.multiply(b, d, out=scratch)           # alpha_k
+        total += scratch
+        term *= scratch
+        value += term
+    value /= total
+    value *= 1.0 / 12.0
+    value += f[2:-2]
+    return value
 
 
 #: the reconstructions by name

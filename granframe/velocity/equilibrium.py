@@ -130,47 +130,66 @@ def discrete_maxwellians(grid, density, momentum, second, xp=numpy, points=None)
     scale = float(grid.half_width)
     w = points / scale                                         # the nodes in [-1, 1)
     with numpy.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        j = momentum / scale
-        s = second / (scale * scale)
-        temperature = (s - (j * j).sum(axis=1) / density) / (d * density)
-        valid = (xp.isfinite(density) & (density > 0) & xp.isfinite(temperature)
-                 & (temperature > 0) & xp.all(xp.isfinite(j), axis=1))
-        rho = xp.where(valid, density, 1.0)
-        # elsewhere: a standard target (u = 0, T = 0.05 L^2) that keeps the iteration finite
-        u = xp.where(valid[:, None], j / rho[:, None], 0.0)
-        t = xp.where(valid, temperature, 0.05)
-        target = xp.concatenate([u, ((u * u).sum(axis=1) + d * t)[:, None]], axis=1)
-        beta = xp.concatenate([u / t[:, None], (-0.5 / t)[:, None]], axis=1)
+        valid, rho, target, beta = _start(density, momentum / scale,
+                                          second / (scale * scale), d, xp)
         identity = xp.eye(d + 1)[None]
         lengths = 0.5 ** xp.arange(float(_SEARCH))
         for _ in range(ITERATIONS):
-            _, mean = _axis_moments(w, beta[:, :d], beta[:, d], xp)
-            phi, covariance = _moments(mean, xp)
-            scaling = xp.sqrt(xp.diagonal(covariance, axis1=1, axis2=2)) + 1e-150
-            scaled = covariance / (scaling[:, :, None] * scaling[:, None, :])
-            scaled = xp.where(xp.isfinite(scaled), scaled, 0.0) + _REGULAR * identity
-            gradient = (phi - target) / scaling
-            step = xp.linalg.solve(scaled, gradient[:, :, None])[:, :, 0]
-            # a line search on the convex objective, on all candidate lengths at once
-            candidates = beta[:, None, :] - lengths[:, None] * (step / scaling)[:, None, :]
-            objective = _objective(w, candidates, target, xp)
-            objective = xp.where(xp.isfinite(objective), objective, xp.inf)
-            lowest = objective.min(axis=1)
-            # the full step unless a shorter one is lower beyond round-off (near the
-            # minimum the objective's differences are below its round-off)
-            full = objective[:, 0] <= lowest + 1e-13 * (1.0 + xp.abs(lowest))
-            best = xp.where(full, 0, xp.argmin(objective, axis=1))
-            beta = xp.take_along_axis(candidates, best[:, None, None], axis=1)[:, 0]
-            beta = xp.where(xp.isfinite(beta), beta, 0.0)
+            beta = _newton_step(w, beta, target, identity, lengths, xp)
         factors, mean = _axis_moments(w, beta[:, :d], beta[:, d], xp)
         phi, _ = _moments(mean, xp)
         residual = xp.abs(phi - target).max(axis=1) / target[:, -1]
     converged = valid & (residual <= RESIDUAL_TOLERANCE)
-    n = density.shape[0]
+    return _product(factors, rho / grid.cell_volume, d), converged
+
+
+def _start(density, j, s, d: int, xp):
+    """Where the moments (mass ``density``, momentum ``j`` and second moment ``s`` in the
+    variables w = v / L) are realisable (``valid``), the mass (1 elsewhere), the Newton
+    target (u, |u|^2 + d T) and the first iterate (u / T, -1 / (2T)): the continuous
+    Maxwellian's; elsewhere a standard target (u = 0, T = 0.05 L^2) that keeps the iteration
+    finite."""
+    temperature = (s - (j * j).sum(axis=1) / density) / (d * density)
+    valid = (xp.isfinite(density) & (density > 0) & xp.isfinite(temperature)
+             & (temperature > 0) & xp.all(xp.isfinite(j), axis=1))
+    rho = xp.where(valid, density, 1.0)
+    u = xp.where(valid[:, None], j / rho[:, None], 0.0)
+    t = xp.where(valid, temperature, 0.05)
+    target = xp.concatenate([u, ((u * u).sum(axis=1) + d * t)[:, None]], axis=1)
+    beta = xp.concatenate([u / t[:, None], (-0.5 / t)[:, None]], axis=1)
+    return valid, rho, target, beta
+
+
+def _newton_step(w, beta, target, identity, lengths, xp):
+    """One Newton step on (b, c) with the Hessian scaled by its diagonal, and a line search
+    over ``lengths`` (all candidate lengths at once) on the convex objective."""
+    d = beta.shape[1] - 1
+    _, mean = _axis_moments(w, beta[:, :d], beta[:, d], xp)
+    phi, covariance = _moments(mean, xp)
+    scaling = xp.sqrt(xp.diagonal(covariance, axis1=1, axis2=2)) + 1e-150
+    scaled = covariance / (scaling[:, :, None] * scaling[:, None, :])
+    scaled = xp.where(xp.isfinite(scaled), scaled, 0.0) + _REGULAR * identity
+    gradient = (phi - target) / scaling
+    step = xp.linalg.solve(scaled, gradient[:, :, None])[:, :, 0]
+    candidates = beta[:, None, :] - lengths[:, None] * (step / scaling)[:, None, :]
+    objective = _objective(w, candidates, target, xp)
+    objective = xp.where(xp.isfinite(objective), objective, xp.inf)
+    lowest = objective.min(axis=1)
+    # the full step unless a shorter one is lower beyond round-off (near the minimum the
+    # objective's differences are below its round-off)
+    full = objective[:, 0] <= lowest + 1e-13 * (1.0 + xp.abs(lowest))
+    best = xp.where(full, 0, xp.argmin(objective, axis=1))
+    beta = xp.take_along_axis(candidates, best[:, None, None], axis=1)[:, 0]
+    return xp.where(xp.isfinite(beta), beta, 0.0)
+
+
+def _product(factors, amplitude, d: int):
+    """amplitude_n prod_i factors_{n,i}(v_i): the separable Maxwellians (n, *grid.shape)."""
+    n = factors.shape[0]
     result = None
     for i in range(d):
         shape = [n] + [1] * d
         shape[1 + i] = -1
         factor = factors[:, i].reshape(shape)
         result = factor if result is None else result * factor
-    return result * (rho / grid.cell_volume).reshape((n,) + (1,) * d), converged
+    return result * amplitude.reshape((n,) + (1,) * d)

@@ -237,23 +237,9 @@ class FastSpectral(CollisionOperator):
         self._a, self._b = a_rho, math.pi * rho / L - a_rho
         radial = w_rho * rho ** (d - 1) * kernel.prefactor(d) * kernel.speed_part(rho)
 
-        reps, w_plus, w_minus = plan.reps, plan.w_plus, plan.w_minus
+        reps = plan.reps
         self.n_pairs = len(reps)
-        # Angular terms of each pair: coefficient and (ghat, sigma) parts of the phase vector
-        # eta = alpha ghat - a sigma, with alpha = a (term of +ghat) or b (reused term of -ghat).
-        if kernel.is_isotropic:
-            coef = numpy.stack([w_plus, w_minus], axis=1)                     # (P, 2)
-            sig = numpy.zeros((1, d))
-            f0_plus = f0_minus = numpy.full(len(reps), sphere_area(d))
-        else:
-            s_nodes, s_weights = self.sigma.nodes(), self.sigma.weights()
-            cos_plus = reps @ s_nodes.T                                        # (P, S)
-            b_plus = s_weights * kernel.angular_part(cos_plus)
-            b_minus = s_weights * kernel.angular_part(-cos_plus)
-            coef = numpy.concatenate([w_plus[:, None] * b_plus, w_minus[:, None] * b_minus], axis=1)
-            sig = s_nodes
-            f0_plus, f0_minus = b_plus.sum(axis=1), b_minus.sum(axis=1)
-        self._reps, self._coef, self._sig = reps, coef, sig
+        self._reps, self._coef, self._sig, f0_plus, f0_minus = self._angular_terms(plan)
 
         # Wavenumbers of the half (rfft) layout: axes 0..d-2 in DFT order, last axis 0..N/2.
         self._k_axes = grid.half_wavenumbers()
@@ -270,14 +256,8 @@ class FastSpectral(CollisionOperator):
         self._radial_weights = xp.asarray(weights)
         del kk, weights
 
-        # Loss multiplier G_loss(m) on the half layout (same rho, ghat rule as the gain).
-        g_loss = numpy.zeros(half_shape, dtype=complex)
-        for r, w in zip(rho, radial):
-            for sign, f0 in ((-1.0, w_plus * f0_plus), (1.0, w_minus * f0_minus)):
-                factors = [numpy.exp(sign * 1j * math.pi * r / L * numpy.outer(reps[:, i], k))
-                           for i, k in enumerate(self._k_axes)]                 # each (P, N_i)
-                g_loss += w * _separable_sum(f0, factors)
-        self._g_loss = xp.asarray(g_loss / total, dtype=self._complex_dtype)
+        self._g_loss = xp.asarray(self._loss_multiplier(rho, radial, plan, f0_plus, f0_minus)
+                                  / total, dtype=self._complex_dtype)
 
         # Work split: contiguous ranges of rho values over pipelines; pairs in batches.
         pipelines = plan.pipelines
@@ -288,6 +268,35 @@ class FastSpectral(CollisionOperator):
                           if pipelines > 1 else None)
         self._stack = None
         self._size_stack(1)
+
+    def _angular_terms(self, plan):
+        """The angular terms of each antipodal pair: the coefficients, the sigma parts of the
+        phase vector eta = alpha ghat - a sigma (alpha = a for the term of +ghat, b for the
+        reused term of -ghat), and the angular integrals of b at +ghat and -ghat."""
+        kernel, d = self.kernel, self.grid.dimension
+        reps, w_plus, w_minus = plan.reps, plan.w_plus, plan.w_minus
+        if kernel.is_isotropic:
+            coef = numpy.stack([w_plus, w_minus], axis=1)                     # (P, 2)
+            area = numpy.full(len(reps), sphere_area(d))
+            return reps, coef, numpy.zeros((1, d)), area, area
+        s_nodes, s_weights = self.sigma.nodes(), self.sigma.weights()
+        cos_plus = reps @ s_nodes.T                                            # (P, S)
+        b_plus = s_weights * kernel.angular_part(cos_plus)
+        b_minus = s_weights * kernel.angular_part(-cos_plus)
+        coef = numpy.concatenate([w_plus[:, None] * b_plus, w_minus[:, None] * b_minus], axis=1)
+        return reps, coef, s_nodes, b_plus.sum(axis=1), b_minus.sum(axis=1)
+
+    def _loss_multiplier(self, rho, radial, plan, f0_plus, f0_minus):
+        """N^d G_loss(m) on the half layout, with the same rho and ghat rule as the gain."""
+        L = self.grid.half_width
+        reps = plan.reps
+        g_loss = numpy.zeros(self._half_shape, dtype=complex)
+        for r, w in zip(rho, radial):
+            for sign, f0 in ((-1.0, plan.w_plus * f0_plus), (1.0, plan.w_minus * f0_minus)):
+                factors = [numpy.exp(sign * 1j * math.pi * r / L * numpy.outer(reps[:, i], k))
+                           for i, k in enumerate(self._k_axes)]                 # each (P, N_i)
+                g_loss += w * _separable_sum(f0, factors)
+        return g_loss
 
     def _size_stack(self, distributions: int):
         """Transforms and buffers for stacks of ``distributions`` (the last size asked
@@ -457,15 +466,13 @@ def _plan(grid, kernel, backend, radial_points, sphere, sigma, quadrature, batch
     pipelines = max(1, min(backend.concurrency, radial_points))
     fixed = complex_ * half * (radial_points + 4 + 2 * pipelines)
     per_distribution = complex_ * half * (3 + 2 * pipelines)
-    per_pair = real * total + 2 * complex_ * half
     table_per_pair = complex_ * (half_shape[0] + half // half_shape[0]) * (1 + terms)
-    tables = table_per_pair * radial_points * n_pairs
-    precompute = tables <= budget // 4
-    if not precompute:      # each pipeline forms the tables of its block of pairs
-        tables, per_pair = 0, per_pair + table_per_pair
+    precompute, tables, per_pair = _tables_placed(
+        table_per_pair, radial_points * n_pairs, real * total + 2 * complex_ * half, budget)
     if batch is None:
         batch = _default_batch(complex_ * half, n_pairs, _ceil_div(radial_points, pipelines),
                                backend.batch_bytes)
+    weights_gib = memory.gib(complex_ * half * radial_points)
     if fixed + tables + pipelines * batch * per_pair > budget:
         batch = (budget - fixed - tables) // (pipelines * per_pair)
         if batch < 1:
@@ -473,30 +480,48 @@ def _plan(grid, kernel, backend, radial_points, sphere, sigma, quadrature, batch
                          f"is too small: one pair per pipeline needs "
                          f"{memory.gib(fixed + tables + pipelines * per_pair)} GiB (d = {d}, "
                          f"N = {grid.n_modes}); use a smaller N, fewer radial_points (the "
-                         f"radial weights take {memory.gib(complex_ * half * radial_points)} "
-                         "GiB), or raise memory_budget")
+                         f"radial weights take {weights_gib} GiB), or raise memory_budget")
     steady = fixed + tables + pipelines * batch * per_pair
     if not precompute:      # a block holds the pairs of whole rho values
         steady += pipelines * max(0, n_pairs - batch) * table_per_pair
-    memory_bytes = steady + 56 * half
-    if distributions > 1:
-        grids = _stack_transforms(int(batch), n_pairs, distributions)
-        memory_bytes += ((distributions - 1) * per_distribution
-                         + pipelines * (grids - int(batch)) * per_pair)
-        if memory_bytes > budget:
-            check.reject(owner, "f", f"a stack of {distributions} distributions",
-                         f"is too large: it needs {memory.gib(memory_bytes)} GiB, over the "
-                         f"memory_budget of {memory.gib(budget)} GiB (d = {d}, "
-                         f"N = {grid.n_modes}); evaluate smaller stacks, or raise "
-                         "memory_budget")
+    memory_bytes = steady + 56 * half + _stack_bytes(
+        grid, int(batch), n_pairs, distributions, pipelines, per_distribution, per_pair,
+        steady + 56 * half, budget)
     if memory_bytes > budget:
         check.reject(owner, "memory_budget", memory_budget,
                      f"is too small: the operator needs {memory.gib(memory_bytes)} GiB (d = {d}, "
                      f"N = {grid.n_modes}); use a smaller N, fewer radial_points (the "
-                     f"radial weights take {memory.gib(complex_ * half * radial_points)} GiB), "
-                     "or raise memory_budget")
+                     f"radial weights take {weights_gib} GiB), or raise memory_budget")
     return _Plan(radial_points, sphere, sigma, reps, w_plus, w_minus, pipelines, int(batch),
                  precompute, int(memory_bytes))
+
+
+def _tables_placed(table_per_pair: int, pairs: int, per_pair: int, budget: int) -> tuple:
+    """Whether the phase tables of all ``pairs`` (rho, pair) are precomputed (when they fit
+    in a quarter of the budget), the bytes they take, and the bytes per pair of a batch: a
+    pipeline that forms the tables of its block of pairs holds them per pair."""
+    tables = table_per_pair * pairs
+    if tables <= budget // 4:
+        return True, tables, per_pair
+    return False, 0, per_pair + table_per_pair
+
+
+def _stack_bytes(grid, batch: int, n_pairs: int, distributions: int, pipelines: int,
+                 per_distribution: int, per_pair: int, single: int, budget: int) -> int:
+    """What a stack of D = ``distributions`` distributions needs beyond one (``single``
+    bytes): ``per_distribution`` for each further one and the further grids of every
+    pipeline's transform (:func:`_stack_transforms`); a stack over ``budget`` is refused
+    naming ``f``."""
+    if distributions <= 1:
+        return 0
+    grids = _stack_transforms(batch, n_pairs, distributions)
+    extra = (distributions - 1) * per_distribution + pipelines * (grids - batch) * per_pair
+    if single + extra > budget:
+        check.reject("fast_spectral", "f", f"a stack of {distributions} distributions",
+                     f"is too large: it needs {memory.gib(single + extra)} GiB, over the "
+                     f"memory_budget of {memory.gib(budget)} GiB (d = {grid.dimension}, "
+                     f"N = {grid.n_modes}); evaluate smaller stacks, or raise memory_budget")
+    return extra
 
 
 _BLAS = threadpoolctl.ThreadpoolController()

@@ -6,13 +6,14 @@ and how such a rate scales with the state of a cell (:func:`scaled_rates`).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy
 
 from granframe.backends import to_host
 from granframe.model.restitution import is_elastic
-from granframe.theory.cooling import relative_speed_average
+from granframe.theory.cooling import maxwellian_cooling_rate
 
 class CoolingRate:
     r"""The granular cooling rate zeta(rho, T, E) of a Maxwellian, d T/dt = -zeta T / eps.
@@ -28,7 +29,8 @@ class CoolingRate:
     For a Maxwellian of density rho and temperature T, the double integral is rho^2 times
     the average over its relative speeds
     (:func:`~granframe.theory.cooling.relative_speed_average`), and with
-    d/dt int |v|^2 f = rho d dT/dt,
+    d/dt int |v|^2 f = rho d dT/dt (:func:`~granframe.theory.cooling.maxwellian_cooling_rate`
+    with C beta, which gives the coefficient and the table below),
 
     .. math:: \zeta = \frac{C\beta\,E^\gamma \rho}{8 d T}
               \bigl\langle s^{\lambda+2}(1 - e(s)^2)\bigr\rangle_{2T},
@@ -49,25 +51,23 @@ class CoolingRate:
         self.elastic = is_elastic(restitution, grid)
         lam = kernel.speed_exponent
         self.exponent = lam / 2.0
-        beta = kernel.prefactor(d) * kernel.angular_integral(d, lambda t: 1.0 - t)
-        self._constant = beta / (8.0 * d)
+        rate = functools.partial(
+            maxwellian_cooling_rate, dimension=d, speed_exponent=lam,
+            scattering=kernel.prefactor(d) * kernel.angular_integral(d, lambda t: 1.0 - t))
         self.table = None
         self._tables = {}
         if self.elastic:
             self.coefficient = 0.0
         elif restitution.is_constant:
             e = float(numpy.asarray(restitution(numpy.array([1.0]))).reshape(-1)[0])
-            #: zeta = coefficient rho E^gamma T^(lambda/2) for a constant e
-            self.coefficient = (self._constant * (1.0 - e * e) * 4.0 ** (lam / 2 + 1)
-                                * math.exp(math.lgamma((d + lam + 2) / 2)
-                                           - math.lgamma(d / 2)))
+            #: zeta = coefficient rho E^gamma T^(lambda/2) for a constant e: the rate at
+            #: rho = T = 1 (without E^gamma)
+            self.coefficient = float(rate(e))
         else:
             self.coefficient = None
             top = float(grid.half_width) ** 2
             temperatures = top * numpy.logspace(-12.0, 0.0, 241)
-            values = [self._constant * relative_speed_average(
-                lambda s: s ** (lam + 2) * (1.0 - numpy.asarray(restitution(s)) ** 2), d, t) / t
-                for t in temperatures]
+            values = [rate(restitution, 1.0, t) for t in temperatures]
             self.table = (numpy.log(temperatures), numpy.log(numpy.maximum(values, 1e-300)))
 
     def __call__(self, density, temperature, energy, xp=numpy):
