@@ -461,10 +461,6 @@ def test_the_granular_euler_solver_cools_a_gas_at_rest_at_the_exact_rate():
         assert numpy.abs(rest["density"][-1] - 1.0).max() == 0.0
 
 
-@pytest.mark.xfail(strict=True, reason="granular_euler_piston fills the two ghost cells of "
-                   "the wall at x = 0 in the wrong order (the mirror of cell 1 next to the "
-                   "wall, of cell 0 beyond it): the wall leaks mass (1.6e-4 by t = 0.2 "
-                   "here) and energy; kept as it is, the studies' outputs depend on it")
 def test_the_granular_euler_solver_conserves_mass_and_energy_between_reflecting_walls():
     """Reflecting walls through a shock (e = 1): mass and energy to round-off (with the
     ghost cells in mirror order they are, to 2e-16)."""

@@ -369,16 +369,13 @@ def _cool(q, dt, c, dimension):
 
 def _transport_rate(q, dx, dimension):
     """-d_x of the Euler fluxes of q: MUSCL with the minmod limiter on (rho, u, T), two
-    ghost cells at each wall (mirrored: u reversed), the HLL flux at every face.
-
-    At x = 0 the two ghost cells are in the wrong order (the mirror of cell 1 next to the
-    wall, of cell 0 beyond it; at x = ell they are in mirror order): a known bug, recorded
-    by a strict xfail in tests/test_theory.py and kept, since the studies' outputs depend
-    on it."""
+    ghost cells at each wall, the mirror images of the first two cells (u reversed) in
+    mirror order (the image of the wall cell next to the wall), the HLL flux at every face:
+    a reflecting wall lets no mass or energy through (tests/test_theory.py)."""
     prim = numpy.array(_primitive(q, dimension))
     mirror = prim[:, [1, 0]] * numpy.array([[1.0], [-1.0], [1.0]])
     far = prim[:, [-1, -2]] * numpy.array([[1.0], [-1.0], [1.0]])
-    padded = numpy.concatenate([mirror[:, ::-1], prim, far], axis=1)
+    padded = numpy.concatenate([mirror, prim, far], axis=1)
     slope = _minmod(padded[:, 1:-1] - padded[:, :-2], padded[:, 2:] - padded[:, 1:-1])
     centre = padded[:, 1:-1]
     left = (centre + 0.5 * slope)[:, :-1]
