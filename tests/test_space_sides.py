@@ -16,6 +16,7 @@ from granframe.space.boundaries import Diffuse, Specular, Vibrating
 from granframe.testing.conformance import WALL_SIDES
 from granframe.space.transport import upwind_speeds, wall_weights
 from granframe.velocity.grid import VelocityGrid
+from granframe.velocity.moments import FieldMoments
 
 SIDES = [Side(axis, end) for axis in range(3) for end in (0, 1)]
 
@@ -137,7 +138,7 @@ def test_a_run_with_a_space_section_is_the_same_problem_on_an_interval():
     assert type(problem) is SpaceProblem and isinstance(problem.space, Interval)
     assert problem.space.dimension == 1 and problem.domain.axes == ("x",)
     assert [str(side) for side in problem.domain.sides] == ["left", "right"]
-    assert problem.transport.axis == 0
+    assert problem.transport.axis == 0 and problem.fields.transport_axes == (0,)
     assert problem.layout().snapshot_dimensions == ("x", "v1", "v2")
     assert problem.owned == slice(0, 8) and tuple(problem.ranges) == ((0, 8),)
 
@@ -155,3 +156,41 @@ def test_the_vibrating_wall_moves_along_x_only():
     with pytest.raises(ValueError, match="parameter 'side' = Side.axis=1, end=0. is invalid"):
         wall.normal_velocity(0.0, Side(1, 0))
     assert WALL_SIDES == ("left", "right")
+
+
+@pytest.mark.parametrize("dimension", [2, 3])
+def test_the_moments_read_the_node_of_every_transport_axis_in_halves(dimension):
+    """With v_1 and v_2 both transport components, the "halves" reading counts the node -L
+    of each as zero in the odd powers of that component, and the "periodic" reading turns
+    it back into the grid's own moments (the node at -L) to round-off, cross terms of the
+    corner node included."""
+    grid = VelocityGrid(dimension, 12, 3.0)
+    f = numpy.random.default_rng(dimension).random((4,) + grid.shape)
+    moments = FieldMoments(grid, 1.0, transport_axes=(0, 1))
+    raw = moments.raw(f)
+    flat = f.reshape(4, -1) * grid.cell_volume
+    actual = [numpy.broadcast_to(m, grid.shape).reshape(-1) for m in grid.mesh()]
+    halves = [numpy.where(m == -grid.half_width, 0.0, m) if a < 2 else m
+              for a, m in enumerate(actual)]
+    squared = sum(m * m for m in actual)
+    for node, v in (("halves", halves), ("periodic", actual)):
+        read = moments.central(raw, node)
+        scale = numpy.abs(flat).sum(axis=1) * grid.half_width ** 3
+        assert numpy.allclose(read["momentum"], flat @ numpy.stack(v, 1), rtol=0,
+                              atol=1e-14 * scale.max())
+        second = numpy.einsum("cn,in,jn->cij", flat, v, v)
+        for i in range(dimension):          # the diagonal holds the true v_i^2 in both
+            second[:, i, i] = flat @ (actual[i] * actual[i])
+        assert numpy.allclose(read["second"], second, rtol=0, atol=1e-14 * scale.max())
+        assert numpy.allclose(read["third"], flat @ numpy.stack([m * squared for m in v], 1),
+                              rtol=0, atol=1e-14 * scale.max())
+    assert numpy.allclose(moments.central(raw, "periodic")["momentum"][0],
+                          grid.momentum(f[0]), rtol=1e-13, atol=0)
+
+
+def test_the_default_transport_axis_is_v1_and_bad_axes_are_refused():
+    grid = VelocityGrid(2, 12, 3.0)
+    assert FieldMoments(grid, 1.0).transport_axes == (0,)
+    for axes in [(1, 0), (0, 0), (2,), ("x",), None, (True,)]:
+        with pytest.raises(ValueError, match="FieldMoments: parameter 'transport_axes'"):
+            FieldMoments(grid, 1.0, transport_axes=axes)

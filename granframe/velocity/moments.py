@@ -3,17 +3,18 @@ r"""The moment service: the moments of a batch of distributions in one pass on t
 For f of shape (cells, *grid.shape) (a space run's cells; a space-homogeneous run or a
 single distribution is a batch of one) the raw moments of each are one matrix product
 f (cells x N^d) times the basis (N^d x m) of 1, v_i, v_i v_j (i <= j), v_i |v|^2, |v|^4
-and the content of the node v_1 = -L times 1, v_j (j > 1) and |v|^2, weighted by the cell
-volume of the velocity grid;
+and the content of the node v_a = -L of each transport axis a (v_1 for a run along x)
+times 1, v_j (j != a) and |v|^2, weighted by the cell volume of the velocity grid;
 from them, with rho u = J,
 
 .. math:: P_{ij} = M_{ij} - \rho u_i u_j,\qquad T = \frac{\operatorname{tr} P}{d\,\rho},\qquad
           q_i = \tfrac12\bigl(M^{(3)}_i - 2 u_j M_{ij} - u_i \operatorname{tr} M
           + 2 \rho u_i |u|^2\bigr),
 
-the central moments of granframe's conventions. The node v_1 = -L, which the periodic
-grid shares between -L and +L, has one documented rule, with two readings of the same
-raw moments (the node's columns turn one into the other, :meth:`FieldMoments.central`):
+the central moments of granframe's conventions. The node v_a = -L of a transport axis,
+which the periodic grid shares between -L and +L, has one documented rule, with two
+readings of the same raw moments (the node's columns turn one into the other,
+:meth:`FieldMoments.central`; v_1 below stands for each transport axis's component):
 
 - ``"halves"``, the fields of a space run: the node counts as its two halves, v_1 = 0 in
   the odd powers of v_1 (momentum, P_1j for j != 1, q_i) and v_1^2 = L^2 in the even ones,
@@ -35,6 +36,7 @@ from __future__ import annotations
 
 import numpy
 
+from granframe import validators as check
 from granframe.backends import to_host
 
 #: the fields recorded for every cell after every step: name -> (components, dimensions)
@@ -43,6 +45,21 @@ FIELDS = {"density": ((), ()), "velocity": (("d",), ("axis",)), "temperature": (
 
 #: the totals over all cells recorded after every step
 TOTALS = ("mass", "kinetic_energy", "min_f", "negative_mass_fraction")
+
+
+def _checked_axes(axes, dimension: int) -> tuple:
+    """``axes`` as a tuple of distinct velocity axes in increasing order, refused by name
+    otherwise."""
+    try:
+        values = tuple(int(a) for a in axes)
+    except (TypeError, ValueError):
+        values = None
+    if (values is None or any(isinstance(a, bool) for a in axes)
+            or values != tuple(sorted(set(values))) or any(not 0 <= a < dimension for a in values)
+            or values != tuple(axes)):
+        check.reject("FieldMoments", "transport_axes", axes, "must be distinct velocity axes in "
+               f"increasing order, each in 0 .. {dimension - 1}")
+    return values
 
 
 class FieldMoments:
@@ -55,34 +72,46 @@ class FieldMoments:
         The cell width (the totals are sum_j int f dv dx).
     xp : module
         The array namespace of f; the basis and the node arrays are put there once.
+    transport_axes : tuple of int
+        The velocity components that carry f along the space axes, whose node -L the
+        "halves" reading counts as its two halves: (0,), v_1, for a run along x (and a
+        space-homogeneous one, which reads its moments "periodic").
     """
 
-    def __init__(self, grid, dx: float, xp=numpy):
+    def __init__(self, grid, dx: float, xp=numpy, transport_axes: tuple = (0,)):
         d = grid.dimension
         self.grid, self.dx, self.xp, self.d = grid, float(dx), xp, d
-        mesh = [m.reshape(-1) for m in numpy.meshgrid(*[grid.points()] * d, indexing="ij")]
-        squared = sum(m * m for m in mesh)
-        edge = mesh[0] == -grid.half_width            # the node -L: half at -L, half at +L
-        odd = numpy.where(edge, 0.0, mesh[0])
-        mesh = [odd] + mesh[1:]
+        self.transport_axes = axes = _checked_axes(transport_axes, d)
+        actual = [m.reshape(-1) for m in numpy.meshgrid(*[grid.points()] * d, indexing="ij")]
+        squared = sum(m * m for m in actual)
+        # the node -L of each transport axis: half at -L, half at +L
+        edges = [actual[a] == -grid.half_width for a in axes]
+        mesh = list(actual)
+        for a, edge in zip(axes, edges):
+            mesh[a] = numpy.where(edge, 0.0, actual[a])
         self.pairs = [(i, j) for i in range(d) for j in range(i, d)]
-        columns = ([numpy.ones_like(odd)] + mesh
-                   + [squared - sum(m * m for m in mesh[1:]) if (i, j) == (0, 0)
-                      else mesh[i] * mesh[j] for i, j in self.pairs]
-                   + [m * squared for m in mesh] + [squared * squared]
-                   + [edge.astype(float)] + [edge * m for m in mesh[1:]] + [edge * squared])
+        columns = ([numpy.ones_like(squared)] + mesh
+                   + [squared - sum(actual[k] * actual[k] for k in range(d) if k != i)
+                      if i == j and i in axes else mesh[i] * mesh[j] for i, j in self.pairs]
+                   + [m * squared for m in mesh] + [squared * squared])
+        for a, edge in zip(axes, edges):
+            columns += ([edge.astype(float)] + [edge * mesh[j] for j in range(d) if j != a]
+                        + [edge * squared])
+        columns += [ea * eb for k, ea in enumerate(edges) for eb in edges[k + 1:]]
         count = len(self.pairs)
         #: the columns of the raw moments: J_i, M_ij (pairs), M3_i = int v_i |v|^2 f, M4 =
-        #: int |v|^4 f, and the node -L's content times 1, v_2..v_d and |v|^2
+        #: int |v|^4 f, and for each transport axis a the content of its node -L times 1,
+        #: the other components v_j (j != a) and |v|^2, then that of the nodes -L of two
+        #: transport axes at once
+        start = 2 + 2 * d + count
         self.columns = {"momentum": slice(1, 1 + d), "second": slice(1 + d, 1 + d + count),
                         "third": slice(1 + d + count, 1 + 2 * d + count),
                         "fourth": 1 + 2 * d + count,
-                        "edge": slice(2 + 2 * d + count, 3 + 3 * d + count)}
+                        "edge": slice(start, len(columns))}
         self.basis = xp.asarray(numpy.stack(columns, axis=1) * grid.cell_volume)
-        #: the nodes v (d, N^d) with v_1 = -L at the node -L, and |v|^2 (N^d), for the
-        #: edge shares (where the collision operator sees that node)
-        self.nodes = xp.asarray(numpy.stack([numpy.where(edge, -grid.half_width, odd)]
-                                            + mesh[1:]))
+        #: the nodes v (d, N^d) with the nodes -L at -L, and |v|^2 (N^d), for the edge
+        #: shares (where the collision operator sees those nodes)
+        self.nodes = xp.asarray(numpy.stack(actual))
         self.squared = xp.asarray(squared)
         #: the 1-D nodes, for the discrete Maxwellians of the BGK penalisation
         #: (:func:`~granframe.velocity.equilibrium.discrete_maxwellians`)
@@ -108,9 +137,10 @@ class FieldMoments:
         rho = raw[:, 0]
         momentum = raw[:, 1:1 + d]
         if node == "periodic":
-            shift = -self.grid.half_width * raw[:, self.columns["edge"].start]
-            momentum = self.xp.concatenate([(momentum[:, 0] + shift)[:, None],
-                                            momentum[:, 1:]], axis=1)
+            start, axes = self.columns["edge"].start, self.transport_axes
+            momentum = self.xp.stack(
+                [momentum[:, i] - self.grid.half_width * raw[:, start + axes.index(i) * (d + 1)]
+                 if i in axes else momentum[:, i] for i in range(d)], axis=1)
         trace = raw[:, self._diagonal].sum(axis=1)
         with numpy.errstate(divide="ignore", invalid="ignore"):
             velocity = momentum / rho[:, None]
@@ -150,9 +180,11 @@ class FieldMoments:
         M_ij (cells, d, d), ``third`` M3_i (cells, d) and ``fourth`` M4 (cells,), from the
         raw moments ``raw`` (cells, m) on the host.
 
-        "periodic" takes the node at v_1 = -L: with E_a the node's content times
-        a = 1, v_j (j > 1), |v|^2, J_1 - L E_1, M_1j - L E_{v_j} (j > 1) and
-        M3_1 - L E_{|v|^2}; the even powers of v_1 are the same in both readings."""
+        "periodic" takes the nodes at v_a = -L of the transport axes a: with E^a_w the
+        content of the node -L of axis a times w = 1, v_j (j != a, read in halves), |v|^2,
+        and E^ab that of the nodes -L of two axes, J_a - L E^a_1,
+        M_aj - L E^a_{v_j} - L E^j_{v_a} + L^2 E^aj (the last two where j is a transport axis
+        too) and M3_a - L E^a_{|v|^2}; the even powers are the same in both readings."""
         d, columns, cells = self.d, self.columns, raw.shape[0]
         momentum = numpy.array(raw[:, columns["momentum"]], dtype=float)
         second = numpy.zeros((cells, d, d))
@@ -160,15 +192,25 @@ class FieldMoments:
             second[:, i, j] = second[:, j, i] = raw[:, columns["second"].start + k]
         third = numpy.array(raw[:, columns["third"]], dtype=float)
         if node == "periodic":
-            edge = raw[:, columns["edge"]]
-            L = self.grid.half_width
-            momentum[:, 0] -= L * edge[:, 0]
-            for j in range(1, d):
-                second[:, 0, j] -= L * edge[:, j]
-                second[:, j, 0] = second[:, 0, j]
-            third[:, 0] -= L * edge[:, -1]
+            self._periodic(raw[:, columns["edge"]], momentum, second, third)
         return {"density": raw[:, 0], "momentum": momentum, "second": second,
                 "third": third, "fourth": raw[:, columns["fourth"]]}
+
+    def _periodic(self, edge, momentum, second, third) -> None:
+        """The halves moments turned into the periodic ones in place, from the nodes'
+        columns ``edge`` (:meth:`central`)."""
+        d, axes, L = self.d, self.transport_axes, self.grid.half_width
+        for g, a in enumerate(axes):
+            block = edge[:, g * (d + 1):(g + 1) * (d + 1)]
+            momentum[:, a] -= L * block[:, 0]
+            for k, j in enumerate(j for j in range(d) if j != a):
+                second[:, a, j] -= L * block[:, 1 + k]
+                second[:, j, a] = second[:, a, j]
+            third[:, a] -= L * block[:, -1]
+        cross = len(axes) * (d + 1)
+        for k, (a, b) in enumerate((a, b) for i, a in enumerate(axes) for b in axes[i + 1:]):
+            second[:, a, b] += L * L * edge[:, cross + k]
+            second[:, b, a] = second[:, a, b]
 
     @staticmethod
     def fields_of(moments: dict) -> tuple:

@@ -246,7 +246,8 @@ class Interval:
             self.domain.neighbours = Halo.of(self.communicator, self.ranges,
                                              self.left.periodic)
         self.transport = Transport(self.domain, self.reconstruction, self.left, self.right)
-        self.fields = FieldMoments(grid, self.domain.dx, xp)
+        self.fields = FieldMoments(grid, self.domain.dx, xp,
+                                   transport_axes=(self.transport.axis,))
 
     def initial(self, check: bool):
         """f0 as cell averages (cells, *grid.shape), checked and projected cell by cell,
