@@ -22,6 +22,7 @@ from granframe.equations.homogeneous import HomogeneousBoltzmann
 from granframe.equations.rescaled import RescaledBoltzmann
 from granframe.memory import check_run_memory
 from granframe.registry import default_registries
+from granframe.run.description import RunDescription
 from granframe.run.problems.parts import build_operator, check_step
 from granframe.run.problems.spaces import (LEVEL_RECORDS, WALL_RECORDS, Interval, Point,
                                            space_layout)
@@ -51,7 +52,7 @@ class SpaceProblem(Problem):
 
     def __init__(self, description, outline: bool = False, communicator=None,
                  partition_cells=None):
-        if not hasattr(description, "space"):
+        if not isinstance(description, RunDescription):
             reject("SpaceProblem", "description", description, "must be a RunDescription",
                    error=TypeError)
         self.description = d = description
@@ -90,7 +91,7 @@ class SpaceProblem(Problem):
     @property
     def reduction_seconds(self) -> float:
         """Wall seconds of the reductions of the records over the processes."""
-        return getattr(self.space, "reduction_seconds", 0.0)
+        return self.space.reduction_seconds
 
     def _rescaled(self, outline: bool):
         """The :class:`~granframe.equations.rescaled.RescaledBoltzmann` of the owned cells of

@@ -77,6 +77,8 @@ class Point:
     owned_cells = None
     ranges = ((0, 1),)
     domain = transport = fields = left = right = reconstruction = cell_layout = None
+    #: no reductions over processes: one process
+    reduction_seconds = 0.0
 
     def __init__(self, description, outline: bool = False, communicator=None,
                  partition_cells=None):
