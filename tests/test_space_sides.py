@@ -194,3 +194,19 @@ def test_the_default_transport_axis_is_v1_and_bad_axes_are_refused():
     for axes in [(1, 0), (0, 0), (2,), ("x",), None, (True,)]:
         with pytest.raises(ValueError, match="FieldMoments: parameter 'transport_axes'"):
             FieldMoments(grid, 1.0, transport_axes=axes)
+
+
+def test_the_shapes_of_space_have_one_interface():
+    """What SpaceProblem reads of its shape, every shape has: a further axis is a further
+    shape with these members."""
+    members = {"dimension", "collisions", "owned", "owned_cells", "ranges", "communicator",
+               "domain", "transport", "fields", "left", "right", "reconstruction",
+               "cell_layout", "reduction_seconds", "build", "initial", "integrator",
+               "layout", "record_names", "state", "snapshot", "record", "monitors", "report",
+               "progress_text"}
+    point = Point(_description(space=False), outline=True)
+    interval = Interval(_description(space=True), outline=True)
+    for shape in (point, interval):
+        missing = {name for name in members if not hasattr(shape, name)}
+        assert not missing, (type(shape).__name__, missing)
+    assert (point.dimension, interval.dimension) == (0, 1)
