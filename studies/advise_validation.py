@@ -88,20 +88,20 @@ def _timing(description, cache):
     op = description.operator
     key = (description.grid, repr(op.params), description.rescaled, description.integrator.name)
     if key not in cache:    # timed as advise times its proposal
-        simulation = Simulation(description)
-        limit = step_limit(simulation.integrator, simulation.equation, simulation.f0)
-        cache[key] = (evaluation_seconds(simulation),
+        problem = Simulation(description).problem
+        limit = step_limit(problem.integrator, problem.equation, problem.f0)
+        cache[key] = (evaluation_seconds(problem),
                       math.inf if limit is None else limit.limit)
     return cache[key]
 
 
 def _run(description):
     """March the description; returns (times t, temperatures T, final f, grid), physical t, T."""
-    simulation = Simulation(description)
-    integrator = simulation.integrator
-    equation, backend = simulation.equation, simulation.backend
-    grid, xp = simulation.grid, backend.xp
-    f = backend.asarray(simulation.f0)
+    problem = Simulation(description).problem
+    integrator = problem.integrator
+    equation, backend = problem.equation, problem.backend
+    grid, xp = problem.grid, backend.xp
+    f = backend.asarray(problem.f0)
     dt, steps = description.time_step, round(description.final_time / description.time_step)
     temperatures = [grid.temperature(f, xp)]
     for i in range(steps):
@@ -155,7 +155,7 @@ def _rescaled_final(scene, grid):
     """The rescaled time s of the scene's final time on ``grid`` (its a_0)."""
     probe = _description(scene, grid, 16, 16 if scene.dimension == 2 else 11, "float64", "rk4",
                          1.0, 1.0, True)
-    law = Simulation(probe).equation.rescaling
+    law = Simulation(probe).problem.equation.rescaling
     return float(law.rescaled_time(scene.final_time)) * 1.0001
 
 

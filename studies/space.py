@@ -133,7 +133,7 @@ def runs(quick: bool = False) -> dict:
 
 def _operator(ds):
     """The run's collision operator, rebuilt from its stored description."""
-    return Simulation(_description(ds)).operator
+    return Simulation(_description(ds)).problem.operator
 
 
 def report(stores: dict, out) -> dict:
@@ -263,7 +263,7 @@ def convergence(out, cells=SOD_CELLS, knudsen=SOD_KNUDSEN, balance=BALANCE_STEPS
         seconds = time.perf_counter() - started
         balance_rows.append({"cells": n, "dt": description.time_step,
                              "seconds": round(seconds, 1),
-                             **energy_balance(ds, simulation.operator,
+                             **energy_balance(ds, simulation.problem.operator,
                                               BALANCE["knudsen"])})
         print(balance_rows[-1], flush=True)
     if sod_rows:

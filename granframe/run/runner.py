@@ -565,8 +565,9 @@ class Simulation:
 
     def __getattr__(self, name):
         """The problem's public members, read through the simulation for convenience
-        (``simulation.f0``, ``simulation.domain`` in a notebook or a test); the runner
-        itself reads the problem through the :class:`granframe.abc.Problem` contract only."""
+        (``simulation.f0``, ``simulation.domain`` in a notebook or a test); granframe's own
+        code reads ``simulation.problem``, the runner through the
+        :class:`granframe.abc.Problem` contract only."""
         if name.startswith("_") or "problem" not in self.__dict__:
             raise AttributeError(name)
         return getattr(self.__dict__["problem"], name)
@@ -576,10 +577,10 @@ class Simulation:
         registries = default_registries()
         plugins = {}
         for field, family in COMPONENT_FAMILIES.items():
-            name = (self.backend.name if field == "backend"
+            name = (self.problem.backend.name if field == "backend"
                     else getattr(self.description, field).name)
             plugins[field] = f"{name} ({registries.get(family, name).source})"
-        return {"granframe": __version__, "backend_config": repr(self.backend), **plugins,
+        return {"granframe": __version__, "backend_config": repr(self.problem.backend), **plugins,
                 "python": sys.version.split()[0], "numpy": numpy.__version__,
                 "zarr": zarr.__version__, "host": platform.node(), "cpus": available_cpus(),
                 **self._processes()}
@@ -602,7 +603,7 @@ class Simulation:
         """
         d = self.description
         interval = d.output.snapshot_interval
-        if not self.integrator.adaptive:
+        if not self.problem.integrator.adaptive:
             full, last = fixed_steps(d.final_time, d.time_step)
             total = full + (1 if last else 0)
             every = total if interval is None else round(interval / d.time_step)

@@ -273,27 +273,27 @@ class Advice:
         return "\n".join(lines)
 
 
-def evaluation_seconds(simulation, repeats: int = 7) -> float:
-    """Median seconds of one evaluation of a simulation's right-hand side on f0 (the
+def evaluation_seconds(problem, repeats: int = 7) -> float:
+    """Median seconds of one evaluation of a problem's right-hand side on f0 (the
     collision operator, and the drift of a rescaled run), after two warm-up evaluations,
     timed by the backend (:func:`granframe.tools.bench.median_time`)."""
     from granframe.tools.bench import median_time
 
-    f = simulation.backend.asarray(simulation.f0)
+    f = problem.backend.asarray(problem.f0)
 
     def evaluate():
-        simulation.equation.nonlinear(0.0, f)
+        problem.equation.nonlinear(0.0, f)
 
     for _ in range(2):
         evaluate()
-    return median_time(evaluate, repeats, simulation.backend)
+    return median_time(evaluate, repeats, problem.backend)
 
 
 def _time_evaluation(description) -> float:
     """:func:`evaluation_seconds` of a description."""
     from granframe.run.runner import Simulation
 
-    return evaluation_seconds(Simulation(description))
+    return evaluation_seconds(Simulation(description).problem)
 
 
 def advise(scene: Scene, *, backend: str = "auto", closed_forms: bool = True) -> Advice:

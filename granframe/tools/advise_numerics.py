@@ -405,17 +405,17 @@ def choose_time_step(description, probe, final, horizon, budget):
     """
     from granframe.run.runner import Simulation
 
-    simulation = Simulation(description)
-    equation, backend = simulation.equation, simulation.backend
-    grid, xp = simulation.grid, backend.xp
-    f0 = backend.asarray(simulation.f0)
+    problem = Simulation(description).problem
+    equation, backend = problem.equation, problem.backend
+    grid, xp = problem.grid, backend.xp
+    f0 = backend.asarray(problem.f0)
     schemes = ["rk4"]
     if description.heat_bath > 0 and not description.rescaled:
         schemes.append("if_rk4")
     best = None
     for name in schemes:
         integrator = default_registries().create("time_integrators", name)
-        limit = step_limit(integrator, equation, simulation.f0)
+        limit = step_limit(integrator, equation, problem.f0)
         dt = min(0.9 * limit.limit if limit is not None else math.inf, final)
         if best is None or dt > best[0] * 1.01:
             best = (dt, name, integrator)

@@ -142,7 +142,8 @@ def _run_one(description, out, args) -> int:
     try:
         simulation = Simulation(description, partition=args.partition)
         # a space run keeps no projection record (None): nothing to note
-        note = projection_note(simulation.projection) if simulation.projection else None
+        projection = simulation.problem.projection
+        note = projection_note(projection) if projection else None
         if note:
             print(f"granframe: {note}", file=sys.stderr)
         hint = cooling_hint(description)

@@ -90,8 +90,13 @@ class SpaceProblem(Problem):
 
     @property
     def reduction_seconds(self) -> float:
-        """Wall seconds of the reductions of the records over the processes."""
+        """Wall seconds of the reductions of the records over the processes (settable: a
+        timing resets it after the warm-up steps)."""
         return self.space.reduction_seconds
+
+    @reduction_seconds.setter
+    def reduction_seconds(self, seconds: float) -> None:
+        self.space.reduction_seconds = float(seconds)
 
     def _rescaled(self, outline: bool):
         """The :class:`~granframe.equations.rescaled.RescaledBoltzmann` of the owned cells of
