@@ -29,10 +29,11 @@ class Side:
 
     A :class:`Boundary` sees its side in its own frame: the wall at the lower end of axis
     0 with the domain beyond it, the velocities that leave it into the domain those with
-    v_1 > 0. A side equals its name (``Side(0, 1) == "right"``). :meth:`to_wall` maps f from the lab onto that frame, exactly on the velocity
-    nodes: the normal velocity component v_{a+1} of axis a is brought to the first place
-    (the velocity axes 1 and a + 1 exchanged, a symmetry of the cubic grid) and, at the upper
-    end, reversed by :func:`reflect_nodes` (v_1 -> -v_1, the permutation i -> (N - i) mod N);
+    v_1 > 0. A side equals its name (``Side(0, 1) == "right"``). :meth:`to_wall` maps f
+    from the lab onto that frame, exactly on the velocity nodes: the normal velocity
+    component v_{a+1} of axis a is brought to the first place (the velocity axes 1 and
+    a + 1 exchanged, a symmetry of the cubic grid) and, at the upper end, reversed by
+    :func:`reflect_nodes` (v_1 -> -v_1, the permutation i -> (N - i) mod N);
     :meth:`from_wall` is its inverse. Along x at the lower end both are the identity.
     """
 
@@ -184,10 +185,10 @@ class Boundary(abc.ABC):
     :class:`Side` (an axis and an end; its :attr:`~Side.name` "left" (x = 0) or "right"
     (x = ell) along x), or its name. A wall that moves along its axis with lab velocity U
     has the normal velocity U times :attr:`Side.normal_sign` in its own frame: +U on the
-    left and -U on the right (the reflection reverses v_1). Both run inside a time step, on the device with a GPU backend: they
-    must not copy device arrays to the host (no ``float()`` of an array, no branching on
-    array values) and should keep their constant arrays per grid and array namespace
-    rather than copy them from the host on every call.
+    left and -U on the right (the reflection reverses v_1). Both run inside a time step,
+    on the device with a GPU backend: they must not copy device arrays to the host (no
+    ``float()`` of an array, no branching on array values) and should keep their constant
+    arrays per grid and array namespace rather than copy them from the host on every call.
     """
 
     #: the two ends are one (a periodic interval): both must be periodic, and the core

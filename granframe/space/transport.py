@@ -79,12 +79,12 @@ def wall_weights(grid, axis: int = 0):
 
     The node -L counts as in the recorded fields (:mod:`granframe.velocity.moments`): the
     normal component v_{axis+1} = 0 there in the momentum (its content moves half each way
-    and carries no net normal velocity) and L^2 in the energy. With these weights the fluxes through the faces are those of
-    the cells' mass, momentum and energy, so the change of the totals over a step equals
-    what the walls let in, to round-off, wherever nothing else acts. Through a wall at
-    rest, sum_v v_1 F Delta v = int v_1^2 f dv is the normal momentum flux (the pressure
-    P_11 + rho u_1^2 on the face) and sum_v v_t F Delta v = int v_1 v_t f dv the
-    tangential one (P_1t + rho u_1 u_t).
+    and carries no net normal velocity) and L^2 in the energy. With these weights the
+    fluxes through the faces are those of the cells' mass, momentum and energy, so the
+    change of the totals over a step equals what the walls let in, to round-off, wherever
+    nothing else acts. Through a wall at rest, sum_v v_1 F Delta v = int v_1^2 f dv is the
+    normal momentum flux (the pressure P_11 + rho u_1^2 on the face) and
+    sum_v v_t F Delta v = int v_1 v_t f dv the tangential one (P_1t + rho u_1 u_t).
     """
     mesh = [numpy.broadcast_to(m, grid.shape) for m in grid.mesh()]
     mesh[axis] = numpy.where(mesh[axis] == -grid.half_width, 0.0, mesh[axis])

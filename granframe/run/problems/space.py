@@ -100,10 +100,10 @@ class SpaceProblem(Problem):
 
     def _rescaled(self, outline: bool):
         """The :class:`~granframe.equations.rescaled.RescaledBoltzmann` of the owned cells of
-        f0 (u = 0 along the space axes); with ``outline`` its a_0 from the closed-form dissipation of
-        every cell
-        (:meth:`~granframe.equations.conservative.ConservativeCorrection.dissipation` of the
-        :class:`~granframe.stepping.stability.OperatorOutline`)."""
+        f0 (u = 0 along the space axes); with ``outline`` its a_0 from the closed-form
+        dissipation of every cell
+        (:meth:`~granframe.equations.conservative.ConservativeCorrection.dissipation` of
+        the :class:`~granframe.stepping.stability.OperatorOutline`)."""
         d, xp = self.description, self.backend.xp
         cells = self.f0[self.owned]
         dissipation = None
