@@ -217,21 +217,14 @@ def _left_of_contact(s, left, star, gamma):
 
 def _right_of_contact(s, right, star, gamma):
     """rho, u, p of :func:`euler_riemann` at S = (x - x0)/t as if right of the contact: the
-    right state, the right fan (if the right wave is one) or the star state."""
+    mirror image (x -> -x, u -> -u) of :func:`_left_of_contact` for the mirrored problem,
+    whose left state is the right one with u reversed."""
     rr, ur, pr = right
-    g4, g5, g7 = 2.0 / (gamma - 1.0), 2.0 / (gamma + 1.0), 0.5 * (gamma - 1.0)
-    g3 = 2.0 * gamma / (gamma - 1.0)
-    ar = math.sqrt(gamma * pr / rr)
-    speeds = star["speeds"]
-    if star["right_wave"] == "shock":
-        outside_r, fan_r = s > speeds[-1], numpy.zeros(s.shape, dtype=bool)
-    else:
-        outside_r, fan_r = s > speeds[-1], (s <= speeds[-1]) & (s > speeds[-2])
-    cr = numpy.clip(g5 * (ar - g7 * (ur - s)), 0.0, None) / ar
-    rho_r = numpy.where(outside_r, rr, numpy.where(fan_r, rr * cr ** g4, star["rho_right"]))
-    u_r = numpy.where(outside_r, ur, numpy.where(fan_r, g5 * (-ar + g7 * ur + s), star["u"]))
-    p_r = numpy.where(outside_r, pr, numpy.where(fan_r, pr * cr ** g3, star["p"]))
-    return rho_r, u_r, p_r
+    mirror = {"rho_left": star["rho_right"], "u": -star["u"], "p": star["p"],
+              "left_wave": star["right_wave"],
+              "speeds": [-speed for speed in reversed(star["speeds"])]}
+    rho_r, u_r, p_r = _left_of_contact(-s, (rr, -ur, pr), mirror, gamma)
+    return rho_r, -u_r, p_r
 
 
 def euler_riemann_cell_averages(left, right, gamma: float, edges, t: float, x0: float = 0.5,
