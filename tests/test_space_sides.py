@@ -13,10 +13,11 @@ from granframe.parallel import SerialCommunicator
 from granframe.run.description import RunDescription
 from granframe.run.problems import Interval, Point, SpaceProblem, make_problem
 from granframe.space.boundaries import Diffuse, Specular, Vibrating
-from granframe.testing.conformance import WALL_SIDES
 from granframe.space.transport import upwind_speeds, wall_weights
+from granframe.testing.conformance import WALL_SIDES
 from granframe.velocity.grid import VelocityGrid
 from granframe.velocity.moments import FieldMoments
+from test_parallel import SPACE
 
 SIDES = [Side(axis, end) for axis in range(3) for end in (0, 1)]
 
@@ -94,27 +95,8 @@ def test_a_wall_across_y_lets_no_mass_through_along_v2(wall, side):
 
 
 def _description(space: bool) -> RunDescription:
-    text = """
-final_time = 0.02
-time_step = 0.01
-integrator = "rk4"
-[grid]
-dimension = 2
-n_modes = 16
-support_radius = 3.2
-[kernel]
-name = "maxwell"
-[restitution]
-name = "constant"
-value = 0.9
-[initial]
-name = "maxwellian"
-[operator]
-name = "direct_spectral"
-"""
-    if space:
-        text = text.replace("[grid]", "[space]\ncells = 8\nlength = 1.0\n[grid]")
-    return RunDescription.from_toml(text)
+    """test_parallel's space run of 12 cells, or the same without its space section."""
+    return RunDescription.from_toml(SPACE if space else SPACE.split("[space]")[0])
 
 
 def test_a_space_homogeneous_run_is_the_problem_of_zero_space_dimensions():
@@ -128,7 +110,7 @@ def test_a_space_homogeneous_run_is_the_problem_of_zero_space_dimensions():
     layout = problem.layout()
     assert layout.snapshot_dimensions == ("v1", "v2")
     state = problem.state(problem.f0)
-    assert numpy.array_equal(problem.snapshot(problem.step(0.0, state, 0.01)).shape,
+    assert numpy.array_equal(problem.snapshot(problem.step(0.0, state, 0.002)).shape,
                              problem.f0.shape)
     assert set(problem.record(state)) >= {"mass", "temperature", "kurtosis", "heat_flux"}
 
@@ -140,7 +122,7 @@ def test_a_run_with_a_space_section_is_the_same_problem_on_an_interval():
     assert [str(side) for side in problem.domain.sides] == ["left", "right"]
     assert problem.transport.axis == 0 and problem.fields.transport_axes == (0,)
     assert problem.layout().snapshot_dimensions == ("x", "v1", "v2")
-    assert problem.owned == slice(0, 8) and tuple(problem.ranges) == ((0, 8),)
+    assert problem.owned == slice(0, 12) and tuple(problem.ranges) == ((0, 12),)
 
 
 def test_a_side_equals_its_name_for_walls_written_against_names():
