@@ -32,13 +32,15 @@ def test_a_side_is_named_as_the_walls_of_a_description(side):
 
 @pytest.mark.parametrize("name", ["up", "", None, 3])
 def test_an_unknown_side_is_refused_by_name(name):
-    with pytest.raises(ValueError, match="side = .* must be one of 'left', 'right', 'bottom'"):
+    with pytest.raises(ValueError, match="^Side: parameter 'side' = .* is invalid; must be one "
+                                         "of 'left', 'right', 'bottom'"):
         Side.named(name)
 
 
 @pytest.mark.parametrize("axis, end", [(3, 0), (-1, 0), (0, 2), (True, 0), (0, False)])
 def test_a_side_out_of_range_is_refused(axis, end):
-    with pytest.raises(ValueError, match="Side: (axis|end) = "):
+    with pytest.raises(ValueError, match="^Side: parameter '(axis|end)' = .* is invalid; must "
+                                         "be 0 "):
         Side(axis, end)
 
 

@@ -15,6 +15,8 @@ from typing import ClassVar
 import attrs
 import numpy
 
+from granframe import validators as check
+
 #: the names of the two ends of each space axis, lower then upper: x, y, z
 SIDE_NAMES = (("left", "right"), ("bottom", "top"), ("back", "front"))
 
@@ -43,13 +45,13 @@ class Side:
     @axis.validator
     def _check_axis(self, attribute, value):
         if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 3:
-            raise ValueError(f"Side: axis = {value!r} must be 0 (x), 1 (y) or 2 (z)")
+            check.reject("Side", "axis", value, "must be 0 (x), 1 (y) or 2 (z)")
 
     @end.validator
     def _check_end(self, attribute, value):
         if value not in (0, 1) or isinstance(value, bool):
-            raise ValueError(f"Side: end = {value!r} must be 0 (the lower end) or 1 (the "
-                             "upper end)")
+            check.reject("Side", "end", value, "must be 0 (the lower end) or 1 (the upper "
+                         "end)")
 
     @classmethod
     def named(cls, name) -> "Side":
@@ -60,7 +62,7 @@ class Side:
             if name in ends:
                 return cls(axis, ends.index(name))
         known = ", ".join(repr(n) for ends in SIDE_NAMES for n in ends)
-        raise ValueError(f"side = {name!r} must be one of {known}")
+        check.reject("Side", "side", name, f"must be one of {known}")
 
     @property
     def name(self) -> str:
