@@ -13,7 +13,8 @@ from granframe.run.description import RunDescription
 from granframe.run.problems import make_problem
 from granframe.run.runner import Simulation, StorageObserver
 from granframe.run.storage import RunStore
-from granframe.space.hierarchy import CoolingRate, choose_levels, relaxation_rate
+from granframe.parallel import SerialCommunicator
+from granframe.space.hierarchy import CoolingRate, StepRates, choose_levels, relaxation_rate
 from granframe.theory.cooling import relative_speed_average as speed_average
 from granframe.velocity.grid import VelocityGrid
 
@@ -100,6 +101,47 @@ def test_cooled_temperature_solves_the_temperature_law(kernel, law, heat):
     assert got == pytest.approx(solution.y[0, -1], rel=1e-7)
 
 
+def test_cooled_takes_its_substeps_from_the_rate_it_is_given():
+    """With the batch's own fastest rate given, cooled is the one that reads it (bitwise);
+    with the rate of a state half as fast (fewer substeps) it stays within 1e-6."""
+    grid, kernel, law, _ = _parts(3, 16, 5.0, kernel="hard_spheres")
+    cooling = CoolingRate(kernel, law, grid)
+    rho, t0, energy = numpy.array([1.2, 0.4]), numpy.array([1.5, 0.3]), numpy.ones(2)
+    eps, dt, tau = 0.05, 0.3, 0.4
+    rate = float(cooling.rates(rho, t0, energy, eps, tau).max())
+    own = cooling.cooled(rho, t0, energy, dt, eps, tau)
+    numpy.testing.assert_array_equal(cooling.cooled(rho, t0, energy, dt, eps, tau, rate=rate), own)
+    assert CoolingRate.substeps(rate, dt) > CoolingRate.substeps(rate / 2, dt) > 1
+    numpy.testing.assert_allclose(cooling.cooled(rho, t0, energy, dt, eps, tau, rate=rate / 2),
+                                  own, rtol=1e-6)
+
+
+class _TwoProcesses:
+    """A communicator whose other process holds ``other``."""
+
+    def __init__(self, other):
+        self.other = numpy.asarray(other, dtype=float)
+
+    def allgather(self, vector):
+        return numpy.stack([vector, self.other])
+
+
+def test_step_rates_are_the_fastest_over_the_valid_cells_of_every_process():
+    grid, kernel, law, _ = _parts(2, 16, 5.0, kernel="maxwell")
+    rates = StepRates(CoolingRate(kernel, law, grid), 0.1, 0.5)
+    assert rates.fastest(0.5) is None
+    rho = numpy.array([1.0, 2.0, 3.0, 0.0])
+    temperature = numpy.array([1.0, 0.5, numpy.nan, 1.0])       # the last two do not count
+    velocity = numpy.zeros((4, 2))
+    rates.follow(rho, velocity, temperature, SerialCommunicator())
+    zeta = 2.0 * (1 - 0.8 ** 2) / 4 / 0.1          # maxwell molecules: rho (1 - e^2)/4
+    assert rates.fastest(0.0) == pytest.approx(zeta, rel=1e-12)
+    assert rates.fastest(0.5) == pytest.approx(zeta + 2 * 0.5 / 0.5, rel=1e-12)
+    rates.follow(rho, velocity, temperature, _TwoProcesses([7.0, 1.0]))
+    assert rates.fastest(0.0) == 7.0
+    assert rates.fastest(0.5) == pytest.approx(zeta + 2.0, rel=1e-12)
+
+
 # -- the relaxation rates of the operator -------------------------------------------------------
 
 @pytest.mark.parametrize("dimension,n", [(2, 32), (3, 20)])
@@ -165,6 +207,11 @@ SOD = {"title": "Sod", "grid": {"dimension": 2, "n_modes": 24, "support_radius":
        "knudsen": 1e-3, "conservative": True, "time_step": 0.004, "final_time": 0.06,
        "output": {"snapshot_interval": 0.02},
        "space": {"cells": 30, "left": "specular", "right": "specular"}}
+
+
+#: an inelastic gas under a heat bath whose hierarchy puts most cells at the euler level
+HEATED = [("restitution.value", 0.9), ("heat_bath", 10.0),
+          ("space.hierarchy", {"realizability": [0.05, 0.1], "distance": [0.1, 0.2]})]
 
 
 def _description(changes=()):
@@ -253,12 +300,16 @@ def test_a_sheared_cooling_gas_stays_at_the_full_level_under_the_default_hierarc
     assert (looser.level.values[-1] == 1).any()
 
 
-def test_an_interrupted_hybrid_run_resumes_bitwise(tmp_path, monkeypatch):
+@pytest.mark.parametrize("heating", [
+    [("space.hierarchy", {})],
+    HEATED],          # the euler level in use, its substeps from 6 to 8 around the resume
+    ids=["elastic", "inelastic_heated"])
+def test_an_interrupted_hybrid_run_resumes_bitwise(tmp_path, monkeypatch, heating):
     """Ctrl-C after the third commit, then resume: f, the fields, the levels and the
     indicators equal the uninterrupted run's bitwise (the levels, the indicators of the last
-    step and the step count are taken up from the store)."""
-    d = _description([("final_time", 0.12), ("output.snapshot_interval", 0.008),
-                      ("space.hierarchy", {})])
+    step and the step count are taken up from the store; inelastic and heated, the fields
+    that set the substeps of the fluid levels' temperature law too)."""
+    d = _description([("final_time", 0.12), ("output.snapshot_interval", 0.008)] + heating)
     Simulation(d).run(tmp_path / "reference.zarr", progress=False)
     reference = granframe.open_run(tmp_path / "reference.zarr")
     commit, commits = StorageObserver.at_output, []
@@ -284,6 +335,27 @@ def test_an_interrupted_hybrid_run_resumes_bitwise(tmp_path, monkeypatch):
                  "reach"):
         numpy.testing.assert_array_equal(resumed[name].values, reference[name].values,
                                          err_msg=name)
+
+
+def test_a_resumed_hierarchy_takes_up_the_rates_of_its_last_record(tmp_path):
+    """The fluid levels' substeps follow the fastest rates of the temperature law over the
+    cells of the last record (StepRates): a resume takes them up from the store's fields
+    of the step it resumes from, the same numbers the uninterrupted run had."""
+    d = _description(HEATED + [("final_time", 0.024), ("output.snapshot_interval", 0.008)])
+    Simulation(d).run(tmp_path / "run.zarr", progress=False)
+    store, data = RunStore.open(tmp_path / "run.zarr"), granframe.open_run(tmp_path / "run.zarr")
+    problem = make_problem(d)
+    step = int(data.step.values[-3])
+    problem.resume(store, step)
+    rates = problem.hierarchy.context.rates
+    fields = [data[name].values[-3] for name in ("density", "velocity", "temperature")]
+    expected = StepRates(rates.cooling, 1e-3, 10.0)
+    expected.follow(*fields, SerialCommunicator())
+    assert rates.values == expected.values and len(expected.values) == 2
+    rho, t = fields[0], fields[2]
+    heated = numpy.max(rates.cooling(rho, t, 1.0) / 1e-3 + 20.0 / t)   # maxwell: no E^gamma
+    assert rates.values[10.0] == pytest.approx(heated, rel=1e-14)
+    assert CoolingRate.substeps(rates.values[10.0], d.time_step) > 1
 
 
 def test_the_hierarchy_builds_every_registered_level_through_the_registry():

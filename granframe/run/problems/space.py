@@ -155,14 +155,20 @@ class SpaceProblem(Problem):
 
     def resume(self, store, step: int) -> None:
         """Take up the levels of the hierarchy where the store's run left them: the level of
-        every owned cell in ``step`` (its ``level`` record), and the step count that sets
-        when the levels are chosen next, so that a resumed run is the uninterrupted one."""
+        every owned cell in ``step`` (its ``level`` record), the step count that sets when
+        the levels are chosen next, and the fields of the owned cells that the substeps of
+        the fluid levels follow (:meth:`HybridCollisions.follow
+        <granframe.space.hierarchy.HybridCollisions.follow>`), so that a resumed run is the
+        uninterrupted one."""
         if self.hierarchy is None:
             return
         records = int(store.progress["records"])
         steps = numpy.asarray(store.group["step"][:records])
         row = int(numpy.flatnonzero(steps == step)[-1])
         self.hierarchy.take_up(step, *(store.group[name][row] for name in LEVEL_RECORDS))
+        owned = self.hierarchy.owned
+        self.hierarchy.follow(*(store.group[name][row][owned]
+                                for name in ("density", "velocity", "temperature")))
 
     def state(self, f_host):
         """The stepped state from f on the host: every cell (f0) or the owned ones."""

@@ -335,7 +335,9 @@ class Interval:
         (:meth:`FieldMoments.packed`) and one device->host transfer, then one reduction over
         the processes (:meth:`~granframe.abc.Communicator.allgather` of the partial totals,
         combined in rank order by :meth:`FieldMoments.combine`, the same in every
-        process)."""
+        process). The hierarchy follows the fields it records
+        (:meth:`~granframe.space.hierarchy.HybridCollisions.follow`: the substeps of its
+        fluid levels in the next step, from numbers on the host)."""
         cells = self.domain.to_cells(state)
         extra = self.transport.take_wall_totals().reshape(-1)
         carried = None if hierarchy is None else hierarchy.pending()
@@ -354,6 +356,7 @@ class Interval:
         record["wall_mass"], record["wall_energy"] = extra[:, 0], extra[:, -1]
         record["wall_momentum"] = extra[:, 1:-1]
         if hierarchy is not None:
+            hierarchy.follow(record["density"], record["velocity"], record["temperature"])
             record.update(hierarchy.records())
         return record
 

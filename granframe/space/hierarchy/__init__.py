@@ -24,7 +24,9 @@ The fluid levels cool their equilibrium at the granular cooling rate of the run'
 and restitution law (:class:`CoolingRate`), the ``euler`` level also heats it at 2 tau per
 unit time under a heat bath (the relaxation levels get the heat bath from the run's
 integrator); mass and momentum are kept to round-off, the energy to the cooling the
-formula gives.
+formula gives. Where that formula has no closed form (a heat bath, a restitution law that
+depends on the impact speed) it is integrated by substeps whose number follows the fastest
+rate over the cells of the last record (:class:`StepRates`), numbers already on the host.
 
 Which level a cell takes is decided every ``interval`` steps from two indicators per cell
 (:class:`HybridCollisions`, :func:`choose_levels`):
@@ -66,7 +68,8 @@ from granframe.space.hierarchy.indicators import (CellIndicators, equilibrium_di
                                                   realizability)
 from granframe.space.hierarchy.levels import (BoltzmannLevel, EllipsoidalLevel, EulerLevel,
                                               FluidParts, RelaxationLevel)
-from granframe.space.hierarchy.rates import CoolingRate, relaxation_rate, scaled_rates
+from granframe.space.hierarchy.rates import (CoolingRate, StepRates, relaxation_rate,
+                                             scaled_rates)
 from granframe.space.hierarchy.relaxation import (EllipsoidalEquation, RelaxationEquation,
                                                   discrete_gaussians)
 
@@ -74,4 +77,4 @@ __all__ = ["BoltzmannLevel", "CellIndicators", "CoolingRate", "EllipsoidalEquati
            "EllipsoidalLevel", "EulerLevel", "FluidParts", "HierarchyContext",
            "HybridCollisions", "RelaxationEquation", "RelaxationLevel", "choose_levels",
            "discrete_gaussians", "equilibrium_distance", "realizability", "relaxation_rate",
-           "scaled_rates", "spread_levels"]
+           "StepRates", "scaled_rates", "spread_levels"]

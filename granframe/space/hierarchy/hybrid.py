@@ -14,14 +14,15 @@ import numpy
 from granframe.backends import to_host
 from granframe.space.hierarchy.choice import choose_levels
 from granframe.space.hierarchy.indicators import CellIndicators
-from granframe.space.hierarchy.rates import relaxation_rate
+from granframe.space.hierarchy.rates import CoolingRate, StepRates, relaxation_rate
 
 
 @attrs.define(slots=False)
 class HierarchyContext:
     """What a :class:`~granframe.abc.CollisionModel` factory receives: the run's
     ``equation`` (:class:`~granframe.equations.homogeneous.HomogeneousBoltzmann`), its time
-    ``integrator`` and ``temperature``, the mass-weighted mean temperature of f0."""
+    ``integrator`` and ``temperature``, the mass-weighted mean temperature of f0; and the
+    hierarchy's :attr:`rates`."""
 
     equation: object
     integrator: object
@@ -34,6 +35,16 @@ class HierarchyContext:
         factor = (kernel.energy_factor(0.5 * d * self.temperature)
                   if kernel.energy_exponent else 1.0)
         return rate / (self.temperature ** (kernel.speed_exponent / 2) * factor)
+
+    @functools.cached_property
+    def rates(self) -> StepRates:
+        """The fastest rates of the temperature law over the cells at the start of the step
+        (:class:`~granframe.space.hierarchy.rates.StepRates`), one for all levels, which
+        :meth:`HybridCollisions.follow` keeps up to date."""
+        equation = self.equation
+        operator = equation.operator
+        cooling = CoolingRate(operator.kernel, operator.restitution, operator.grid)
+        return StepRates(cooling, equation.knudsen, equation.heat.tau)
 
     @functools.cached_property
     def shear_coefficient(self) -> float:
@@ -87,7 +98,7 @@ class HybridCollisions:
     def __init__(self, settings, models, context, cells: int, owned: slice, dx: float,
                  periodic: bool, communicator, time_step: float):
         self.settings, self.models, self.equation = settings, models, context.equation
-        self.owned, self.communicator = owned, communicator
+        self.owned, self.communicator, self.context = owned, communicator, context
         #: kappa, delta and the reach of every cell, on the backend
         self.cells = CellIndicators(settings, context, dx, periodic, time_step)
         self.xp = self.cells.parts.xp
@@ -232,6 +243,12 @@ class HybridCollisions:
                     "reach": numpy.full(count, self.settings.buffer, dtype=numpy.int64)}
         return {"level": self.levels[owned].copy(), "realizability": self.kappa[owned].copy(),
                 "distance": self.delta[owned].copy(), "reach": self.reach[owned].copy()}
+
+    def follow(self, density, velocity, temperature) -> None:
+        """The fields of the owned cells of a step's record (on the host) as the start of
+        the next step: the fastest rates of the temperature law, from which the fluid levels
+        take their substeps (:class:`~granframe.space.hierarchy.rates.StepRates`)."""
+        self.context.rates.follow(density, velocity, temperature, self.communicator)
 
     def take_up(self, steps: int, levels, kappa, delta, reach) -> None:
         """Continue after ``steps`` steps with the recorded levels, indicators and reach of

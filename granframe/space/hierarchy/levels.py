@@ -18,14 +18,16 @@ from granframe.velocity.guard import guard_moments
 class FluidParts:
     """What the fluid levels share: the moments of a batch of cells (the ``moments`` of the
     run's equation), their discrete Maxwellians and the cooled temperature, all on the
-    backend."""
+    backend; ``rates`` (:class:`~granframe.space.hierarchy.rates.StepRates`, the
+    hierarchy's), where the cooling takes its substeps from."""
 
-    def __init__(self, equation):
+    def __init__(self, equation, rates=None):
         operator = equation.operator
         self.grid, self.xp = operator.grid, operator.backend.xp
         self.moments = equation.moments
         self.cooling = CoolingRate(operator.kernel, operator.restitution, self.grid)
         self.knudsen, self.heat_bath = equation.knudsen, equation.heat.tau
+        self.rates = rates
 
     def equilibria(self, f, dt: float, heat: bool = True):
         r"""(M, M', ok) for f (cells, *grid.shape): the discrete Maxwellian of every cell's
@@ -43,8 +45,10 @@ class FluidParts:
                                            self.moments.points)
         if dt is None:
             return now, now, ok_now & guarded.valid
+        tau = self.heat_bath if heat else 0.0
         later = self.cooling.cooled(rho, guarded.temperature, guarded.energy, dt,
-                                    self.knudsen, self.heat_bath if heat else 0.0, xp)
+                                    self.knudsen, tau, xp,
+                                    None if self.rates is None else self.rates.fastest(tau))
         cooled = guarded.second + rho * d * (later - guarded.temperature)
         after, ok_after = discrete_maxwellians(self.grid, rho, momentum, cooled, xp,
                                                self.moments.points)
@@ -68,7 +72,7 @@ class EulerLevel(CollisionModel):
     full = False
 
     def __init__(self, context):
-        self.parts = FluidParts(context.equation)
+        self.parts = FluidParts(context.equation, context.rates)
 
     def advance(self, f, t, dt):
         xp = self.parts.xp
@@ -98,7 +102,7 @@ class RelaxationLevel(CollisionModel):
     full = False
 
     def __init__(self, context):
-        self.parts = FluidParts(context.equation)
+        self.parts = FluidParts(context.equation, context.rates)
         self.equation = RelaxationEquation(context.equation, context.shear_coefficient)
         self.integrator = context.integrator
 
@@ -121,7 +125,7 @@ class EllipsoidalLevel(RelaxationLevel):
     name = "esbgk"
 
     def __init__(self, context):
-        self.parts = FluidParts(context.equation)
+        self.parts = FluidParts(context.equation, context.rates)
         self.equation = EllipsoidalEquation(context.equation, context.shear_coefficient,
                                             context.heat_coefficient)
         self.integrator = context.integrator

@@ -86,16 +86,30 @@ class CoolingRate:
             self._tables[xp] = tuple(xp.asarray(a) for a in self.table)
         return self._tables[xp]
 
+    def rates(self, density, temperature, energy, knudsen: float, heat_bath: float,
+              xp=numpy):
+        """|d ln T/dt| of the temperature law at T of every cell, zeta/eps + 2 tau/T
+        (arrays in ``xp``): the rate that sets the substeps of :meth:`cooled`."""
+        return self(density, temperature, energy, xp) / knudsen + 2.0 * heat_bath / temperature
+
+    @staticmethod
+    def substeps(rate: float, dt: float) -> int:
+        """The RK4 substeps of :meth:`cooled` over dt for cells whose fastest rate is
+        ``rate``: each at most a twentieth of 1/rate (between 1 and 100000)."""
+        return int(min(max(1, math.ceil(20.0 * rate * dt)), 100000))
+
     def cooled(self, density, temperature, energy, dt: float, knudsen: float,
-               heat_bath: float, xp=numpy):
+               heat_bath: float, xp=numpy, rate: float | None = None):
         r"""T after dt of dT/dt = -zeta(T) T / eps + 2 tau at fixed rho and E^gamma.
 
         A constant e without a heat bath has the closed form
         T (1 + (lambda/2) zeta dt/eps)^(-2/lambda) (T e^{-zeta dt/eps} for lambda = 0);
-        otherwise classical RK4 on ln T with enough substeps that each takes at most a
-        twentieth of the fastest rate's time (relative error below 1e-7). The number of
-        substeps is a host decision: it takes the fastest rate of the batch to the host,
-        one device->host copy of one number per call (none for the closed form)."""
+        otherwise classical RK4 on ln T with :meth:`substeps` for the fastest ``rate``
+        (:meth:`rates`; relative error below 1e-7 where every cell's rate is at most
+        ``rate``). The number of substeps is a host decision: a hierarchy passes the fastest
+        rate of the cells at the start of the step, already on the host
+        (:class:`StepRates`); without it the fastest rate of this batch is taken to the
+        host, one device->host copy of one number."""
         if self.elastic and not heat_bath:
             return temperature
         zeta = self(density, temperature, energy, xp)
@@ -104,8 +118,9 @@ class CoolingRate:
             if self.exponent == 0.0:
                 return temperature * xp.exp(-x)
             return temperature * (1.0 + self.exponent * x) ** (-1.0 / self.exponent)
-        rate = float(to_host(xp.max(zeta / knudsen + 2.0 * heat_bath / temperature)))
-        steps = int(min(max(1, math.ceil(20.0 * rate * dt)), 100000))
+        if rate is None:
+            rate = float(to_host(xp.max(zeta / knudsen + 2.0 * heat_bath / temperature)))
+        steps = self.substeps(rate, dt)
         h = dt / steps
 
         def slope(log_t):
@@ -120,6 +135,58 @@ class CoolingRate:
             k4 = slope(log_t + h * k3)
             log_t = log_t + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
         return xp.exp(log_t)
+
+
+class StepRates:
+    r"""The fastest rates of the temperature law over the cells at the start of a step, on
+    the host, from which the fluid levels choose the substeps of
+    :meth:`CoolingRate.cooled`: max over the cells of zeta/eps (cooling alone, as the
+    relaxation levels cool) and of zeta/eps + 2 tau/T (with the heat bath, as the Euler
+    level heats), from the density, velocity and temperature of every cell that the record
+    of the previous step has already brought to the host (:meth:`follow`), so that no
+    level reads its substeps from the device.
+
+    The state a level advances differs from the recorded one by the step's transport, so
+    the substeps hold the RK4 rule for the cells at the start of the step; every cell of
+    every process counts (the maximum over the processes), so that the levels take the
+    same substeps whatever cells a process holds and at whatever level they are. Before
+    the first record (no rates yet) a level reads the rate of its own batch
+    (:meth:`CoolingRate.cooled` without ``rate``).
+
+    Parameters
+    ----------
+    cooling : CoolingRate
+    knudsen, heat_bath : float
+        eps and tau of the run.
+    """
+
+    def __init__(self, cooling: CoolingRate, knudsen: float, heat_bath: float):
+        self.cooling, self.knudsen, self.heat_bath = cooling, knudsen, heat_bath
+        #: {tau: the fastest rate} for tau = 0 and the run's tau, or None before the first
+        #: :meth:`follow`
+        self.values = None
+
+    def fastest(self, heat_bath: float) -> float | None:
+        """The fastest rate with the heat bath ``heat_bath`` (0 or the run's), or None."""
+        return None if self.values is None else self.values[heat_bath]
+
+    def follow(self, density, velocity, temperature, communicator) -> None:
+        """The rates of the cells of this process (host arrays: density and temperature
+        (cells,), velocity (cells, d)), combined over the processes of ``communicator``
+        (one :meth:`~granframe.abc.Communicator.allgather` of two numbers); cells without
+        a positive density and temperature do not count."""
+        density, temperature = numpy.asarray(density), numpy.asarray(temperature)
+        valid = (density > 0) & (temperature > 0) & numpy.isfinite(temperature)
+        rho, t = density[valid], temperature[valid]
+        d = numpy.asarray(velocity).shape[-1]
+        energy = 0.5 * rho * ((numpy.asarray(velocity)[valid] ** 2).sum(axis=-1) + d * t)
+        local = numpy.zeros(2)
+        if rho.size:
+            cooling = self.cooling.rates(rho, t, energy, self.knudsen, 0.0)
+            heated = cooling + 2.0 * self.heat_bath / t
+            local[:] = numpy.max(cooling), numpy.max(heated)
+        fastest = communicator.allgather(local).max(axis=0)
+        self.values = {0.0: float(fastest[0]), self.heat_bath: float(fastest[1])}
 
 
 def relaxation_rate(operator, mode: str, temperature: float, density: float = 1.0,
