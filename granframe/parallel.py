@@ -26,6 +26,7 @@ import numpy
 
 from granframe import validators as check
 from granframe.abc import Communicator, Pending
+from granframe.abc.space import AXIS_NAMES, Side
 
 #: environment variables by which launchers tell a process how many were started and its
 #: number: MPICH's Hydra and Intel MPI (PMI), Open MPI, MVAPICH, and Slurm's srun (set in
@@ -121,24 +122,26 @@ def world() -> Communicator:
 
 
 def partition(cells: int, chunk: int, processes: int, ghost: int,
-              counts=None) -> list[tuple[int, int]]:
+              counts=None, axis: int = 0) -> list[tuple[int, int]]:
     """The cells ``(start, stop)`` of each process: contiguous, whole chunks, in rank order.
 
     Parameters
     ----------
     cells : int
-        The cells of the interval.
+        The cells of the axis.
     chunk : int
-        The width along x of the store's chunks (``space.block_cells``): each process
-        writes whole chunks, so each range starts and ends on a chunk boundary.
+        The width along the axis of the store's chunks (``space.block_cells``): each
+        process writes whole chunks, so each range starts and ends on a chunk boundary.
     processes : int
-        The number of processes.
+        The number of processes that share the axis.
     ghost : int
         The reconstruction's ghost width: each range must hold at least that many cells,
         since its ghost cells come from the next range alone.
     counts : sequence of int, optional
         The cells of each process, given explicitly; by default the chunks are shared as
         evenly as possible (the first ``chunks mod processes`` processes one more).
+    axis : int, optional
+        The space axis (0: x), which the messages name.
 
     Raises
     ------
@@ -153,7 +156,8 @@ def partition(cells: int, chunk: int, processes: int, ghost: int,
     chunks = cells // chunk
     if processes > chunks:
         check.reject(owner, "processes", processes, f"must be at most the {chunks} chunks of "
-                     f"space.block_cells = {chunk} cells that the store is cut into along x "
+                     f"space.block_cells = {chunk} cells that the store is cut into along "
+                     f"{AXIS_NAMES[axis]} "
                      f"(each process writes whole chunks): set space.block_cells to a divisor "
                      f"of {cells} of at most {cells // processes}, or run on fewer processes")
     if counts is None:
@@ -209,38 +213,44 @@ def batch_block(owned: int, ghost: int, block_cells: int | None = None) -> int:
 
 class CellLayout:
     """How the cells of a space axis are cut, in one place: the store's chunks, the
-    ranges of the processes (whole chunks, :func:`partition`) and this process's batch
-    blocks (:func:`batch_block`), as Dedalus's distributor holds its layouts; a store
-    resumed by these processes is checked against their ranges by
-    :func:`check_store_chunks`. A serial run is the case of one process owning every cell.
+    ranges of the processes that share the axis (whole chunks, :func:`partition`) and this
+    process's batch blocks (:func:`batch_block`), as Dedalus's distributor holds its
+    layouts; a store resumed by these processes is checked against their ranges by
+    :func:`check_store_chunks`. A serial run is the case of one process owning every cell;
+    a decomposition of several axes is one layout per axis, each with the processes along
+    it and this one's place among them.
 
     Parameters
     ----------
     cells, ghost : int
         The cells of the axis and the reconstruction's ghost width.
-    communicator : Communicator
-        The processes; this one is ``communicator.rank``.
+    processes, index : int
+        The processes that share the axis, and this one's place among them (in one space
+        dimension the communicator's size and rank).
     block_cells : int or None
         The description's ``space.block_cells`` (None: the defaults of :func:`store_chunk`
         and :func:`batch_block`).
     counts : sequence of int, optional
         The cells of each process (:func:`partition`).
+    axis : int, optional
+        The space axis (0: x).
 
     Attributes
     ----------
     chunk : int
-        The store's chunk width.
+        The store's chunk width along the axis.
     ranges : list of (int, int)
-        The cells (start, stop) of every process, in rank order.
+        The cells (start, stop) of every process along the axis, in order.
     block : int
         The cells per batch block of this process.
     """
 
-    def __init__(self, cells: int, ghost: int, communicator: Communicator,
-                 block_cells: int | None = None, counts=None):
+    def __init__(self, cells: int, ghost: int, processes: int, index: int,
+                 block_cells: int | None = None, counts=None, axis: int = 0):
+        self.axis = int(axis)
         self.chunk = store_chunk(cells, ghost, block_cells)
-        self.ranges = partition(cells, self.chunk, communicator.size, ghost, counts)
-        self.start, self.stop = self.ranges[communicator.rank]
+        self.ranges = partition(cells, self.chunk, processes, ghost, counts, self.axis)
+        self.start, self.stop = self.ranges[index]
         self.block = batch_block(self.stop - self.start, ghost, block_cells)
 
     @property
@@ -249,15 +259,16 @@ class CellLayout:
         return slice(self.start, self.stop)
 
 
-def check_store_chunks(ranges, chunk: int, cells, path) -> None:
+def check_store_chunks(ranges, chunk: int, cells, path, axis: int = 0) -> None:
     """Refuse to let processes with the cells ``ranges`` share a store chunked by
-    ``chunk`` cells along x (of ``cells``) whose chunks do not fall on the boundaries of
-    their ranges (a store made with another ``block_cells``): each process writes whole
-    chunks (:func:`partition`)."""
+    ``chunk`` cells along ``axis`` (of ``cells``) whose chunks do not fall on the
+    boundaries of their ranges (a store made with another ``block_cells``): each process
+    writes whole chunks (:func:`partition`)."""
     starts = [a for a, _ in ranges]
     if any(start % chunk for start in starts):
         check.reject("run", "processes", len(ranges), f"cannot share the store '{path}' "
-                     f"among themselves: it is chunked by {chunk} cells along x, and the "
+                     f"among themselves: it is chunked by {chunk} cells along "
+                     f"{AXIS_NAMES[axis]}, and the "
                      f"cells of the processes start at {starts}; each must start at a "
                      f"multiple of {chunk} (run on a number of processes that divides "
                      f"{cells} // {chunk} chunks, or give the partition)")
@@ -271,8 +282,8 @@ class Halo:
     ----------
     communicator : Communicator
     left, right : int or None
-        The ranks that own the cells left of ``start`` and right of ``stop`` (the last and
-        the first for a periodic interval), None at a wall.
+        The ranks that own the cells below ``start`` and above ``stop`` along the domain's
+        axis (the last and the first for a periodic axis), None at a wall.
 
     Attributes
     ----------
@@ -296,16 +307,18 @@ class Halo:
         return cls(communicator, left, right)
 
     def start(self, domain, array, sides) -> Pending:
-        """Post the exchange of the ghost cells of ``sides`` ("left", "right") of the block
-        array ``array``: this range's first (last) ``ghost`` cells go to the left (right)
-        neighbour, whose last (first) ones fill the ghost cells."""
+        """Post the exchange of the ghost cells of ``sides`` (of ``domain.sides``, or their
+        names) of the block array ``array``: this range's first (last) ``ghost`` cells go to
+        the neighbour at the lower (upper) end, whose last (first) ones fill the ghost
+        cells."""
         began = time.perf_counter()
         g, n = domain.ghost, domain.block_cells
+        ends = {Side.named(side).end for side in sides}
         sends, receives = [], []
-        if "left" in sides:
+        if 0 in ends:
             sends.append((self.left, LEFTWARD, array[0, g:2 * g]))
             receives.append((self.left, RIGHTWARD, array[0, :g]))
-        if "right" in sides:
+        if 1 in ends:
             sends.append((self.right, RIGHTWARD, array[-1, n:n + g]))
             receives.append((self.right, LEFTWARD, array[-1, g + n:]))
         pending = self.communicator.start(sends, receives)

@@ -9,11 +9,16 @@ import numpy
 import pytest
 
 from granframe.abc import SIDE_NAMES, Side, reflect_nodes
-from granframe.parallel import SerialCommunicator
+from granframe.parallel import CellLayout, SerialCommunicator, check_store_chunks
+from granframe.registry import default_registries
 from granframe.run.description import RunDescription
 from granframe.run.problems import Interval, Point, SpaceProblem, make_problem
+from granframe.run.problems.spaces import space_layout
 from granframe.space.boundaries import Diffuse, Specular, Vibrating
-from granframe.space.transport import upwind_speeds, wall_weights
+from granframe.space.collisions import FreeFlight, SplitStep
+from granframe.space.domain import Domain
+from granframe.space.hierarchy import realizability
+from granframe.space.transport import Transport, upwind_speeds, wall_weights
 from granframe.testing.conformance import WALL_SIDES
 from granframe.velocity.grid import VelocityGrid
 from granframe.velocity.moments import FieldMoments
@@ -194,3 +199,119 @@ def test_the_shapes_of_space_have_one_interface():
         missing = {name for name in members if not hasattr(shape, name)}
         assert not missing, (type(shape).__name__, missing)
     assert (point.dimension, interval.dimension) == (0, 1)
+
+
+# -- cells along an axis: the domain, its layout, the transport, the fields, the store -------
+
+def _swap(f, dimension=2):
+    """f (..., *grid.shape) with the velocity axes 1 and 2 exchanged."""
+    return numpy.swapaxes(f, f.ndim - dimension, f.ndim - dimension + 1)
+
+
+def _cells(grid, cells, seed):
+    """Smooth positive cells: Maxwellians whose drift and temperature vary from cell to
+    cell along both velocity components."""
+    rng = numpy.random.default_rng(seed)
+    return numpy.stack([grid.maxwellian(1.0 + 0.3 * rng.random(), (rng.normal(0, 0.4),
+                                                                   rng.normal(0, 0.4)),
+                                        0.6 + 0.5 * rng.random()) for _ in range(cells)])
+
+
+WALL_PAIRS = {
+    "periodic": ("periodic", {}, "periodic", {}),
+    "diffuse-specular": ("diffuse", {"temperature": 1.2, "velocity": 0.3, "accommodation": 0.6},
+                         "specular", {}),
+    "specular-diffuse": ("specular", {}, "diffuse", {"temperature": 0.8, "velocity": -0.2}),
+}
+
+
+@pytest.mark.parametrize("walls", list(WALL_PAIRS))
+@pytest.mark.parametrize("reconstruction", ["muscl", "weno5"])
+def test_cells_along_y_are_the_cells_along_x_with_the_velocity_axes_exchanged(walls,
+                                                                                reconstruction):
+    """The domain, the transport and its walls, and the fields take their axis: the same
+    cells laid along y, with f's velocity axes 1 and 2 exchanged, step as those along x
+    (three blocks, three Strang steps of free flight through the walls): bitwise when
+    periodic, to round-off through a diffuse wall (its emission sums over the nodes in
+    another order); the wall totals with the momentum components exchanged and the fields
+    with theirs to round-off too."""
+    registries = default_registries()
+    grid = VelocityGrid(2, 16, 4.0)
+    lower, low_params, upper, up_params = WALL_PAIRS[walls]
+    scheme = registries.create("reconstructions", reconstruction)
+    f0 = _cells(grid, 12, 1)
+    results = []
+    for axis, f in ((0, f0), (1, _swap(f0))):
+        domain = Domain(12, 1.5, 4, scheme.ghost, grid, axis=axis)
+        transport = Transport(domain, scheme, registries.create("boundaries", lower, **low_params),
+                              registries.create("boundaries", upper, **up_params))
+        step, array = SplitStep(FreeFlight(), transport), domain.from_cells(f)
+        for k in range(3):
+            array = step.step(None, 0.01 * k, array, 0.01)
+        cells = domain.to_cells(array)
+        fields = FieldMoments(grid, domain.dx, transport_axes=(transport.axis,))
+        results.append((domain, cells, transport.take_wall_totals(), fields(cells)))
+    (x, at_x, walls_x, fields_x), (y, at_y, walls_y, fields_y) = results
+    assert (x.axes, y.axes) == (("x",), ("y",)) and y.sides == ("bottom", "top")
+    assert numpy.abs(at_x - f0).max() > 1e-3                  # f moved, and through the walls
+    if walls == "periodic":
+        numpy.testing.assert_array_equal(at_y, _swap(at_x))
+    else:       # a diffuse wall sums its emission over the nodes in the other order
+        numpy.testing.assert_allclose(at_y, _swap(at_x), rtol=0, atol=1e-15 * at_x.max())
+    numpy.testing.assert_allclose(walls_y[:, [0, 2, 1, 3]], walls_x, rtol=0,
+                                  atol=1e-14 * numpy.abs(walls_x).max())
+    for name, exchanged in (("density", lambda a: a), ("velocity", lambda a: a[:, ::-1]),
+                            ("pressure_tensor", lambda a: a[:, ::-1, ::-1]),
+                            ("heat_flux", lambda a: a[:, ::-1])):
+        numpy.testing.assert_allclose(fields_y[name], exchanged(fields_x[name]), rtol=0,
+                                      atol=1e-14 * numpy.abs(fields_x[name]).max(),
+                                      err_msg=name)
+    if walls != "periodic":
+        assert numpy.abs(walls_x[:, 1]).max() > 1e-4          # the walls took momentum
+
+
+def test_the_layout_and_the_store_of_cells_along_y_name_that_axis():
+    grid = VelocityGrid(2, 8, 4.0)
+    layout = CellLayout(24, 2, 3, 1, block_cells=4, axis=1)
+    assert (layout.axis, layout.ranges, layout.owned, layout.block) == (
+        1, [(0, 8), (8, 16), (16, 24)], slice(8, 16), 4)
+    domain = Domain(24, 2.0, layout.block, 2, grid, owned=(layout.start, layout.stop),
+                    axis=layout.axis)
+    store = space_layout(grid, domain, layout.chunk)
+    assert store.snapshot_dimensions == ("y", "v1", "v2")
+    assert store.snapshot_chunks[0] == layout.chunk == 4
+    assert [c[0] for c in store.coordinates] == ["v1", "v2", "y"]
+    numpy.testing.assert_array_equal(store.coordinates[-1][1], domain.centres())
+    numpy.testing.assert_allclose(domain.centres(), (numpy.arange(24) + 0.5) / 12, rtol=1e-15)
+    cells = [r for r in store.records if r.cells_chunk is not None]
+    assert {r.name for r in cells} >= {"density", "velocity", "temperature"}
+    assert all(r.dimensions[0] == "y" and r.chunks[1] == 4 for r in cells)
+    with pytest.raises(ValueError, match="store is cut into along y"):
+        CellLayout(24, 2, 7, 0, block_cells=4, axis=1)
+    with pytest.raises(ValueError, match="chunked by 8 cells along y"):
+        check_store_chunks([(0, 12), (12, 24)], 8, 24, "run.zarr", axis=1)
+
+
+@pytest.mark.parametrize("axis", [2, -1, True, 1.0])
+def test_a_domain_refuses_an_axis_the_velocity_grid_does_not_have(axis):
+    with pytest.raises(ValueError, match="^Domain: parameter 'axis' = .* is invalid; must be "
+                                         "a space axis below the velocity dimension 2: 0 "
+                                         r"\(x\), 1 \(y\)"):
+        Domain(12, 1.0, 4, 2, VelocityGrid(2, 8, 4.0), axis=axis)
+
+
+def test_the_realizability_of_cells_along_y_differentiates_along_y():
+    """kappa of a profile along y with the velocity components exchanged is kappa of the
+    same profile along x (the stress and the heat flux of the normal component a)."""
+    rng = numpy.random.default_rng(3)
+    rho, temperature = 1.0 + 0.2 * rng.random(10), 0.8 + 0.4 * rng.random(10)
+    for d in (2, 3):
+        velocity = rng.normal(0, 0.3, (10, d))
+        swapped = velocity.copy()
+        swapped[:, [0, 1]] = velocity[:, [1, 0]]
+        for periodic in (True, False):
+            along_x = realizability(rho, velocity, temperature, 0.1, periodic, 0.01, rho)
+            along_y = realizability(rho, swapped, temperature, 0.1, periodic, 0.01, rho,
+                                    axis=1)
+            numpy.testing.assert_array_equal(along_y, along_x)
+            assert along_x.max() > 0.0

@@ -17,6 +17,8 @@ import numpy
 
 from granframe import validators as check
 
+#: the names of the space axes, as the store names its cell coordinates
+AXIS_NAMES = ("x", "y", "z")
 #: the names of the two ends of each space axis, lower then upper: x, y, z
 SIDE_NAMES = (("left", "right"), ("bottom", "top"), ("back", "front"))
 

@@ -1,4 +1,5 @@
-r"""The cells of [0, ell], the part of them this process owns, and their ghost cells.
+r"""The cells of [0, ell] along a space axis, the part of them this process owns, and their
+ghost cells.
 
 A :class:`Domain` is to the space discretisation what PETSc's DMDA is to a structured grid
 (S. Balay et al., PETSc users manual, "DMDA"): it knows the global cells and their edges,
@@ -15,6 +16,11 @@ each other when this process owns both, and at an end of the owned range inside 
 interval (or a periodic end owned elsewhere) from the process next to it, through
 :attr:`Domain.neighbours` (docs/space.md, "Blocks and their distribution"). With one
 process the domain owns every cell and touches both ends.
+
+The cells lie along one space ``axis`` (0: x, 1: y, 2: z); its two ends are the domain's
+:attr:`~Domain.sides` (:class:`~granframe.abc.Side`), through which every wall sees f in
+its own frame, and the transport carries f along it with the velocity component
+v_{axis+1} (:class:`~granframe.space.transport.Transport`).
 """
 
 from __future__ import annotations
@@ -22,14 +28,15 @@ from __future__ import annotations
 import numpy
 
 from granframe import validators as check
-from granframe.abc.space import Side
+from granframe.abc.space import AXIS_NAMES, Side
 from granframe.abc.space import reflect_nodes as reflect
 
 __all__ = ["Domain", "reflect"]
 
 
 class Domain:
-    """The global cells of [0, ell], the owned range, its blocks and their ghost cells.
+    """The global cells of [0, ell] along a space axis, the owned range, its blocks and their
+    ghost cells.
 
     Parameters
     ----------
@@ -49,22 +56,36 @@ class Domain:
     owned : tuple of int, optional
         ``(start, stop)``: the cells this process owns
         (:func:`granframe.parallel.partition`); all cells by default.
+    axis : int, optional
+        The space axis the cells lie along: 0 (x, the default), 1 (y) or 2 (z), below the
+        velocity dimension.
 
     Attributes
     ----------
     start, stop : int
         The owned cells are ``start <= j < stop``.
     touches_left, touches_right : bool
-        Whether the owned range contains the first (x = 0) or the last (x = ell) cell.
+        Whether the owned range contains the first (at 0, the lower side) or the last (at
+        ell, the upper side) cell of the axis.
+    axes : tuple of str
+        The name of the axis (:data:`~granframe.abc.space.AXIS_NAMES`), as the store names
+        its cell coordinate.
+    sides : tuple of Side
+        The lower and the upper side of the axis.
     neighbours : object or None
         Exchanges the ghost cells of the ends of the owned range that other processes
         hold: ``neighbours.start(domain, array, sides)`` posts the messages of ``sides``
-        ("left", "right") and returns what to ``wait()`` for
+        (of :attr:`sides`) and returns what to ``wait()`` for
         (:class:`granframe.parallel.Halo`). None for a domain that owns every cell.
     """
 
     def __init__(self, cells: int, length: float, block_cells: int, ghost: int, grid,
-                 xp=numpy, owned: tuple | None = None):
+                 xp=numpy, owned: tuple | None = None, axis: int = 0):
+        if not check.is_integer(axis) or not 0 <= axis < min(3, grid.dimension):
+            check.reject("Domain", "axis", axis, f"must be a space axis below the velocity "
+                         f"dimension {grid.dimension}: "
+                         + ", ".join(f"{a} ({n})" for a, n in
+                                     enumerate(AXIS_NAMES[:grid.dimension])))
         start, stop = (0, cells) if owned is None else (int(owned[0]), int(owned[1]))
         if not 0 <= start < stop <= cells:
             check.reject("Domain", "owned", owned, f"must be (start, stop) with 0 <= start < "
@@ -80,11 +101,9 @@ class Domain:
         self.grid, self.xp = grid, xp
         self.shape = (self.blocks, block_cells + 2 * ghost) + tuple(grid.shape)
         self.neighbours = None
-
-    #: the space axes, named as the store's cell coordinates; a side is an axis and an end
-    axes = ("x",)
-    #: the two sides of the interval, lower (x = 0) and upper (x = ell)
-    sides = (Side(0, 0), Side(0, 1))
+        self.axis = int(axis)
+        self.axes = (AXIS_NAMES[self.axis],)
+        self.sides = (Side(self.axis, 0), Side(self.axis, 1))
 
     # -- geometry ---------------------------------------------------------------------------
     @property
@@ -102,7 +121,7 @@ class Domain:
 
     def coordinates(self) -> dict:
         """The cell centres along every space axis, by the axis's name (:attr:`axes`)."""
-        return {"x": self.centres()}
+        return {self.axes[0]: self.centres()}
 
     @property
     def owned(self) -> slice:
@@ -139,7 +158,8 @@ class Domain:
     # -- ghost cells ------------------------------------------------------------------------
     def exchange(self, array, left, right, t: float = 0.0) -> None:
         """Fill every ghost cell of ``array`` (see the module notes); ``left`` and
-        ``right`` are the boundaries of the interval, acting at time ``t``.
+        ``right`` are the boundaries of the lower and the upper side (:attr:`sides`),
+        acting at time ``t``.
 
         The ghost cells that other processes hold are posted first
         (:meth:`~granframe.parallel.Halo.start`), the local ones filled while they travel,
@@ -147,9 +167,10 @@ class Domain:
         g, n, d = self.ghost, self.block_cells, self.grid.dimension
         if g == 0:
             return
+        lower, upper = self.sides
         local = left.periodic and self.touches_left and self.touches_right
-        remote = [side for side, touches, wall in (("left", self.touches_left, left),
-                                                   ("right", self.touches_right, right))
+        remote = [side for side, touches, wall in ((lower, self.touches_left, left),
+                                                   (upper, self.touches_right, right))
                   if not local and (wall.periodic or not touches)]
         pending = self._neighbours().start(self, array, remote) if remote else None
         array[1:, :g] = array[:-1, n:n + g]
@@ -158,7 +179,6 @@ class Domain:
         if local:
             array[0, :g] = array[-1, n:n + g]
             array[-1, g + n:] = array[0, g:2 * g]
-        lower, upper = self.sides
         if self.touches_left and not left.periodic:
             inside = lower.to_wall(array[0, g:2 * g], d, xp)
             ghosts = left.ghosts(inside, self.grid, xp, t=t, side=lower)
@@ -173,6 +193,6 @@ class Domain:
     def _neighbours(self):
         if self.neighbours is None:
             raise RuntimeError(f"Domain: cells {self.start}..{self.stop - 1} of {self.cells} "
-                               "have an end that another process owns, and no neighbours "
-                               "to fill its ghost cells")
+                               f"have an end that another process owns (along "
+                               f"{self.axes[0]}), and no neighbours to fill its ghost cells")
         return self.neighbours

@@ -132,7 +132,8 @@ class SpaceProblem(Problem):
                                     **level.params) for level in settings.levels]
         return HybridCollisions(settings, models, context, self.description.space.cells,
                                 self.domain.owned, self.domain.dx, self.left.periodic,
-                                self.communicator, self.description.time_step)
+                                self.communicator, self.description.time_step,
+                                self.domain.axis)
 
     @property
     def owned(self) -> slice:

@@ -224,8 +224,8 @@ class Interval:
                                     world() if communicator is None else communicator)
         #: the store's chunks, the cells (start, stop) of every process in rank order and
         #: this one's batch blocks
-        self.cell_layout = CellLayout(space.cells, self.reconstruction.ghost, comm,
-                                      space.block_cells, partition_cells)
+        self.cell_layout = CellLayout(space.cells, self.reconstruction.ghost, comm.size,
+                                      comm.rank, space.block_cells, partition_cells)
         self.ranges = self.cell_layout.ranges
         self.owned_cells = self.cell_layout.stop - self.cell_layout.start
         self.domain = self.transport = self.fields = None
@@ -243,7 +243,7 @@ class Interval:
         d, layout = self.description, self.cell_layout
         self.domain = Domain(d.space.cells, d.space.length, layout.block,
                              self.reconstruction.ghost, grid, xp,
-                             owned=(layout.start, layout.stop))
+                             owned=(layout.start, layout.stop), axis=layout.axis)
         if self.communicator.size > 1:
             self.domain.neighbours = Halo.of(self.communicator, self.ranges,
                                              self.left.periodic)

@@ -92,7 +92,7 @@ from granframe.run.storage.paths import (TRASH, check_replaceable, recover, sibl
                                          store_kind)
 from granframe.run.storage.reports import check, describe, dropped_note, stray_entries
 from granframe.run.storage.resumption import differences
-from granframe.run.storage.schema import (CELLS, CONVENTIONS, FIRST_RECORD_ARRAYS,
+from granframe.run.storage.schema import (CELL_AXES, CONVENTIONS, FIRST_RECORD_ARRAYS,
                                           LEVEL_LONG_NAMES, LONG_NAMES, MOMENT_CHUNK,
                                           NONDIMENSIONALISATION, RECORD_ARRAYS,
                                           RECORDED_MOMENTS, REFERENCES, RESCALED_NOTE,
@@ -108,7 +108,7 @@ from granframe.run.storage.store import RunStore
 warnings.filterwarnings("ignore", message="Object at .* is not recognized as a component of a "
                         "Zarr hierarchy", category=UserWarning)
 
-__all__ = ["CELLS", "CONVENTIONS", "FIRST_RECORD_ARRAYS", "LEVEL_LONG_NAMES", "LONG_NAMES",
+__all__ = ["CELL_AXES", "CONVENTIONS", "FIRST_RECORD_ARRAYS", "LEVEL_LONG_NAMES", "LONG_NAMES",
            "MOMENT_CHUNK", "NONDIMENSIONALISATION", "RECORD_ARRAYS", "RECORDED_MOMENTS",
            "REFERENCES", "RESCALED_NOTE", "RESUMABLE", "SCALAR_MOMENTS", "SCHEMA",
            "SNAPSHOT_ARRAYS", "SNAPSHOT_CHUNK", "STEP_RECORDS", "SWEEP_SCHEMA_KEY",

@@ -18,7 +18,7 @@ import zarr
 
 from granframe.parallel import SerialCommunicator
 from granframe.run.storage.errors import StoreError
-from granframe.run.storage.schema import CELLS, SNAPSHOT_ARRAYS
+from granframe.run.storage.schema import CELL_AXES, SNAPSHOT_ARRAYS
 from granframe.run.storage.state import StoreState
 from granframe.validators import is_integer, reject
 
@@ -119,10 +119,11 @@ class StoreCommits(StoreState):
     @functools.cached_property
     def cell_arrays(self) -> tuple:
         """The arrays split by cells, which :meth:`write_block` writes: those whose first
-        dimension after ``time`` or ``step_time`` is the cells axis ``x`` (a space run's f
-        and fields); empty in a space-homogeneous run's store."""
+        dimension after ``time`` or ``step_time`` is the cells axis (:data:`CELL_AXES`; a
+        space run's f and fields); empty in a space-homogeneous run's store."""
         return tuple(name for name in SNAPSHOT_ARRAYS[:1] + self.record_arrays
-                     if tuple(self.group[name].metadata.dimension_names or ())[1:2] == (CELLS,))
+                     if tuple(self.group[name].metadata.dimension_names or ())[1:2]
+                     in [(a,) for a in CELL_AXES])
 
     def commit(self, snapshots, records: dict, progress: dict) -> None:
         """Append snapshots [(t, f)] and moment records (name -> arrays along step_time),

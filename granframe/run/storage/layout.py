@@ -17,7 +17,7 @@ import attrs
 import numpy
 import zarr
 
-from granframe.run.storage.schema import (CELLS, MOMENT_CHUNK, RECORDED_MOMENTS, SNAPSHOT_CHUNK,
+from granframe.run.storage.schema import (CELL_AXES, MOMENT_CHUNK, RECORDED_MOMENTS, SNAPSHOT_CHUNK,
                                           array_attributes)
 from granframe.validators import is_integer, reject
 
@@ -55,7 +55,8 @@ class RecordArray:
         Records per chunk along ``step_time``.
     cells_chunk : int or None
         Cells per chunk along its first dimension after ``step_time``, which must then be
-        the cells axis ``x``: a space run's fields are chunked by block of cells
+        the cells axis (``x``, or ``y`` or ``z`` for cells along those axes): a space run's
+        fields are chunked by block of cells
         (``cells_chunk = block_cells``), so that the owner of a block writes chunk files
         no other block touches (:meth:`RunStore.write_block`). None: one chunk spans
         each dimension after ``step_time`` whole.
@@ -72,10 +73,11 @@ class RecordArray:
     def _check_cells_chunk(self, attribute, value):
         if value is None:
             return
-        if tuple(self.dimensions[:1]) != (CELLS,) or not self.shape:
+        if tuple(self.dimensions[:1]) not in [(a,) for a in CELL_AXES] or not self.shape:
             reject("RecordArray", "cells_chunk", value, f"is only allowed for a record whose "
-                   f"first dimension after step_time is the cells axis '{CELLS}' (record "
-                   f"'{self.name}' has dimensions {tuple(self.dimensions)}); leave it None")
+                   f"first dimension after step_time is the cells axis 'x' (or 'y', 'z' "
+                   f"for cells along those axes) (record '{self.name}' has dimensions "
+                   f"{tuple(self.dimensions)}); leave it None")
         if not is_integer(value) or not 1 <= value <= self.shape[0]:
             reject("RecordArray", "cells_chunk", value, f"must be None or a whole number of "
                    f"cells from 1 to {self.shape[0]} (the cells of record '{self.name}')")

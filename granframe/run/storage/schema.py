@@ -14,6 +14,7 @@ from __future__ import annotations
 import datetime
 import json
 
+from granframe.abc.space import AXIS_NAMES
 from granframe.validators import is_real
 
 SCHEMA = "granframe.run/2"
@@ -116,9 +117,10 @@ REFERENCES = (
 
 MOMENT_CHUNK = 4096
 SNAPSHOT_CHUNK = 1024
-#: the cells axis of a space run's store: the first dimension after ``time`` of f and
-#: after ``step_time`` of the fields; the arrays that have it are written block by block
-CELLS = "x"
+#: the names a space run's cells axis takes in its store (that of the axis the cells lie
+#: along, :data:`granframe.abc.space.AXIS_NAMES`): the first dimension after ``time`` of f
+#: and after ``step_time`` of the fields; the arrays that have it are written block by block
+CELL_AXES = AXIS_NAMES
 #: statuses of a run that may be continued
 RESUMABLE = ("running", "interrupted")
 

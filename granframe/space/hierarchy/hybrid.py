@@ -93,14 +93,16 @@ class HybridCollisions:
     periodic : bool
     communicator : Communicator
     time_step : float
+    axis : int, optional
+        The space axis the cells lie along (0: x).
     """
 
     def __init__(self, settings, models, context, cells: int, owned: slice, dx: float,
-                 periodic: bool, communicator, time_step: float):
+                 periodic: bool, communicator, time_step: float, axis: int = 0):
         self.settings, self.models, self.equation = settings, models, context.equation
         self.owned, self.communicator, self.context = owned, communicator, context
         #: kappa, delta and the reach of every cell, on the backend
-        self.cells = CellIndicators(settings, context, dx, periodic, time_step)
+        self.cells = CellIndicators(settings, context, dx, periodic, time_step, axis)
         self.xp = self.cells.parts.xp
         #: where the choice runs: the backend, or the host with several processes
         self.choice_xp = numpy if communicator.size > 1 else self.xp

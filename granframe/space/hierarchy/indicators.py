@@ -17,19 +17,22 @@ from granframe.velocity.guard import guard_moments
 
 
 def realizability(density, velocity, temperature, dx: float, periodic: bool, knudsen: float,
-                  rate, xp=numpy):
+                  rate, xp=numpy, axis: int = 0):
     r"""The Navier-Stokes realizability indicator of every cell (see the package notes),
 
     .. math:: \kappa = \max\Bigl(\frac{\lVert\sigma\rVert_F}{p},
-              \frac{|q_1|}{p\sqrt T}\Bigr),\qquad
+              \frac{|q_a|}{p\sqrt T}\Bigr),\qquad
               \sigma_{ij} = -\mu\bigl(\partial_i u_j + \partial_j u_i
-              - \tfrac2d\,\delta_{ij}\,\partial_1 u_1\bigr),\quad
-              q_1 = -\tfrac{d+2}{2}\,\mu\,\partial_1 T,
+              - \tfrac2d\,\delta_{ij}\,\partial_a u_a\bigr),\quad
+              q_a = -\tfrac{d+2}{2}\,\mu\,\partial_a T,
 
-    with only x-derivatives (:func:`x_derivative`), p = rho T, mu = eps p / nu_s (``rate``:
-    nu_s of every cell) and the conductivity of a gas of Prandtl number 1 (the BGK
-    closure's, as Filbet & Rey). Arrays over all cells in ``xp``."""
+    with only the derivatives along the cells' space axis a = ``axis`` (0: x;
+    :func:`x_derivative`), p = rho T, mu = eps p / nu_s (``rate``: nu_s of every cell) and
+    the conductivity of a gas of Prandtl number 1 (the BGK closure's, as Filbet & Rey).
+    Arrays over all cells in ``xp``."""
     d = velocity.shape[1]
+    if axis:                            # the normal component first; sigma is symmetric
+        velocity = velocity[:, [axis] + [j for j in range(d) if j != axis]]
     du = x_derivative(velocity, dx, periodic, xp)
     dT = x_derivative(temperature, dx, periodic, xp)
     scale = knudsen / rate                                 # mu / p
@@ -103,10 +106,14 @@ class CellIndicators:
     periodic : bool
     time_step : float
         The run's dt, for :func:`equilibrium_distance`.
+    axis : int, optional
+        The space axis the cells lie along (0: x), along which kappa differentiates.
     """
 
-    def __init__(self, settings, context, dx: float, periodic: bool, time_step: float):
+    def __init__(self, settings, context, dx: float, periodic: bool, time_step: float,
+                 axis: int = 0):
         equation = context.equation
+        self.axis = axis
         self.parts = FluidParts(equation)
         self.kernel, self.knudsen = equation.operator.kernel, equation.knudsen
         self.shear_coefficient = context.shear_coefficient
@@ -155,7 +162,7 @@ class CellIndicators:
         energy = 0.5 * rho * ((velocity ** 2).sum(axis=1) + d * temperature)
         rate = scaled_rates(self.shear_coefficient, self.kernel, rho, temperature, energy, xp)
         kappa = realizability(rho, velocity, temperature, self.dx, self.periodic, self.knudsen,
-                              rate, xp)
+                              rate, xp, self.axis)
         kappa = xp.where(guarded.valid, kappa, xp.inf)
         path = self.free_paths * self.knudsen * xp.sqrt(2 * temperature) / rate
         reach = xp.maximum(self.buffer, xp.ceil(path / self.dx - 1e-9)).astype(xp.int64)
