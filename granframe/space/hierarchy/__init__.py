@@ -75,6 +75,6 @@ from granframe.space.hierarchy.relaxation import (EllipsoidalEquation, Relaxatio
 
 __all__ = ["BoltzmannLevel", "CellIndicators", "CoolingRate", "EllipsoidalEquation",
            "EllipsoidalLevel", "EulerLevel", "FluidParts", "HierarchyContext",
-           "HybridCollisions", "RelaxationEquation", "RelaxationLevel", "choose_levels",
-           "discrete_gaussians", "equilibrium_distance", "realizability", "relaxation_rate",
-           "StepRates", "scaled_rates", "spread_levels"]
+           "HybridCollisions", "RelaxationEquation", "RelaxationLevel", "StepRates",
+           "choose_levels", "discrete_gaussians", "equilibrium_distance", "realizability",
+           "relaxation_rate", "scaled_rates", "spread_levels"]
