@@ -247,6 +247,10 @@ class CellLayout:
 
     def __init__(self, cells: int, ghost: int, processes: int, index: int,
                  block_cells: int | None = None, counts=None, axis: int = 0):
+        if not (check.is_integer(index) and check.is_integer(processes)
+                and 0 <= index < processes):
+            check.reject("CellLayout", "index", index, f"must be this process's place among "
+                         f"the {processes} processes along the axis, 0 to {processes - 1}")
         self.axis = int(axis)
         self.chunk = store_chunk(cells, ghost, block_cells)
         self.ranges = partition(cells, self.chunk, processes, ghost, counts, self.axis)

@@ -286,6 +286,10 @@ def test_the_layout_and_the_store_of_cells_along_y_name_that_axis():
     cells = [r for r in store.records if r.cells_chunk is not None]
     assert {r.name for r in cells} >= {"density", "velocity", "temperature"}
     assert all(r.dimensions[0] == "y" and r.chunks[1] == 4 for r in cells)
+    for index in (3, -1, 1.0):
+        with pytest.raises(ValueError, match="^CellLayout: parameter 'index' = .* is invalid; "
+                                             "must be this process's place among the 3 "):
+            CellLayout(24, 2, 3, index, block_cells=4, axis=1)
     with pytest.raises(ValueError, match="store is cut into along y"):
         CellLayout(24, 2, 7, 0, block_cells=4, axis=1)
     with pytest.raises(ValueError, match="chunked by 8 cells along y"):
