@@ -402,6 +402,38 @@ def test_the_memory_of_the_operator_on_every_cell_is_in_the_one_budget(tmp_path,
                                r"\(operator 2\d.\d GiB \+ \d+ copies of every cell's f")
 
 
+@pytest.mark.parametrize("command", ["run", "limits", "advise", "bench"])
+def test_a_billion_cells_are_refused_by_their_memory_not_hung(tmp_path, capsys, command):
+    """1e9 cells without block_cells: the default chunk width looped over every integer up
+    to the cell count (minutes), and ``limits`` then sampled f0 in every cell of its
+    outline (terabytes). Now the divisors are found in pairs up to sqrt(cells) and every
+    command meets the run's memory check first: one line naming space.cells, exit 2."""
+    changes = [("space.cells", 10 ** 9), ("time_step", 1e-12), ("final_time", 2e-12)]
+    (tmp_path / "x.toml").write_text(tomli_w.dumps(table(*changes)))
+    arguments = {"run": ["run", tmp_path / "x.toml", "--out", tmp_path / "out",
+                         "--no-progress"],
+                 "limits": ["limits", tmp_path / "x.toml"],
+                 "advise": ["advise", tmp_path / "x.toml"],
+                 "bench": ["bench", "--space", "2:16:1000000000"]}[command]
+    assert main([str(a) for a in arguments]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    assert "parameter 'space.cells' = 1000000000 is invalid;" in err
+    assert "more than the memory budget" in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_divisors_of_the_cells_are_those_of_the_definition():
+    from granframe.parallel import cell_divisors
+
+    for cells in list(range(1, 200)) + [2 ** 20, 10 ** 9, 999983]:
+        low, high = 3, min(cells, 70)
+        assert cell_divisors(cells, low, high) == [b for b in range(low, high + 1)
+                                                  if cells % b == 0]
+    assert cell_divisors(10 ** 9, 3)[-3:] == [25 * 10 ** 7, 5 * 10 ** 8, 10 ** 9]
+    assert cell_divisors(999983, 2) == [999983]                 # a prime
+
+
 # -- the command line ---------------------------------------------------------------------
 @pytest.mark.parametrize("changes,message", [
     ([("space.cells", 4)], "parameter 'space.cells' = 4 is invalid; must be >= 5"),

@@ -63,7 +63,8 @@ class SpaceProblem(Problem):
         self.communicator = comm = space.communicator
         self.ranges = space.ranges
         collide = space.collisions
-        if outline:
+        if outline:          # its f0 alone is a copy of every cell's f: the run's check first
+            check_run_memory(d, None, cells=space.owned_cells)
             self.backend = NumpyBackend(threads=1)
             self.operator = OperatorOutline(grid, d.build("kernel"), d.build("restitution"),
                                             self.backend) if collide else None
