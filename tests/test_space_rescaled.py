@@ -13,7 +13,9 @@ import math
 import numpy
 import pytest
 
+import granframe
 from granframe.equations.rescaled import Rescaling
+from granframe.run.storage import RunStore
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 
@@ -123,3 +125,55 @@ def test_a_specular_box_is_accepted_and_its_mass_kept():
                            space={"left": "specular", "right": "specular"}, final=0.1))
     mass = ds.mass.values
     assert abs(mass[-1] / mass[0] - 1.0) < 1e-13
+
+
+def test_the_fields_of_a_rescaled_run_map_to_those_of_f_and_its_store_plots(tmp_path):
+    """Rescaling.physical_fields of the recorded fields of g equal the fields of the
+    physical f of the last snapshot (Rescaling.physical: f = omega^d g on the grid
+    v = u + (xi - u)/omega; its node -L of v_1 read in halves, as the fields read it),
+    to round-off; granframe plot draws the store (it raised
+    KeyError: 'temperature') with the physical fields against t."""
+    from granframe.tools.cli import main
+    from granframe.tools.plot_data import RunData
+    path = tmp_path / "rescaled.zarr"
+    d = _description(final=0.1, dt=0.02, initial=dict(SHEAR, component=2))
+    Simulation(d).run(path, progress=False)
+    ds = granframe.open_run(path)
+    law = Rescaling.from_store(RunStore.open(path))
+    s, step = float(ds.time.values[-1]), int(ds.snapshot_step.values[-1])
+    fields = law.physical_fields(ds.step_time.values[step:step + 1], *(
+        ds[name].values[step:step + 1] for name in ("density", "velocity", "temperature",
+                                                     "pressure_tensor", "heat_flux")))
+    grid = d.grid
+    omega = float(law.scale(s))
+    assert omega > 1.01          # the gas has cooled: f and g differ by 1 % and more
+    axes, f = law.physical(grid, ds.f.values[-1], s)
+    h = (axes[0][1] - axes[0][0]) ** grid.dimension
+    # the fields read the node -L of v_1 (the transport component) in halves, at -L and +L
+    axes[0] = numpy.append(axes[0], -axes[0][0])
+    f = numpy.concatenate([f, f[:, :1]], axis=1)
+    f[:, [0, -1]] *= 0.5
+    mesh = numpy.meshgrid(*axes, indexing="ij")
+    rho = f.sum(axis=(1, 2)) * h
+    u = numpy.stack([(f * m).sum(axis=(1, 2)) * h / rho for m in mesh], axis=1)
+    c = [m[None] - u[:, i, None, None] for i, m in enumerate(mesh)]
+    pressure = numpy.stack([numpy.stack([(f * c[i] * c[j]).sum(axis=(1, 2)) * h
+                                         for j in range(2)], axis=1) for i in range(2)], axis=1)
+    numpy.testing.assert_allclose(fields["density"][0], rho, rtol=1e-12)
+    numpy.testing.assert_allclose(fields["velocity"][0], u, rtol=0, atol=1e-12)
+    numpy.testing.assert_allclose(fields["pressure_tensor"][0], pressure, rtol=0,
+                                  atol=1e-10 * numpy.abs(pressure).max())
+    speed2 = c[0] ** 2 + c[1] ** 2
+    heat = numpy.stack([(f * c[i] * speed2).sum(axis=(1, 2)) * h / 2 for i in range(2)],
+                       axis=1)
+    numpy.testing.assert_allclose(fields["heat_flux"][0], heat, rtol=0,
+                                  atol=1e-10 * numpy.abs(heat).max())
+    numpy.testing.assert_allclose(fields["temperature"][0],
+                                  numpy.trace(pressure, axis1=1, axis2=2) / (2 * rho),
+                                  rtol=1e-10)
+    run = RunData(ds)
+    numpy.testing.assert_allclose(run.field("temperature")[step], fields["temperature"][0])
+    assert run.step_time[-1] == pytest.approx(float(law.physical_time(s)))
+    assert run.moments["kinetic_energy"][-1] < run.moments["kinetic_energy"][0]
+    assert main(["plot", str(path), "--out", str(tmp_path / "figures")]) == 0
+    assert {p.name for p in (tmp_path / "figures").iterdir()} >= {"maps.png", "totals.png"}

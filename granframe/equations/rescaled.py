@@ -106,6 +106,31 @@ class Rescaling:
         r"""T(t(s)) = T_g(s) / \omega(s)^2."""
         return numpy.asarray(rescaled_temperature) / self.scale(s) ** 2
 
+    def physical_fields(self, s, density, velocity, temperature, pressure_tensor,
+                        heat_flux) -> dict:
+        r"""The fields of f(t(s), x, .) from those of g(s, x, .) (arrays over records and
+        cells, ``s`` the records' times): with v = u + (\xi - u)/\omega,
+
+        .. math:: \rho_f = \rho_g,\quad u_f = u + (u_g - u)/\omega,\quad
+                  P_f = P_g/\omega^2,\quad T_f = T_g/\omega^2,\quad
+                  q_f = q_g/\omega^3,
+
+        and the kinetic energy of every cell \rho_f |u_f|^2/2 + tr P_f / 2; returns
+        ``density``, ``velocity``, ``temperature``, ``pressure_tensor``, ``heat_flux``
+        and ``energy_density``."""
+        omega = self.scale(s).reshape((-1,) + (1,) * (numpy.ndim(density) - 1))
+        d = numpy.shape(velocity)[-1]
+        mean = numpy.asarray(self.velocity, dtype=float)[:d]
+        density = numpy.asarray(density, dtype=float)
+        velocity = mean + (numpy.asarray(velocity, dtype=float) - mean) / omega[..., None]
+        pressure = numpy.asarray(pressure_tensor, dtype=float) / omega[..., None, None] ** 2
+        trace = numpy.trace(pressure, axis1=-2, axis2=-1)
+        return {"density": density, "velocity": velocity,
+                "temperature": numpy.asarray(temperature, dtype=float) / omega ** 2,
+                "pressure_tensor": pressure,
+                "heat_flux": numpy.asarray(heat_flux, dtype=float) / omega[..., None] ** 3,
+                "energy_density": 0.5 * density * (velocity ** 2).sum(axis=-1) + 0.5 * trace}
+
     def physical(self, grid, g, s):
         r"""f(t(s), .) on its own grid: returns ``(axes, f)``.
 

@@ -121,14 +121,30 @@ class RunData:
         self.rescaled = _attribute(data, "rescaling") is not None
         if self.rescaled:
             law = Rescaling(**_attribute(data, "rescaling"))
-            self.moments["temperature"] = law.temperature(self.step_time,
-                                                          self.moments["temperature"])
+            if self.space is None:
+                self.moments["temperature"] = law.temperature(self.step_time,
+                                                              self.moments["temperature"])
+            else:
+                self._physical_fields(law)
             self.step_time = law.physical_time(self.step_time)
             self.times = law.physical_time(self.times)
             self.title += " (rescaled; f shown as the profile g)"
         #: the names of f and of the velocity in the figures: g and xi for a rescaled run
         self.f_name, self.v_name = ("g", "ξ") if self.rescaled else ("f", "v")
         self._extremes = None
+
+    def _physical_fields(self, law) -> None:
+        """The fields and the total kinetic energy of a rescaled space run, those of f
+        (:meth:`~granframe.equations.rescaled.Rescaling.physical_fields` of the recorded
+        fields of g at the records' times s)."""
+        fields = law.physical_fields(self.step_time, *(
+            self.ds[name].values for name in ("density", "velocity", "temperature",
+                                              "pressure_tensor", "heat_flux")))
+        energy = fields.pop("energy_density").sum(axis=1) * (self.space.length
+                                                             / self.space.cells)
+        self.ds = self.ds.assign({name: (self.ds[name].dims, values)
+                                  for name, values in fields.items()})
+        self.moments["kinetic_energy"] = energy
 
     @classmethod
     def of(cls, data) -> "RunData":
