@@ -27,6 +27,7 @@ import attrs
 import pluggy
 
 from granframe import contract_checks, hookspecs
+from granframe import validators as check
 from granframe._version import __version__
 from granframe.errors import PluginError, UnknownNameError, UnknownParameterError
 
@@ -428,9 +429,10 @@ def get_plugin_manager() -> tuple[pluggy.PluginManager, dict[str, Source]]:
                               f"{source}; uninstall one or disable with {DISABLE_ENV}")
         try:
             plugin = ep.load()
-        except Exception as exc:  # any import failure of third-party code, reported with its origin
-            raise PluginError(f"cannot load {source} (entry point {ep.value!r}): {exc!r}; "
-                              f"disable it with {DISABLE_ENV}={ep.name}") from exc
+        except check.USER_CODE_FAILURES as exc:  # third-party code, reported with its origin
+            raise PluginError(f"cannot load {source} (entry point {ep.value!r}): "
+                              f"{check.raised(exc)}; disable it with "
+                              f"{DISABLE_ENV}={ep.name}") from exc
         try:
             pm.register(plugin, name=ep.name)
         except pluggy.PluginValidationError as exc:

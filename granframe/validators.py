@@ -24,6 +24,20 @@ def reject(owner: str, name: str, value: Any, allowed: str, *, error=ValueError)
     raise error(f"{owner}: parameter '{name}' = {shown} is invalid; {allowed}")
 
 
+#: what user code (an initial condition, a kernel's angular part, a module it names) may
+#: raise that granframe reports as that code's failure: any error, and a ``sys.exit``
+#: inside it (KeyboardInterrupt still stops the run)
+USER_CODE_FAILURES = (Exception, SystemExit)
+
+
+def raised(exc: BaseException) -> str:
+    """What user code raised, for a message: ``TypeError: ...``, or for a ``sys.exit``
+    inside it ``SystemExit (it called sys.exit(0))``."""
+    if isinstance(exc, SystemExit):
+        return f"SystemExit (it called sys.exit({exc.code!r}))"
+    return f"{type(exc).__name__}: {exc}"
+
+
 def distinct(value: float, limit: float, digits: int = 3) -> tuple[str, str]:
     """``value`` and ``limit`` with ``digits`` significant digits, or as many more as make
     them differ (17 tell any two floats apart), for messages comparing a value with its

@@ -5,7 +5,9 @@ or a NaN. The grid of these runs is 2D N = 16, S = 3.2: L = 7.0627, h = 0.88284.
 
 import copy
 import math
+import os
 import re
+import subprocess
 import sys
 import types
 
@@ -592,3 +594,47 @@ def test_space_function_parameters_the_function_does_not_take_are_refused(tmp_pa
     reference = _function("family", _family)
     refused(tmp_path, [("initial", {"name": "space_function", "function": reference,
                                     "params": params})], match)
+
+
+def _exits(*_, **__):
+    sys.exit(0)
+
+
+def test_user_code_that_calls_sys_exit_is_refused_naming_it(tmp_path, capsys,
+                                                           make_distribution):
+    """A space function, a callable initial condition, a kernel's angular part, a module a
+    description names and a plugin that call sys.exit: each is that code's failure,
+    refused naming it (a space function's sys.exit(0) ended granframe run with status 0,
+    nothing printed and no store)."""
+    reference = _function("exits", _exits)
+    table_exits = table(("initial", {"name": "space_function", "function": reference}))
+    (tmp_path / "x.toml").write_text(tomli_w.dumps(table_exits))
+    out = tmp_path / "out"
+    assert main(["run", str(tmp_path / "x.toml"), "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("granframe: error: SpaceFunction: parameter 'function' = "
+                          "'sbi_functions:exits' is invalid;") and err.count("\n") == 1, err
+    assert "calling it raised SystemExit (it called sys.exit(0))" in err
+    assert not out.exists()
+    with pytest.raises(ValueError, match=r"^FromCallable: parameter 'function' = .* calling "
+                                         r"it raised SystemExit \(it called sys.exit\(0\)\)"):
+        gf.initial_condition("callable", function=_exits).sample(GRID)
+    with pytest.raises(TypeError, match=r"parameter 'angular' = .*\(calling it raised "
+                                        r"SystemExit \(it called sys.exit\(0\)\)"):
+        gf.collision_kernel("vhs", exponent=0.5, angular=_exits)
+    (tmp_path / "exits_on_import.py").write_text("import sys\nsys.exit(3)\n")
+    sys.path.insert(0, str(tmp_path))
+    try:
+        with pytest.raises(ValueError, match=r"'exits_on_import:f' is invalid; cannot be "
+                                             r"imported: importing 'exits_on_import' raised "
+                                             r"SystemExit \(it called sys.exit\(3\)\)"):
+            SpaceFunction("exits_on_import:f")
+    finally:
+        sys.path.remove(str(tmp_path))
+    site = make_distribution("granframe-exits", "granframe_exits", "import sys\nsys.exit(0)\n")
+    done = subprocess.run([sys.executable, "-m", "granframe.tools.cli", "plugins"],
+                          env=dict(os.environ, PYTHONPATH=str(site)), capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 2, done.stderr
+    assert ("cannot load plugin 'granframe_exits'" in done.stderr
+            and "SystemExit (it called sys.exit(0))" in done.stderr), done.stderr

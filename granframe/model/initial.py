@@ -319,6 +319,9 @@ def resolve_callable(owner: str, name: str, value) -> Callable:
                 target = getattr(target, part)
         except (ImportError, AttributeError) as exc:
             check.reject(owner, name, value, f"cannot be imported ({exc})")
+        except check.USER_CODE_FAILURES as exc:     # the module's own code, run by its import
+            check.reject(owner, name, value, f"cannot be imported: importing "
+                         f"'{module_name}' raised {check.raised(exc)}")
         if callable(target):
             return target
     check.reject(owner, name, value, "must be a callable or a 'module:function' string",
@@ -384,10 +387,10 @@ class FromCallable(InitialCondition):
         try:
             raw = numpy.asarray(function(*grid.mesh()))
             values = numpy.asarray(raw.real if raw.dtype.kind == "c" else raw, dtype=float)
-        except Exception as exc:  # the user's function: report it with what it was given
+        except check.USER_CODE_FAILURES as exc:  # the user's function, with what it was given
             check.reject("FromCallable", "function", self.function,
                          f"must map the {grid.dimension} velocity components (broadcastable "
-                         f"arrays) to f0; calling it raised {type(exc).__name__}: {exc}")
+                         f"arrays) to f0; calling it raised {check.raised(exc)}")
         check_real(raw, values, "FromCallable", self.function)
         try:
             return numpy.broadcast_to(values, grid.shape).copy()

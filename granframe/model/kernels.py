@@ -35,9 +35,9 @@ def _angular_validator(instance, attribute, value):
     try:
         with numpy.errstate(all="ignore"):
             samples = numpy.asarray(value(_ANGULAR_SAMPLES), dtype=float)
-    except Exception as exc:  # a user callable may fail in any way: report which one failed
-        check.reject(owner, attribute.name, value,
-                     f"must accept a NumPy array of cos(theta) in [-1, 1] ({exc!r})", error=TypeError)
+    except check.USER_CODE_FAILURES as exc:  # a user callable may fail in any way
+        check.reject(owner, attribute.name, value, "must accept a NumPy array of cos(theta) "
+                     f"in [-1, 1] (calling it raised {check.raised(exc)})", error=TypeError)
     samples = numpy.broadcast_to(samples, _ANGULAR_SAMPLES.shape)
     if not numpy.all(numpy.isfinite(samples)) or samples.min() <= 0.0:
         check.reject(owner, attribute.name, value,

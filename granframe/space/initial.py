@@ -320,12 +320,12 @@ class SpaceFunction(SpaceCondition):
             raw = numpy.asarray(function(x, *mesh))
             values = numpy.asarray(raw.real if raw.dtype.kind == "c" else raw, dtype=float)
             values = numpy.broadcast_to(values, shape)
-        except Exception as exc:  # the user's function: report it with what it was given
+        except check.USER_CODE_FAILURES as exc:  # the user's function, with what it was given
             check.reject("SpaceFunction", "function", self.function,
                          f"must map x and the {len(mesh)} velocity components (broadcastable "
                          f"arrays, x of shape {x.shape}) to f0 of shape {shape}"
                          + (f" with params {self.params}" if self.params else "")
-                         + f"; calling it raised {type(exc).__name__}: {exc}")
+                         + f"; calling it raised {check.raised(exc)}")
         check_real(raw, values, "SpaceFunction", self.function)
         return values
 
