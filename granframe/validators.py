@@ -16,9 +16,19 @@ import attrs
 import numpy
 
 
+def _plain(value):
+    """``value`` with NumPy scalars as Python numbers (in lists and tuples too), so that a
+    message shows 0.5, not np.float64(0.5)."""
+    if isinstance(value, numpy.generic):
+        return value.item()
+    if isinstance(value, (list, tuple)):
+        return type(value)(_plain(v) for v in value)
+    return value
+
+
 def reject(owner: str, name: str, value: Any, allowed: str, *, error=ValueError):
-    """Raise ``error`` with granframe's standard message."""
-    shown = repr(value)
+    """Raise ``error`` with granframe's standard message (NumPy scalars shown as numbers)."""
+    shown = repr(_plain(value))
     if len(shown) > 80:
         shown = shown[:77] + "..."
     raise error(f"{owner}: parameter '{name}' = {shown} is invalid; {allowed}")
@@ -36,6 +46,25 @@ def raised(exc: BaseException) -> str:
     if isinstance(exc, SystemExit):
         return f"SystemExit (it called sys.exit({exc.code!r}))"
     return f"{type(exc).__name__}: {exc}"
+
+
+def existing_file(owner: str, name: str, path, expected: str) -> None:
+    """Refuse a ``path`` that is not a file: missing ("no such file"), or a directory
+    (a zarr store such as a run's, or another), saying what the command takes
+    (``expected``)."""
+    import pathlib
+
+    path = pathlib.Path(path)
+    if path.is_file():
+        return
+    if not path.exists():
+        reject(owner, name, str(path), "no such file")
+    what = ("a zarr store (a run's or a sweep's), not a file"
+            if (path / "zarr.json").is_file() else "a directory, not a file")
+    reject(owner, name, str(path), f"is {what}; {owner} takes {expected}"
+           + ("; `granframe info` says what a store holds, and a run store is continued by "
+              "`granframe run DESCRIPTION --out STORE --resume`"
+              if (path / "zarr.json").is_file() else ""))
 
 
 def distinct(value: float, limit: float, digits: int = 3) -> tuple[str, str]:

@@ -477,3 +477,70 @@ def test_space_keys_can_be_set_on_the_command_line(tmp_path, capsys):
     status, err = _cli(tmp_path, capsys, "limits", tmp_path / "d.toml", "--set",
                        "space.right.accomodation=0.5")
     assert status == 2 and "did you mean 'space.right.accommodation'?" in err
+
+
+# -- messages show what the user gave ------------------------------------------------------
+
+def test_a_string_for_a_list_of_thresholds_is_shown_as_written():
+    """It was shown as a tuple of its characters, ('0', '.', '1')."""
+    from test_space_bad_input import table
+
+    for key in ("realizability", "distance"):
+        with pytest.raises(TypeError, match=rf"parameter 'hierarchy.{key}' = '0.1' is "
+                                             r"invalid; must be a list of 2 numbers"):
+            RunDescription.from_dict(table(("integrator", "penalised_euler"),
+                                           ("conservative", True),
+                                           ("space.hierarchy", {key: "0.1"})))
+
+
+def test_a_hierarchy_without_the_correction_shows_what_conservative_is():
+    """It showed conservative = None, a value the user cannot write."""
+    from test_space_bad_input import table
+
+    for value in (False, None):
+        changes = [("integrator", "penalised_euler"), ("space.hierarchy", {})]
+        if value is not None:
+            changes.append(("conservative", value))
+        with pytest.raises(ValueError, match=r"parameter 'conservative' = False is invalid; "
+                                             r"must be set \(true, or a weight\)"):
+            RunDescription.from_dict(table(*changes))
+
+
+def test_numpy_scalars_are_shown_as_numbers():
+    from granframe.parallel import partition
+    from granframe.validators import reject
+
+    with pytest.raises(ValueError, match=r"^partition: parameter 'partition' = \[21, 3\] is "):
+        partition(24, 4, 2, 2, [numpy.int64(21), numpy.int64(3)])
+    with pytest.raises(ValueError, match=r"parameter 'y' = \(0.5, 2\) is invalid"):
+        reject("X", "y", (numpy.float64(0.5), numpy.int32(2)), "")
+    with pytest.raises(ValueError, match=r"parameter 'y' = 0.25 is invalid"):
+        reject("X", "y", numpy.float32(0.25), "")
+
+
+@pytest.mark.parametrize("command", ["run", "limits", "advise", "sweep"])
+def test_a_directory_is_refused_as_a_directory_and_a_store_as_a_store(tmp_path, capsys,
+                                                                      command):
+    """A store directory was 'no such file'."""
+    store = tmp_path / "run.zarr"
+    Simulation(heated(final_time=0.02, time_step=0.01)).run(store, progress=False)
+    plain = tmp_path / "plain"
+    plain.mkdir()
+    out = ["--out", tmp_path / "s.zarr"] if command in ("run", "sweep") else []
+    status, err = _cli(tmp_path, capsys, command, store, *out)
+    assert status == 2 and "is a zarr store (a run's or a sweep's), not a file;" in err, err
+    assert "granframe info" in err and err.count("\n") == 1
+    status, err = _cli(tmp_path, capsys, command, plain, *out)
+    assert status == 2 and "is a directory, not a file;" in err, err
+    status, err = _cli(tmp_path, capsys, command, tmp_path / "missing.toml", *out)
+    assert status == 2 and "no such file" in err, err
+    assert not (tmp_path / "s.zarr").exists()
+
+
+@pytest.mark.parametrize("method", ["mass", "momentum", "temperature", "kurtosis",
+                                    "pressure_tensor", "heat_flux", "moments", "project"])
+def test_the_grid_refuses_an_f_that_is_not_an_array_by_name(method):
+    grid = gf.VelocityGrid(2, 8, 4.0)
+    with pytest.raises(TypeError, match=r"^VelocityGrid: parameter 'f' = \[1, 2\] is invalid; "
+                                        r"must be an array of the grid shape \(8, 8\)"):
+        getattr(grid, method)([1, 2])

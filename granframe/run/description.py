@@ -385,7 +385,7 @@ class RunDescription:
             check.reject(owner, "heat_bath", self.heat_bath, "must be 0 in a collisionless "
                          "run (space.collisions = false solves free transport only)")
         if self.space.hierarchy is not None and self.conservative is None:
-            check.reject(owner, "conservative", self.conservative,
+            check.reject(owner, "conservative", False,
                          "must be set (true, or a weight) with a space.hierarchy: the levels "
                          "keep every cell's mass and momentum to round-off and its energy to "
                          "the collisions' dissipation, and only the corrected operator does "

@@ -29,6 +29,7 @@ import numpy
 import tqdm
 import zarr
 
+from granframe import validators as check
 from granframe._version import __version__
 from granframe.backends import available_cpus
 from granframe.errors import NonFiniteError
@@ -84,8 +85,7 @@ def load_study(source, quick: bool = False) -> Study:
     A module may also define ``report(stores, out)``.
     """
     path = pathlib.Path(source)
-    if not path.is_file():
-        raise ValueError(f"run: parameter 'source' = '{source}' is invalid; no such file")
+    check.existing_file("run", "source", path, "a .toml description or a .py study module")
     if path.suffix == ".toml":
         if quick:
             raise ValueError("run: --quick applies to study modules; a TOML description runs "

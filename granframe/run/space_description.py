@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 
 import attrs
+import numpy
 
 from granframe import validators as check
 from granframe.parallel import store_chunk
@@ -38,9 +39,12 @@ def _levels(value):
 
 
 def _floats(value):
-    """A tuple of floats from a list (a number alone as one), unchanged when not numbers."""
+    """A tuple of floats from a list (a number alone as one), unchanged when not numbers
+    (a string too, which is not a list of its characters)."""
     if check.is_real(value):
         value = [value]
+    if not isinstance(value, (list, tuple, numpy.ndarray)):
+        return value
     try:
         return tuple(check.to_float(v) for v in value)
     except TypeError:

@@ -11,6 +11,7 @@ import pathlib
 import sys
 
 from granframe import __version__
+from granframe import validators as check
 from granframe.tools.cli_inputs import load_study, read_text, with_settings
 
 
@@ -182,8 +183,7 @@ def advise_command(args) -> int:
     from granframe.tools.advise import Scene, advise, price_hierarchy
 
     path = pathlib.Path(args.scene)
-    if not path.is_file():
-        raise ValueError(f"advise: parameter 'scene' = '{args.scene}' is invalid; no such file")
+    check.existing_file("advise", "scene", path, "a .toml scene or description")
     try:
         data = tomllib.loads(read_text(path, "advise", "scene"))
     except tomllib.TOMLDecodeError as exc:

@@ -12,6 +12,7 @@ import sys
 
 import attrs
 
+from granframe import validators as check
 from granframe.tools.cli_inputs import load_study, read_text, with_settings
 
 
@@ -238,8 +239,7 @@ def sweep_command(args) -> int:
     from granframe.run.sweep import Sweep, run_sweep
 
     path = pathlib.Path(args.sweep)
-    if not path.is_file():
-        raise ValueError(f"sweep: parameter 'sweep' = '{args.sweep}' is invalid; no such file")
+    check.existing_file("sweep", "sweep", path, "a .toml sweep")
     try:
         result = run_sweep(Sweep.from_toml(read_text(path, "sweep", "sweep")), args.out,
                            scheduler=args.scheduler, workers=args.workers,

@@ -208,6 +208,11 @@ class VelocityGrid(Grid):
 
     # -- moments ----------------------------------------------------------------------
     def check_shape(self, f):
+        """Refuse an f that is not an array (NumPy or the backend's) of the grid's shape."""
+        if not hasattr(f, "shape") or not hasattr(f, "dtype"):
+            check.reject("VelocityGrid", "f", f, f"must be an array of the grid shape "
+                         f"{self.shape} (NumPy, or the backend's), not a "
+                         f"{type(f).__name__}", error=TypeError)
         if tuple(f.shape) != self.shape:
             check.reject("VelocityGrid", "f.shape", tuple(f.shape),
                          f"must equal the grid shape {self.shape}")
