@@ -424,3 +424,29 @@ def test_initial_data_in_x_needs_a_space_table():
 def test_price_refuses_bad_arguments_by_name(argument, keywords, parameter):
     with pytest.raises((ValueError, TypeError), match=parameter):
         price_hierarchy(_sod_run() if argument is None else argument, **keywords)
+
+
+def test_a_rescaled_description_is_priced_as_it_is(tmp_path, capsys):
+    """advise on a rescaled run refused 'space.hierarchy', a key the description did not
+    have (it priced the run with a default hierarchy added): now it times the run as it
+    is, and says why no hierarchy is priced; price_hierarchy refuses it naming rescaled."""
+    table = {"final_time": 0.08, "time_step": 0.02, "integrator": "rk4", "rescaled": True,
+             "conservative": True,
+             "grid": {"dimension": 2, "n_modes": 24, "support_radius": 4.0},
+             "kernel": "hard_spheres", "restitution": {"name": "constant", "value": 0.8},
+             "initial": {"name": "sinusoidal_mode", "field": "velocity", "component": 2,
+                         "amplitude": 0.2},
+             "space": {"cells": 6}}
+    (tmp_path / "r.toml").write_text(tomli_w.dumps(table))
+    status = main(["advise", str(tmp_path / "r.toml")])
+    out, err = capsys.readouterr()
+    assert status == 0, err
+    assert "a rescaled run: priced as it is" in out and "estimated cost: 4 steps x" in out
+    assert "hierarchy' = " not in out + err
+    assert main(["advise", str(tmp_path / "r.toml"), "--json"]) == 0
+    document = json.loads(capsys.readouterr().out)
+    assert document["schema"] == "granframe.run_cost/1" and document["steps"] == 4
+    assert document["step_seconds"] > 0
+    with pytest.raises(ValueError, match=r"^advise: parameter 'rescaled' = True is invalid; "
+                                         r"must be false to price a hierarchy"):
+        price_hierarchy(RunDescription.from_dict(table))

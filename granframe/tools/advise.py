@@ -633,6 +633,11 @@ def _priced(description, repeats):
     if not space.collisions:
         check.reject("advise", "space.collisions", False, "must be true: a collisionless run "
                      "takes no collision step to price")
+    if description.rescaled:
+        check.reject("advise", "rescaled", True, "must be false to price a hierarchy of "
+                     "collision models, which a rescaled run cannot take (its fluid levels "
+                     "have no self-similar drift); run_cost prices the rescaled run as it is "
+                     "(granframe advise does so for a rescaled description)")
     if space.hierarchy is not None:
         return description
     data = description.to_dict()

@@ -82,6 +82,26 @@ def _limit_runs(args) -> tuple[dict, bool]:
             checked)
 
 
+def _advise_rescaled(description, as_json: bool) -> int:
+    """``granframe advise`` on a rescaled run description: priced as it is, one step timed
+    (:func:`~granframe.run.problems.run_cost`); a hierarchy of collision models, which a
+    rescaled run cannot take (its fluid levels have no self-similar drift), is not priced
+    beside it."""
+    from granframe.parallel import SerialCommunicator
+    from granframe.run.problems import make_problem, run_cost
+
+    cost = run_cost(make_problem(description, communicator=SerialCommunicator()), repeats=3)
+    why = ("a rescaled run: priced as it is; a hierarchy of collision models is not priced "
+           "beside it, since its fluid levels have no self-similar drift (docs/space.md)")
+    if as_json:
+        json.dump({"schema": "granframe.run_cost/1", "rescaled": True, "note": why,
+                   **cost.to_dict()}, sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        print(f"{why}\n{cost.text()}")
+    return 0
+
+
 def limits_command(args) -> int:
     """``granframe limits``: the time-step limits of each run and its cost, as lines or
     JSON; 3 when a fixed time step is above a limit."""
@@ -194,7 +214,10 @@ def advise_command(args) -> int:
                              f"the description advised for a scene, and '{path}' is a run "
                              "description (it has a grid), priced as it is: add the "
                              "fragment the report shows to it instead")
-        price = price_hierarchy(RunDescription.from_dict(data))
+        description = RunDescription.from_dict(data)
+        if description.rescaled:
+            return _advise_rescaled(description, args.json)
+        price = price_hierarchy(description)
         if args.json:
             json.dump({"schema": "granframe.hierarchy_price/1", **price.to_dict()}, sys.stdout,
                       indent=2)
