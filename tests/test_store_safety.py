@@ -480,6 +480,36 @@ def test_check_calls_a_sweep_with_an_unreadable_run_damaged(workdir, capsys):
     assert "runs/a is not a readable run store" in capsys.readouterr().out
 
 
+@pytest.mark.parametrize("damage", ["missing", "flipped"])
+def test_a_finished_run_damaged_is_made_again_from_before_the_damage_by_rollback(
+        workdir, capsys, damage):
+    """``--resume --rollback`` on a finished store with a damaged chunk of f said "already
+    finished" and left it damaged (``check`` listed the damage). Now the store is checked
+    whole, taken back to the snapshot before the first damage and the run made again
+    from there: finished, intact, equal to the undamaged store; a second --rollback
+    finds nothing to take back."""
+    reference = contents(finished(workdir / "reference.zarr"))
+    finished(workdir / "s.zarr")
+    chunks = sorted((workdir / "s.zarr" / "f" / "c").rglob("*"))
+    chunk = [c for c in chunks if c.is_file()][1]               # the second snapshot's f
+    chunk.unlink() if damage == "missing" else flip(chunk)
+    assert main(["check", "s.zarr"]) == 3
+    capsys.readouterr()
+    assert main(["run", "base.toml", "--out", "s.zarr", "--resume", "--rollback",
+                 "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "s.zarr: finished," in out and "already finished" not in out, out
+    assert main(["check", "s.zarr"]) == 0
+    resumed = contents(workdir / "s.zarr")
+    assert_same(resumed, reference, "rolled back and made again")
+    assert resumed["meta"]["progress"]["status"] == "finished"
+    assert resumed["meta"]["progress"]["rollbacks"]
+    capsys.readouterr()
+    assert main(["run", "base.toml", "--out", "s.zarr", "--resume", "--rollback",
+                 "--no-progress"]) == 0
+    assert "every chunk is intact: nothing to roll back" in capsys.readouterr().out
+
+
 def test_resume_with_rollback_of_a_health_stop_exits_3(workdir, capsys):
     d = heated(integrator="forward_euler", heat_bath=50.0, time_step=0.05, final_time=5.0,
                output={"snapshot_interval": 0.5}, health={"step_limit": False})

@@ -134,7 +134,7 @@ def _run_one(description, out, args) -> int:
             print(f"{out}: stopped earlier by a health check ({progress.get('message')}); "
                   "not resumed", file=sys.stderr)
             return 3
-        if progress.get("status") == "finished":
+        if progress.get("status") == "finished" and not args.rollback:
             if processes()[1] == 0:   # the lock is one process's
                 RunStore.resume(out, description.to_dict()).close()   # refuses another description
             print(f"{out}: the run is already finished (t = {progress['time']:g}, "
@@ -163,6 +163,10 @@ def _run_one(description, out, args) -> int:
     except KeyboardInterrupt:
         print("\ngranframe: interrupted; " + _interrupted(out), file=sys.stderr)
         return 130
+    if result.status == "already finished":      # --rollback found nothing to take back
+        print(f"{out}: the run is already finished (t = {result.time:g}, {result.steps} "
+              "steps) and every chunk is intact: nothing to roll back")
+        return 0
     print(f"{out}: finished, {result.steps} steps to t = {result.time:g} in "
           f"{result.wall_seconds:.1f} s, {result.snapshots} snapshots")
     if args.rollback:

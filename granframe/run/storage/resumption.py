@@ -54,13 +54,18 @@ def prepare(store, path, description: dict, rollback: bool) -> None:
     """Make ``store`` (at ``path``, its writer lock held) ready to continue the run of
     ``description``: checked (:func:`check_resumable`), the files of writes a kill cut
     short removed, cut back to its last commit (:func:`truncate`) and, unless the run
-    finished, checked to continue from intact data (:func:`roll_back`)."""
+    finished, checked to continue from intact data (:func:`roll_back`); a finished run
+    with ``rollback`` is checked whole (every snapshot of f, as ``granframe check``) and,
+    where damaged, taken back to the snapshot before the first damage, from which the
+    run is made again: the store ends finished and intact."""
     status = check_resumable(store, path, description)
     for partial in pathlib.Path(path).rglob("*.partial"):   # writes cut by a kill
         partial.unlink()
     truncate(store)
     if status != "finished":
         roll_back(store, rollback)
+    elif rollback:           # a finished run is taken back only where it is damaged
+        roll_back(store, rollback, whole=True)
 
 
 def truncate(store) -> None:
@@ -80,7 +85,7 @@ def truncate(store) -> None:
             array.resize((extent,) + array.shape[1:])
 
 
-def roll_back(store, rollback: bool) -> None:
+def roll_back(store, rollback: bool, whole: bool = False) -> None:
     """Check what a resumed run reads; roll back to the last intact commit if asked.
 
     The run continues from the last snapshot whose f and snapshot entries are intact.
@@ -88,10 +93,12 @@ def roll_back(store, rollback: bool) -> None:
     ``rollback`` its records are dropped (NaN; the step numbers, record i being step i,
     are written again) and listed in the metadata's ``dropped_records``
     (:func:`~granframe.run.storage.describe` shows them). Without ``rollback``, any
-    damage raises :class:`StoreDamagedError` naming the last intact commit.
+    damage raises :class:`StoreDamagedError` naming the last intact commit. With
+    ``whole`` every snapshot of f is checked, and the run continues from the last snapshot
+    before the first damaged one.
     """
     k = store.snapshot_count
-    intact, problems = _last_intact(store)
+    intact, problems = _last_intact(store, whole)
     if not problems:
         return
     if intact is None:
@@ -116,13 +123,14 @@ def roll_back(store, rollback: bool) -> None:
     _commit_rollback(store, intact, dropped)
 
 
-def _last_intact(store) -> tuple[int | None, list[dict]]:
+def _last_intact(store, whole: bool = False) -> tuple[int | None, list[dict]]:
     """``(j, problems)``: the last snapshot j of ``store`` whose f and snapshot entries are
     intact (None when none is), and the problems of every array but f and the coordinates
-    and of the snapshots of f after j."""
+    and of the snapshots of f after j; with ``whole`` of every snapshot of f, j before
+    the first damaged one."""
     k = store.snapshot_count
     small = [n for n in store.array_names() if n != "f" and n not in store.coordinate_arrays]
-    problems = store.verify(small)
+    problems = store.verify(small + (["f"] if whole else []))
     bad_snapshot = min((p["first"] for p in problems if p["array"] in SNAPSHOT_ARRAYS),
                        default=k)
     for j in range(min(k, bad_snapshot) - 1, -1, -1):
