@@ -11,7 +11,6 @@ import pathlib
 import sys
 
 from granframe import __version__
-from granframe import validators as check
 from granframe.tools.cli_inputs import load_study, read_text, with_settings
 
 
@@ -201,9 +200,10 @@ def advise_command(args) -> int:
 
     from granframe.run.description import RunDescription
     from granframe.tools.advise import Scene, advise, price_hierarchy
+    from granframe.validators import existing_file
 
     path = pathlib.Path(args.scene)
-    check.existing_file("advise", "scene", path, "a .toml scene or description")
+    existing_file("advise", "scene", path, "a .toml scene or description")
     try:
         data = tomllib.loads(read_text(path, "advise", "scene"))
     except tomllib.TOMLDecodeError as exc:

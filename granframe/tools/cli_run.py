@@ -12,7 +12,6 @@ import sys
 
 import attrs
 
-from granframe import validators as check
 from granframe.tools.cli_inputs import load_study, read_text, with_settings
 
 
@@ -241,9 +240,10 @@ def sweep_command(args) -> int:
     """``granframe sweep``: every point of a parameter sweep into one store; the exit status
     (3 when a run failed, 130 when interrupted)."""
     from granframe.run.sweep import Sweep, run_sweep
+    from granframe.validators import existing_file
 
     path = pathlib.Path(args.sweep)
-    check.existing_file("sweep", "sweep", path, "a .toml sweep")
+    existing_file("sweep", "sweep", path, "a .toml sweep")
     try:
         result = run_sweep(Sweep.from_toml(read_text(path, "sweep", "sweep")), args.out,
                            scheduler=args.scheduler, workers=args.workers,
