@@ -122,6 +122,51 @@ def world() -> Communicator:
     return communicator
 
 
+#: the attribute by which an exception says it was raised in every process at the same
+#: point (:func:`in_every_process`, ``granframe.run.storage.collective``): the processes
+#: stop together, and one of them speaks for all
+RAISED_EVERYWHERE = "granframe_raised_everywhere"
+
+
+def raised_everywhere(exc: BaseException) -> BaseException:
+    """``exc`` marked as raised in every process (:data:`RAISED_EVERYWHERE`)."""
+    try:
+        setattr(exc, RAISED_EVERYWHERE, True)
+    except AttributeError:      # an exception type without a __dict__: left unmarked
+        pass
+    return exc
+
+
+def in_every_process(communicator: Communicator, function):
+    """``function()`` run by every process; when it raises in any of them, every process
+    raises, so that none waits for the others in a later collective: the failing process
+    its own exception, the others one of the same built-in type (ValueError, TypeError,
+    OSError; else RuntimeError) with the first failing process's message and its number,
+    all marked :func:`raised_everywhere`. One allgather of a small object when several
+    processes run; KeyboardInterrupt passes through."""
+    try:
+        value, error = function(), None
+    except Exception as exc:       # reported to every process below
+        value, error = None, exc
+    if communicator.size == 1:
+        if error is not None:
+            raise error
+        return value
+    kinds = (ValueError, TypeError, OSError)
+    summary = None if error is None else (
+        next((k.__name__ for k in kinds if isinstance(error, k)), "RuntimeError"), str(error))
+    failures = [(rank, s) for rank, s in enumerate(communicator.allgather_object(summary))
+                if s is not None]
+    if not failures:
+        return value
+    if error is not None:
+        raise raised_everywhere(error)
+    rank, (kind, message) = failures[0]
+    raise raised_everywhere({"ValueError": ValueError, "TypeError": TypeError,
+                             "OSError": OSError}.get(kind, RuntimeError)(
+        f"{message} (in process {rank} of {communicator.size})"))
+
+
 def partition(cells: int, chunk: int, processes: int, ghost: int,
               counts=None, axis: int = 0) -> list[tuple[int, int]]:
     """The cells ``(start, stop)`` of each process: contiguous, whole chunks, in rank order.

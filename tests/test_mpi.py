@@ -435,3 +435,42 @@ def test_other_commands_and_space_homogeneous_runs_are_refused_under_mpiexec(
                processes=2)
     assert_refused(done, "processes", "space-homogeneous")
     assert not (tmp_path / "out.zarr").exists()
+
+
+RANK_FAILS = '''\
+import os
+
+import numpy
+
+
+def f0(x, v1, v2):
+    if os.environ.get("PMI_RANK", "0") == "1":
+        raise RuntimeError("only in rank 1")
+    return numpy.exp(-(v1 ** 2 + v2 ** 2) / 2) / (2 * numpy.pi) + 0.0 * x
+'''
+
+
+def test_an_error_in_one_process_ends_all_with_one_line(tmp_path, monkeypatch, mpi_sees_two):
+    """A space function that raises in process 1 only hung the run (process 0 waited in
+    the cost estimate's exchange); the initial data are now made in every process and an
+    error in any ends all, said once by process 0 naming the process. A refusal every
+    process meets together (a store that exists) printed the exception and an MPI_Abort
+    line from every process; now one line, as serially."""
+    (tmp_path / "rank_fails.py").write_text(RANK_FAILS)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    toml = write_toml(tmp_path / "run.toml", [
+        ("initial", {"name": "space_function", "function": "rank_fails:f0"})])
+    done = cli("run", toml, "--out", tmp_path / "out.zarr", "--no-progress", processes=2,
+               timeout=120, env={"PYTHONPATH": os.pathsep.join(
+                   [str(tmp_path), os.environ.get("PYTHONPATH", "")])})
+    assert_refused(done, "function", "calling it raised RuntimeError: only in rank 1 "
+                                     "(in process 1 of 2)")
+    assert done.stderr.count("granframe: error") == 1 and "Abort" not in done.stderr, (
+        done.stderr)
+    assert not (tmp_path / "out.zarr").exists()
+    plain = write_toml(tmp_path / "plain.toml")
+    run(plain, tmp_path / "s.zarr", processes=2)
+    done = cli("run", plain, "--out", tmp_path / "s.zarr", "--no-progress", processes=2)
+    assert done.returncode == 2 and "store '" in done.stderr and "exists" in done.stderr
+    assert done.stderr.count("granframe: error") == 1 and "Abort" not in done.stderr, (
+        done.stderr)

@@ -187,8 +187,10 @@ def together(communicator):
     """Around the part of a run that its processes make together (the cost estimate's step
     and the run): an error in one process is printed with its number and ends them all
     (:meth:`~granframe.abc.Communicator.abort`, status 2 for granframe's refusals, 1 for
-    anything else), since the others would wait for it for ever. A health stop and a
-    Ctrl-C reach every process at the same step and pass through."""
+    anything else), since the others would wait for it for ever. A health stop, a Ctrl-C
+    and an error raised in every process at the same point (a refusal of the store,
+    :data:`granframe.parallel.RAISED_EVERYWHERE`) reach every process and pass through:
+    process 0 says it once."""
     from granframe.run.runner import HealthError
 
     try:
@@ -196,8 +198,10 @@ def together(communicator):
     except (HealthError, KeyboardInterrupt):
         raise
     except BaseException as exc:
-        if communicator.size == 1:
-            raise
+        from granframe.parallel import RAISED_EVERYWHERE
+
+        if communicator.size == 1 or getattr(exc, RAISED_EVERYWHERE, False):
+            raise         # every process stops here: process 0 says why, once
         print(f"granframe: error in process {communicator.rank} of {communicator.size}: "
               f"{type(exc).__name__}: {exc}", file=sys.__stderr__, flush=True)
         communicator.abort(2 if isinstance(exc, (ValueError, TypeError, OSError)) else 1)

@@ -21,6 +21,7 @@ from granframe.equations.conservative import ConservativeCorrection
 from granframe.equations.homogeneous import HomogeneousBoltzmann
 from granframe.equations.rescaled import RescaledBoltzmann
 from granframe.memory import check_run_memory
+from granframe.parallel import in_every_process
 from granframe.registry import default_registries
 from granframe.run.description import RunDescription
 from granframe.run.problems.parts import build_operator, check_step
@@ -77,7 +78,9 @@ class SpaceProblem(Problem):
         self.domain, self.transport, self.fields = space.domain, space.transport, space.fields
         self.left, self.right = space.left, space.right
         self.reconstruction, self.cell_layout = space.reconstruction, space.cell_layout
-        self.f0, self.projection = space.initial(check=not outline)
+        # the initial data are the user's code, which may fail in one process only
+        self.f0, self.projection = in_every_process(
+            comm, lambda: space.initial(check=not outline))
         self.equation = (None if not collide else self._rescaled(outline) if d.rescaled
                          else HomogeneousBoltzmann(self.operator, d.heat_bath, d.knudsen))
         #: the map of a rescaled run to physical variables (kept in the store), or None

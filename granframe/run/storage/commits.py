@@ -16,7 +16,7 @@ import attrs
 import numpy
 import zarr
 
-from granframe.parallel import SerialCommunicator
+from granframe.parallel import SerialCommunicator, raised_everywhere
 from granframe.run.storage.errors import StoreError
 from granframe.run.storage.schema import CELL_AXES, SNAPSHOT_ARRAYS
 from granframe.run.storage.state import StoreState
@@ -54,7 +54,7 @@ def collective(communicator, function):
             outcome = ("error", exc)
     kind, value = communicator.bcast(outcome)
     if kind == "error":
-        raise value
+        raise raised_everywhere(value)
     return value
 
 
