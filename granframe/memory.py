@@ -105,11 +105,32 @@ def run_memory(description, backend=None, cells: int | None = None) -> dict:
             options = d.operator_options()
             if space is not None and "distributions" in inspect.signature(estimate).parameters:
                 options["distributions"] = cells
-            need["operator"] = estimate(d.grid, d.build("kernel"), d.build("restitution"),
-                                        d.build("backend") if backend is None else backend,
-                                        **options) or 0
+            need["operator"] = _operator_need(estimate, d, backend, options)
             need["total"] += need["operator"]
     return need
+
+
+def _operator_need(estimate, description, backend, options) -> int:
+    """The operator's estimate of its bytes for the run (0 when it gives none). An
+    operator whose own ``memory_budget`` (the run's budget, unless the description sets
+    it) is too small for it refuses in its estimate; the run's need is then the
+    operator's without that limit beside the copies of f, so that the run is refused
+    with its whole need (:func:`check_run_memory`), not with the operator's share of it."""
+    d = description
+    arguments = (d.grid, d.build("kernel"), d.build("restitution"),
+                 d.build("backend") if backend is None else backend)
+    try:
+        return estimate(*arguments, **options) or 0
+    except ValueError:
+        unset = ("memory_budget" in inspect.signature(estimate).parameters
+                 and options.get("memory_budget") is None)
+        if not unset:
+            raise            # the operator's own refusal of an option the run set
+        try:
+            return estimate(*arguments, **{**options, "memory_budget": 2 ** 62}) or 0
+        except ValueError:
+            pass             # not a matter of memory: the operator's first error
+        raise
 
 
 def check_run_memory(description, backend=None, cells: int | None = None,

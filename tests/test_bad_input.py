@@ -86,6 +86,24 @@ def test_memory_budget_environment_variable_overrides_the_default(monkeypatch):
     assert Simulation(d).operator.memory_bytes < 8e9
 
 
+@pytest.mark.parametrize("command", ["limits", "run"])
+def test_limits_refuse_a_run_the_memory_check_refuses_as_run_does(tmp_path, capsys,
+                                                                  monkeypatch, command):
+    """limits exited 0 with 'estimated cost: not estimated (ValueError ...)' for a run
+    that granframe run refuses for its memory; both now refuse it by name, status 2."""
+    from granframe.memory import run_memory
+
+    d = heated()
+    monkeypatch.setenv("GRANFRAME_MEMORY_BUDGET", str(run_memory(d)["total"] // 2))
+    (tmp_path / "d.toml").write_text(d.to_toml())
+    out = ["--out", tmp_path / "s.zarr"] if command == "run" else []
+    status, err = _cli(tmp_path, capsys, command, tmp_path / "d.toml", *out)
+    assert status == 2 and err.count("\n") == 1, err
+    assert ("parameter 'grid.n_modes' = 32 is invalid; needs about" in err
+            and "more than the memory budget" in err), err
+    assert not (tmp_path / "s.zarr").exists()
+
+
 # -- 2. steps, snapshots and sizes ------------------------------------------------------
 def test_final_time_1e30_is_refused_not_hung():
     with pytest.raises(ValueError, match=r"'final_time' = 1e\+30 is invalid; must be at most "
