@@ -1,6 +1,7 @@
 import importlib
 import importlib.util
 import pathlib
+import signal
 import textwrap
 
 import pytest
@@ -10,6 +11,14 @@ from granframe.registry import Registries, get_plugin_manager
 from granframe_cupy import gpu_available
 
 FAKE_SITE = pathlib.Path(__file__).parent / "fake_site"
+
+# A suite started in the background (``pytest &``, ``nohup pytest &`` from a script) has
+# SIGINT ignored, as a shell sets for its background jobs, and every process it starts
+# inherits that: the tests that Ctrl-C a granframe process would send a signal it never
+# sees. They test Ctrl-C, so the suite sets it up: Python's handler here, which the
+# processes started from here receive as the default disposition.
+if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 #: Test files whose every test is marked ``slow`` (runs of studies, space
 #: validation, resume and kill tests in subprocesses, sweeps on Dask, fuzzing): the fast
