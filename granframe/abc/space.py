@@ -214,6 +214,11 @@ class Boundary(abc.ABC):
         """Refuse a velocity grid the boundary does not fit (a wall velocity of the wrong
         dimension), with a message naming the parameter."""
 
+    def check_time_step(self, time_step: float) -> None:
+        """Refuse a run's time step the boundary cannot be followed at (a wall moving
+        faster than the steps sample its motion), with a message naming the parameter;
+        every step is fine by default."""
+
     @abc.abstractmethod
     def ghosts(self, inside, grid, xp, *, t: float = 0.0, side: Side | str = "left"):
         """Ghost cells beyond the wall from the cells next to it, at time ``t``.

@@ -235,6 +235,8 @@ class Space:
                          "neither")
         for side in ("left", "right"):
             built[side].check(grid)
+            if time_step is not None:
+                built[side].check_time_step(time_step)
         if step_limit and time_step is not None:
             limit = self.transport_limit(grid, built["reconstruction"])
             if time_step > limit * (1 + 1e-12):

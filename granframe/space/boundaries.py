@@ -266,6 +266,12 @@ def _half_range_flux_error(grid, temperature: float, u: float) -> float:
     return discrete / exact - 1.0
 
 
+#: the fewest time steps in a period of a vibrating wall (:meth:`Vibrating.check_time_step`):
+#: its phase advances by at most 45 degrees a step, and the stages of the transport's two
+#: half steps take its velocity at least 48 times a period
+STEPS_PER_PERIOD = 8
+
+
 @attrs.frozen
 class Vibrating(contracts.Boundary):
     r"""A fully diffuse wall at temperature T_w vibrating along x, in the small-amplitude
@@ -310,6 +316,18 @@ class Vibrating(contracts.Boundary):
     def period(self) -> float:
         """2 pi / omega."""
         return 2.0 * math.pi / self.frequency
+
+    def check_time_step(self, time_step: float) -> None:
+        """Refuse a period shorter than :data:`STEPS_PER_PERIOD` steps: the wall velocity
+        A omega cos(omega t) is taken at the transport stages of each step, and fewer
+        steps alias it (a period of 6e-12 with dt = 3e-3 ran, its work sampled at the
+        stages' phases)."""
+        if self.period < STEPS_PER_PERIOD * time_step * (1 - 1e-12):
+            check.reject("Vibrating", "frequency", self.frequency,
+                         f"must give a period 2 pi / omega = {self.period:.4g} of at least "
+                         f"{STEPS_PER_PERIOD} time steps (time_step = {time_step:g}): "
+                         f"omega <= {2.0 * math.pi / (STEPS_PER_PERIOD * time_step):.4g}, "
+                         "or a smaller time_step; the steps sample the wall's motion")
 
     @property
     def speed(self) -> float:
