@@ -10,6 +10,7 @@ from __future__ import annotations
 import difflib
 import math
 import numbers
+import pathlib
 from typing import Any, Callable
 
 import attrs
@@ -52,19 +53,16 @@ def existing_file(owner: str, name: str, path, expected: str) -> None:
     """Refuse a ``path`` that is not a file: missing ("no such file"), or a directory
     (a zarr store such as a run's, or another), saying what the command takes
     (``expected``)."""
-    import pathlib
-
     path = pathlib.Path(path)
     if path.is_file():
         return
     if not path.exists():
         reject(owner, name, str(path), "no such file")
-    what = ("a zarr store (a run's or a sweep's), not a file"
-            if (path / "zarr.json").is_file() else "a directory, not a file")
-    reject(owner, name, str(path), f"is {what}; {owner} takes {expected}"
-           + ("; `granframe info` says what a store holds, and a run store is continued by "
-              "`granframe run DESCRIPTION --out STORE --resume`"
-              if (path / "zarr.json").is_file() else ""))
+    if (path / "zarr.json").is_file():
+        reject(owner, name, str(path), f"is a zarr store (a run's or a sweep's), not a file; "
+               f"{owner} takes {expected}; `granframe info` says what a store holds, and a "
+               "run store is continued by `granframe run DESCRIPTION --out STORE --resume`")
+    reject(owner, name, str(path), f"is a directory, not a file; {owner} takes {expected}")
 
 
 def distinct(value: float, limit: float, digits: int = 3) -> tuple[str, str]:

@@ -121,9 +121,11 @@ class StoreCommits(StoreState):
         """The arrays split by cells, which :meth:`write_block` writes: those whose first
         dimension after ``time`` or ``step_time`` is the cells axis (:data:`CELL_AXES`; a
         space run's f and fields); empty in a space-homogeneous run's store."""
-        return tuple(name for name in SNAPSHOT_ARRAYS[:1] + self.record_arrays
-                     if tuple(self.group[name].metadata.dimension_names or ())[1:2]
-                     in [(a,) for a in CELL_AXES])
+        def split(name):
+            dimensions = tuple(self.group[name].metadata.dimension_names or ())
+            return len(dimensions) > 1 and dimensions[1] in CELL_AXES
+
+        return tuple(filter(split, SNAPSHOT_ARRAYS[:1] + self.record_arrays))
 
     def commit(self, snapshots, records: dict, progress: dict) -> None:
         """Append snapshots [(t, f)] and moment records (name -> arrays along step_time),

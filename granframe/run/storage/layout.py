@@ -73,7 +73,7 @@ class RecordArray:
     def _check_cells_chunk(self, attribute, value):
         if value is None:
             return
-        if tuple(self.dimensions[:1]) not in [(a,) for a in CELL_AXES] or not self.shape:
+        if not self.dimensions or self.dimensions[0] not in CELL_AXES or not self.shape:
             reject("RecordArray", "cells_chunk", value, f"is only allowed for a record whose "
                    f"first dimension after step_time is the cells axis 'x' (or 'y', 'z' "
                    f"for cells along those axes) (record '{self.name}' has dimensions "

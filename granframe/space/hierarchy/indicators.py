@@ -82,7 +82,7 @@ def equilibrium_distance(context, time_step: float, steps: int = 12) -> float:
         xp.asarray([1.0]), xp.asarray([temperature]),
         xp.asarray([0.5 * grid.dimension * temperature]))).reshape(-1)[0])
     step = min(float(time_step), equation.knudsen / frequency)
-    parts = FluidParts(equation)
+    parts = FluidParts(equation, context.rates)
     for k in range(steps):
         cell = conserving_step(equation, integrator, k * step, cell, step)
     now, _, ok = parts.equilibria(cell, None)
@@ -114,7 +114,7 @@ class CellIndicators:
                  axis: int = 0):
         equation = context.equation
         self.axis = axis
-        self.parts = FluidParts(equation)
+        self.parts = FluidParts(equation, context.rates)
         self.kernel, self.knudsen = equation.operator.kernel, equation.knudsen
         self.shear_coefficient = context.shear_coefficient
         self.free_paths, self.buffer = settings.free_paths, settings.buffer

@@ -25,7 +25,9 @@ class FluidParts:
         operator = equation.operator
         self.grid, self.xp = operator.grid, operator.backend.xp
         self.moments = equation.moments
-        self.cooling = CoolingRate(operator.kernel, operator.restitution, self.grid)
+        # the hierarchy's levels share its cooling rate (its table is built once)
+        self.cooling = (CoolingRate(operator.kernel, operator.restitution, self.grid)
+                        if rates is None else rates.cooling)
         self.knudsen, self.heat_bath = equation.knudsen, equation.heat.tau
         self.rates = rates
 
