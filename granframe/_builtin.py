@@ -140,10 +140,11 @@ def granframe_register_boundaries(registry):
                              "accommodation",
                  examples=[{}, {"temperature": 2.0, "velocity": 0.5, "accommodation": 0.7}])
     registry.add("vibrating", boundaries.Vibrating,
-                 description="diffuse wall vibrating along x, A omega cos(omega t), at a fixed "
-                             "place (small amplitude): temperature, amplitude, frequency",
-                 examples=[{"amplitude": 0.1, "frequency": 5.0},
-                           {"temperature": 0.2, "amplitude": 0.02, "frequency": 20.0}])
+                 description="wall vibrating along x in the small-amplitude limit (A -> 0 at "
+                             "fixed A omega): speed A omega, temperature, reflection "
+                             "(diffuse or specular)",
+                 examples=[{"speed": 0.5}, {"speed": 0.3, "temperature": 0.5},
+                           {"speed": 0.5, "reflection": "specular"}])
 
 
 @hookimpl

@@ -1,187 +1,194 @@
-r"""A granular gas driven by a vibrating wall (no gravity): the period-averaged steady state,
-the energy put in per period against the collisional dissipation, and the scaling of the
-temperature with the wall's speed A omega.
+r"""A granular gas driven by a vibrating wall (no gravity): the steady state, the power the
+wall puts in against the collisional dissipation, and the temperature against the energy
+balance of a uniform gas (the leading order of Kumaran's theory of dilute vibrated gases).
 
-x in [0, 1]: the vibrating diffuse wall (T_w, A, omega; docs/space.md, "Moving and
-vibrating walls") at x = 0, a specular wall at x = 1, mean density 1, e = 0.9, 2D
-velocities with the kernel B = |g|/(2 pi). Over a period the vibrating wall sends back, per
-particle, the energy of a wall at rest at
+x in [0, 1]: the vibrating wall (speed amplitude V = A omega, in the limit A -> 0;
+docs/space.md, "Vibrating walls") at x = 0, elastic (specular) as in the kinetic theories
+of vibrated gases, a specular wall at x = 1, mean density 1, 2D velocities with the hard-disk
+kernel B = |g| / (2 pi), knudsen eps. The wall puts in, per unit time,
 
-    T_eff = T_w + 2 c_2 (A omega)^2 / (d + 1),   c_2 = 1/2 - pi/8,
+    P_in = sum over the arriving particles of what the layer adds = Phi Delta e,
 
-to second order in A omega / sqrt(T_w) (the expansion of <J2/J0> in docs/space.md, at
-fixed arriving flux). For a kernel proportional to |g| the kinetic equation has no speed of
-its own: with the walls at T_eff the steady state is that at T_w with every velocity
-scaled by sqrt(T_eff/T_w), so the density profile does not change and the temperature
-profile is multiplied by T_eff/T_w. The study measures both, and the energy balance: per
-period, what the wall puts in (the run's ``wall_energy`` over the period's steps) against
-the collisional dissipation (sum_cells dx h^d sum Q |v|^2/2 / eps at eight snapshots of the
-last period, periodic trapezoid rule) and the energy's change.
+with Phi = rho_w sqrt(T_w / (2 pi)) the arriving flux of a Maxwellian gas at the wall and
+Delta e = 2 V^2 (1 + O(V^2 / T)) per particle (:func:`granframe.space.exact.
+vibrating_wall_heating`); the collisions take out (d/2) rho T zeta(T) / eps per unit
+volume, zeta = zeta_1 rho sqrt(T) for hard disks (the Maxwellian's rate,
+:func:`granframe.theory.cooling.maxwellian_cooling_rate`). A uniform gas (rho = 1, T) in
+balance has
 
-Run: ``python studies/granular_vibrated.py --out DIR --speeds 0,0.5,1``.
+    sqrt(T / (2 pi)) Delta e(V, T) = (d/2) zeta_1 T^{3/2} / eps,
+    T = 2 eps V^2 / (sqrt(2 pi) (d/2) zeta_1)  at leading order,
+
+the scaling T ~ V^2 / (1 - e^2) of Kumaran (Phys. Rev. E 59 (1999) 4188; J. Fluid Mech.
+364 (1998) 163: the mean square velocity ~ <U^2> / (1 - e^2) for a symmetric wall motion)
+and of McNamara & Luding (Phys. Rev. E 58 (1998) 813: the power ~ V^2). It assumes a
+uniform gas, which the run is only where the dissipation over the box is small against
+the conduction across it: (1 - e^2) / eps^2 small (the granular Navier-Stokes profile's
+parameter, docs/granular.md, section 1), and a Maxwellian gas at the wall.
+
+For each e the wall speed is chosen so that the uniform gas has T = 1 (the velocity grid
+fits T = 1); the run starts from that gas and goes to ``--final``. Reported: the mean T
+against the theory, the profiles, the power put in and dissipated at the end (their rates
+from the last steps' ``wall_energy`` and from Q at the last snapshot), the energy's rate of
+change (steadiness), the resolution warnings.
+
+Run: ``python studies/granular_vibrated.py --out DIR``.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 
 import numpy
+import scipy.optimize
 
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.space import exact
+from granframe.theory.cooling import maxwellian_cooling_rate
 from granframe.tools.studykit import (cfl_time_step, finish, json_text, number, numbers,
                                       output_folder, save_figure, study_arguments)
 
 DIMENSION = 2
-#: c_2 of the period mean <J2/J0> = (d+1) T_w/2 + T_w (c_2 eps^2 + ...), docs/space.md
-C2 = exact.VIBRATING_WALL_COEFFICIENTS[0]
-#: snapshots of f per period (the dissipation's periodic trapezoid rule)
+#: snapshots of f over a run
 SNAPSHOTS = 8
 
 
-def effective_temperature(speed: float, temperature: float = 1.0) -> float:
-    """T_eff = T_w + 2 c_2 (A omega)^2 / (d + 1): the wall at rest that puts in, per
-    particle sent back, the vibrating wall's period-mean energy (second order)."""
-    return temperature + 2.0 * C2 * speed * speed / (DIMENSION + 1)
+def cooling_coefficient(e: float) -> float:
+    """zeta_1 = zeta / (rho sqrt(T)) of a Maxwellian of hard disks, B = |g| / (2 pi)."""
+    return maxwellian_cooling_rate(e, 1.0, 1.0, dimension=DIMENSION, speed_exponent=1.0)
 
 
-def description(e: float, knudsen: float, speed: float, period: float, cells: int,
-                n_modes: int, support: float, periods: int, steps_per_period: int,
-                wall_temperature: float = 1.0) -> RunDescription:
-    """The vibrating wall (A omega = ``speed``; a resting diffuse wall if 0) at x = 0 and a
-    specular wall at x = 1, from the Maxwellian at rest at T_w; ``periods`` periods of
-    ``steps_per_period`` SSP RK2 steps, f stored :data:`SNAPSHOTS` times per period."""
-    omega = 2.0 * math.pi / period
-    if speed > 0.0:
-        left = {"name": "vibrating", "temperature": wall_temperature,
-                "amplitude": speed / omega, "frequency": omega}
-    else:
-        left = {"name": "diffuse", "temperature": wall_temperature}
+@functools.lru_cache(maxsize=64)
+def wall_speed_ratio(e: float, knudsen: float) -> float:
+    """x = V / sqrt(T) of the uniform gas in balance (module notes), with the wall's whole
+    heating: Delta e(V, T) = T H(V / sqrt(T)) (the specular layer has no speed of its own),
+    so the balance reads H(x) = sqrt(2 pi) (d/2) zeta_1 / eps (Brent's method, from the
+    leading order H = 2 x^2)."""
+    target = math.sqrt(2 * math.pi) * 0.5 * DIMENSION * cooling_coefficient(e) / knudsen
+    lead = math.sqrt(0.5 * target)
+    return scipy.optimize.brentq(
+        lambda x: math.log(exact.vibrating_wall_heating(x, 1.0, 1.0, "specular", speeds=1000)
+                           / target), 0.7 * lead, 1.1 * lead, xtol=1e-12)
+
+
+def uniform_temperature(e: float, knudsen: float, speed: float) -> float:
+    """T = (V / x)^2 of the uniform gas in balance (:func:`wall_speed_ratio`)."""
+    return (speed / wall_speed_ratio(e, knudsen)) ** 2
+
+
+def description(e: float, knudsen: float, speed: float, cells: int, n_modes: int,
+                support: float, final: float, time_step: float,
+                temperature: float = 1.0) -> RunDescription:
+    """The specular vibrating wall (V = ``speed``) at x = 0, a specular wall at x = 1,
+    from the Maxwellian at rest at ``temperature``; :data:`SNAPSHOTS` snapshots."""
     return RunDescription(
-        title=f"vibrated gas, e = {e:g}, eps = {knudsen:g}, A omega = {speed:g}",
+        title=f"vibrated gas, e = {e:g}, eps = {knudsen:g}, V = {speed:.6g}",
         grid={"dimension": DIMENSION, "n_modes": n_modes, "support_radius": support},
         kernel="hard_spheres", restitution={"name": "constant", "value": e},
-        initial={"name": "maxwellian", "temperature": wall_temperature},
+        initial={"name": "maxwellian", "temperature": temperature},
         operator={"name": "fast_spectral"}, integrator="ssp_rk2", conservative=True,
-        knudsen=knudsen, time_step=period / steps_per_period, final_time=periods * period,
-        output={"snapshot_interval": period / SNAPSHOTS},
-        space={"cells": cells, "reconstruction": "muscl", "left": left, "right": "specular"})
+        knudsen=knudsen, time_step=time_step, final_time=final,
+        output={"snapshot_interval": final / SNAPSHOTS},
+        space={"cells": cells, "reconstruction": "muscl",
+               "left": {"name": "vibrating", "speed": speed, "reflection": "specular"},
+               "right": "specular"})
 
 
-def period_balance(ds, operator, knudsen: float, period: float) -> dict:
-    """Over the last period: the energy the walls put in (sum of ``wall_energy`` over its
-    steps), the collisional dissipation (its rate at the snapshots of the period, periodic
-    trapezoid rule, times the period), the change of the energy, and the period means of
-    rho(x) and T(x) (the step moments)."""
-    steps = ds.time.values
+def balance(ds, operator, knudsen: float, window: int = 20) -> dict:
+    """At the end of a run: the power the walls put in (``wall_energy`` over the last
+    ``window`` steps over their time), the collisional dissipation rate at the last
+    snapshot (sum_cells dx h^d sum Q |v|^2/2 / eps), the energy's rate of change over the
+    window, and the last snapshot's profiles."""
     dt = float(ds.dt.values[-1])
-    per = int(round(period / dt))
-    injected = float(ds.wall_energy.values[-per:].sum())
+    power = float(ds.wall_energy.values[-window:].sum()) / (window * dt)
     energy = ds.kinetic_energy.values
-    change = float(energy[-1] - energy[-per - 1])
+    change = float(energy[-1] - energy[-window - 1]) / (window * dt)
     grid = operator.grid
     dx = 1.0 / ds.sizes["x"]
-    f = ds.f.values[-SNAPSHOTS:]
-    rates = [float(numpy.sum(numpy.asarray(operator(fi)) * grid.speed_squared())
-                   * grid.cell_volume * 0.5 * dx / knudsen) for fi in f]
-    dissipation = float(numpy.mean(rates)) * period
-    return {"time": float(steps[-1]), "injected": injected, "dissipation": dissipation,
-            "change": change, "residual": (injected + dissipation - change) / injected,
-            "density": ds.density.values[-per:].mean(axis=0),
-            "temperature": ds.temperature.values[-per:].mean(axis=0)}
+    f = ds.f.values[-1]
+    dissipation = float(numpy.sum(numpy.asarray(operator(f)) * grid.speed_squared())
+                        * grid.cell_volume * 0.5 * dx / knudsen)
+    return {"power in": power, "dissipation": dissipation, "change": change,
+            "residual": (power + dissipation - change) / power,
+            "density": ds.density.values[-1], "temperature": ds.temperature.values[-1]}
 
 
 def figure(stores, path) -> None:
-    """Period-mean T(x) and rho(x) of each run; T divided by T_eff (dashed; T_eff =
-    T_w + 2 c_2 (A omega)^2/(d+1)) lies on the run at rest with T_w = 1 where the wall
-    acts as one at rest at T_eff."""
+    """T(x) / T_uniform and rho(x) of each run at its end, and mean T / T_uniform over time."""
     import matplotlib.pyplot as plt  # the Agg backend: studykit chose it on import
 
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), layout="tight")
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4), layout="tight")
     for store in stores:
         ds = granframe.open_run(store, time_axis="steps")
         d = RunDescription.from_toml(ds.attrs["description_toml"])
-        left = d.space.left.params
-        speed = left.get("amplitude", 0.0) * left.get("frequency", 0.0)
-        steps = int(round(SNAPSHOTS * d.output.snapshot_interval / d.time_step))
-        density = ds.density.values[-steps:].mean(axis=0)
-        temperature = ds.temperature.values[-steps:].mean(axis=0)
-        wall = left.get("temperature", 1.0)
-        line, = axes[0].plot(ds.x.values, temperature, "o-", ms=3, lw=0.8,
-                             label=f"A omega = {speed:g}, T_w = {wall:.4g}, N = "
-                                   f"{d.grid.n_modes}")
-        axes[0].plot(ds.x.values, temperature / effective_temperature(speed, wall), "--",
-                     color=line.get_color(), lw=0.8)
-        axes[1].plot(ds.x.values, density, "o-", ms=3, lw=0.8, color=line.get_color())
-    axes[0].set_ylabel("period-mean T (dashed: T / T_eff)")
-    axes[1].set_ylabel("period-mean density")
-    for ax in axes:
+        e = d.restitution.params["value"]
+        speed = d.space.left.params["speed"]
+        uniform = uniform_temperature(e, d.knudsen, speed)
+        line, = axes[0].plot(ds.x.values, ds.temperature.values[-1] / uniform, "o-", ms=3,
+                             lw=0.8, label=f"e = {e:g}, V = {speed:.3g}, N = {d.grid.n_modes}")
+        axes[1].plot(ds.x.values, ds.density.values[-1], "o-", ms=3, lw=0.8,
+                     color=line.get_color())
+        mean = (ds.temperature.values * ds.density.values).mean(axis=1)
+        axes[2].plot(ds.time.values, mean / uniform, lw=0.8, color=line.get_color())
+    axes[0].set_ylabel("T / T of the uniform balance")
+    axes[1].set_ylabel("density")
+    axes[2].set_ylabel("mean rho T / T of the uniform balance")
+    axes[2].set_xlabel("t")
+    for ax in axes[:2]:
         ax.set_xlabel("x (vibrating wall at 0, specular at 1)")
     axes[0].legend(fontsize=7)
-    fig.suptitle("vibrated granular gas, e = 0.9", fontsize=9)
+    fig.suptitle(f"gas driven by a vibrating specular wall, eps = {d.knudsen:g}", fontsize=9)
     save_figure(fig, path, dpi=120)
 
 
 def main(argv=None):
-    parser = study_arguments(__doc__, n_modes=32, cells=16, final=None)
-    parser.set_defaults(support=4.0)
-    parser.add_argument("--knudsen", type=number(0.0), default=0.1)
-    parser.add_argument("--speeds", type=numbers(0.0, low_open=False), default=[0.0, 0.5, 1.0],
-                        help="A omega values, comma-separated")
-    parser.add_argument("--period", type=number(0.0), default=0.25)
-    parser.add_argument("--periods", type=number(1, kind=int, low_open=False), default=24)
-    parser.add_argument("--wall-temperature", type=number(0.0), default=1.0,
-                        help="T_w of the vibrating (or resting) wall")
+    parser = study_arguments(__doc__, n_modes=32, cells=16, final=40.0)
+    parser.add_argument("--knudsen", type=number(0.0), default=0.5)
+    parser.add_argument("--restitutions", type=numbers(0.0), default=[0.99, 0.95, 0.9, 0.8],
+                        help="e values, comma-separated (the default: 0.99,0.95,0.9,0.8)")
     args = parser.parse_args(argv)
+    for e in args.restitutions:
+        if e >= 1.0:
+            parser.error(f"argument --restitutions: {e:g} is not allowed: each e must be below "
+                         "1 (an elastic gas driven by the wall has no steady state)")
     out = output_folder(args, figure, "vibrated.png")
     if out is None:
         return
     grid = {"n_modes": args.n_modes, "support_radius": args.support}
-    limit = cfl_time_step(args.cells, args.period, grid)
-    steps_per_period = SNAPSHOTS * math.ceil(args.period / limit / SNAPSHOTS - 1e-9)
-    rows = []
-    for speed in args.speeds:
+    dt = cfl_time_step(args.cells, args.final / SNAPSHOTS, grid)
+    rows, stores = [], []
+    for e in args.restitutions:
         began = time.perf_counter()
-        run = Simulation(description(args.restitution, args.knudsen, speed, args.period,
-                                     args.cells, args.n_modes, args.support, args.periods,
-                                     steps_per_period, args.wall_temperature))
-        store = out / (f"vibrated_e{args.restitution:g}_u{speed:g}_tw{args.wall_temperature:g}"
-                       f"_c{args.cells}.zarr")
+        speed = wall_speed_ratio(e, args.knudsen)          # T uniform = 1
+        run = Simulation(description(e, args.knudsen, speed, args.cells, args.n_modes,
+                                     args.support, args.final, dt))
+        store = out / f"vibrated_e{e:g}_k{args.knudsen:g}_c{args.cells}_n{args.n_modes}.zarr"
         result = run.run(store, progress=False, overwrite=True)
         seconds = time.perf_counter() - began
         ds = granframe.open_run(store, time_axis="steps")
-        balance = period_balance(ds, run.problem.operator, args.knudsen, args.period)
-        row = {"A omega": speed, "e": args.restitution, "eps": args.knudsen,
-               "cells": args.cells, "N": args.n_modes, "S": args.support,
-               "period": args.period, "steps per period": steps_per_period,
-               "periods": args.periods, "seconds": seconds,
-               "T_w": args.wall_temperature,
-               "T_eff/T_w": effective_temperature(speed, args.wall_temperature)
-               / args.wall_temperature,
-               **{k: v for k, v in balance.items() if k not in ("density", "temperature")},
-               "mean T": float(balance["temperature"].mean()),
-               "T profile": balance["temperature"].tolist(),
-               "density profile": balance["density"].tolist(),
+        end = balance(ds, run.problem.operator, args.knudsen)
+        temperature, density = end.pop("temperature"), end.pop("density")
+        uniform = uniform_temperature(e, args.knudsen, speed)
+        row = {"e": e, "eps": args.knudsen, "V": speed, "cells": args.cells,
+               "N": args.n_modes, "S": args.support, "dt": dt, "final": args.final,
+               "seconds": seconds, "T uniform": uniform,
+               "mean T / T uniform": float((temperature * density).mean() / uniform),
+               "T(0) / T uniform": float(temperature[0] / uniform),
+               "T(1) / T uniform": float(temperature[-1] / uniform),
+               "rho max / rho min": float(density.max() / density.min()),
+               "(1 - e^2) / eps^2": (1 - e * e) / args.knudsen ** 2,
+               **end, "T profile": temperature.tolist(), "density profile": density.tolist(),
                "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
         rows.append(row)
+        stores.append(store)
         print(json_text({k: v for k, v in row.items() if "profile" not in k}))
-    base = next((r for r in rows if r["A omega"] == 0.0), None)
-    if base is not None:
-        for row in rows:
-            ratio = numpy.array(row["T profile"]) / numpy.array(base["T profile"])
-            row["T/T(0) mean"] = float(ratio.mean())
-            row["T/T(0) spread"] = float(ratio.max() - ratio.min())
-            row["rho - rho(0) max"] = float(numpy.abs(numpy.array(row["density profile"])
-                                                      - numpy.array(base["density profile"])
-                                                      ).max())
-            print(row["A omega"], row["T/T(0) mean"], row["T_eff/T_w"],
-                  row["T/T(0) spread"], row["rho - rho(0) max"])
-    (out / f"vibrated_e{args.restitution:g}_tw{args.wall_temperature:g}_c{args.cells}"
-           f"_n{args.n_modes}.json").write_text(
+    (out / f"vibrated_k{args.knudsen:g}_c{args.cells}_n{args.n_modes}.json").write_text(
         json_text(rows, indent=1))
+    figure(stores, out / "vibrated.png")
 
 
 if __name__ == "__main__":

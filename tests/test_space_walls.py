@@ -1,215 +1,244 @@
-"""Walls that know the time and their side; the vibrating diffuse wall (docs/space.md,
-"Moving and vibrating walls"); the momentum through the walls and the cell next to a wall
-(docs/space.md, "Wall pressure and shear stress").
+"""Walls that know the time and their side; the vibrating wall in the limit of small
+amplitude (docs/space.md, "Vibrating walls"); the momentum through the walls and the cell
+next to a wall (docs/space.md, "Wall pressure and shear stress").
 
-1. The energy a vibrating wall puts per period into a given incoming distribution: the
-   grid wall (``emit`` at M times of a period) against the closed form with the grid's
-   own sums (to round-off) and the continuous closed form (O(h^2), observed order).
-2. Zero mass flux at every t on both sides; the right wall with the same lab-frame motion.
-3. Constant arrays cached per wall, grid and array namespace: no host/device copies after
-   the first call.
-4. Bad parameters refused, naming them.
-5. A collisionless space run between a vibrating and a specular wall: mass to round-off,
-   and the energy the vibration puts in over a period as the closed form says.
-6. Free-molecular Couette flow: the grid state is steady and its wall momentum (pressure
+1. The layer a vibrating wall sweeps: the escape slope, the density of first hits (one
+   hit per arriving particle), the catch moment <(S - cos)^2> = 1/2.
+2. On the grid: zero mass flux to round-off, on both sides, diffuse and specular; the
+   specular wall's energy per arriving node its closed form 2 V^2 to round-off; the
+   diffuse wall at a vanishing speed the resting diffuse wall.
+3. The heating against the layer's integral (O(h^2), observed order), the layer's integral
+   against its series (the odd V^3 term of the diffuse wall, V^4 of the specular), and
+   both against a particle simulation of a piston that really oscillates, which also
+   tells them from the count of hits (U - v_1)_+ on the arriving gas alone.
+4. Constant arrays cached per wall, grid and array namespace: no host/device copies after
+   the first call; the conformance kit on time-dependent walls.
+5. Bad parameters refused, naming them.
+6. A collisionless space run between a vibrating and a specular wall: mass and the
+   energy balance to round-off, and the energy of the vibration as the grid wall says.
+7. Free-molecular Couette flow: the grid state is steady and its wall momentum (pressure
    and shear stress) the closed form to round-off, a run reaches it, the grid's shear
    stress converges to the continuum's at second order in h; the recorded wall momentum
    is the momentum change of the gas.
-7. The ghost cells of an emitting wall extend the data linearly; the shear stress of the
+8. The ghost cells of an emitting wall extend the data linearly; the shear stress of the
    cell next to a wall is the wall's momentum flux in a Couette flow with collisions.
 
-:func:`injected_energy_rows`, :func:`vibrating_run_energy` and
-:func:`couette_refinement_rows` also make the tables of docs/space.md.
+:func:`heating_rows`, :func:`vibrating_run_energy` and :func:`couette_refinement_rows`
+also make the tables of docs/space.md.
 """
 
 import math
 
+import attrs
 import numpy
 import pytest
 
 import granframe as gf
+from granframe import abc as contracts
+from granframe import validators as check
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
-from granframe.space import exact
+from granframe.space import exact, vibration
 from granframe.space.boundaries import Diffuse, Specular, Vibrating
-from granframe.space.transport import reflect, upwind_speeds
+from granframe.space.transport import upwind_speeds
 from granframe.testing import conformance as kit
+from granframe.testing.piston import oscillating_piston
 from granframe.testing.transfers import CountingBackend
 
-#: the wall of the energy check: T_w = 1, A omega = 0.5 (eps = 0.5), period 2 pi / 5
-WALL = {"temperature": 1.0, "amplitude": 0.1, "frequency": 5.0}
-#: the arriving gas: a Maxwellian of density 1, temperature 0.5, drifting into the wall
-T_IN, U_IN = 0.5, -0.2
+#: the wall of the grid checks: V = A omega = 0.4, T_w = 1
+WALL = {"speed": 0.4, "temperature": 1.0}
 #: the fixed box of the refinement: S = 3.5 (L = 7.72)
 SUPPORT = 3.5
 
 
-def _incoming(grid):
-    return grid.maxwellian(1.0, [U_IN] + [0.0] * (grid.dimension - 1), T_IN)
+def _incoming(grid, temperature=1.0, velocity=0.0):
+    return grid.maxwellian(1.0, [velocity] + [0.0] * (grid.dimension - 1), temperature)
 
 
-def grid_wall_energy(wall, grid, incoming, times: int, side: str = "left") -> float:
-    """The energy the grid wall puts in over one period, sum_k (P/M) sum_v F |v|^2/2 dv with
-    F = c^+ emit(t_k) + c^- in at t_k = k P / M: the periodic trapezoid rule in time,
-    spectrally accurate for the smooth periodic flux."""
-    positive, negative = upwind_speeds(grid)
-    weight = 0.5 * grid.speed_squared() * grid.cell_volume
-    step = wall.period / times
-    total = math.fsum(float(numpy.sum((positive * wall.emit(incoming, grid, numpy, t=k * step,
-                                                                 side=side)
-                                       + negative * incoming) * weight))
-                      for k in range(times))
-    return step * total
+# -- the layer -------------------------------------------------------------------------------
+
+def test_the_escape_slope_is_the_tangent_from_the_wall():
+    """S(theta) >= max(cos theta, 0); S = cos theta where the tangent stays above the wall
+    (theta in [0, pi/2]: the wall decelerates away for good), S(pi) = the slope of the
+    tangent from (pi, 0) to the next rise, found independently by brute force on 2e6
+    points; <(S - cos)^2> = 1/2 to 1e-12 on 4096 phases."""
+    theta = vibration.phases(4096)
+    s = vibration.escape_slope(theta)
+    assert numpy.all(s >= numpy.maximum(numpy.cos(theta), 0.0) - 1e-15)
+    quarter = theta <= 0.5 * math.pi
+    assert numpy.allclose(s[quarter], numpy.cos(theta[quarter]), rtol=0, atol=1e-14)
+    u = numpy.linspace(1e-6, 3 * math.pi, 2_000_001)
+    brute = float(numpy.max(numpy.sin(math.pi + u) / u))
+    assert vibration.escape_slope(math.pi) == pytest.approx(brute, rel=1e-9)
+    assert numpy.mean((s - numpy.cos(theta)) ** 2) == pytest.approx(exact.CATCH_MOMENT,
+                                                                    abs=1e-12)
 
 
-def injected_energy_rows(sizes=(16, 32, 64), dimension=2, times=16):
-    """For each N on the box S = SUPPORT: h, the grid wall's energy per period (``emit`` at
-    ``times`` points), its relative distance from the closed form with the grid's sums and
-    from the continuous closed form, and the change when the time points double."""
-    wall = Vibrating(**WALL)
-    j0, j2 = exact.half_range_maxwellian_fluxes(dimension, T_IN, -U_IN)
-    continuous = exact.vibrating_wall_energy_per_period(dimension, **WALL, incoming_flux=j0,
-                                                        incoming_energy_flux=j2)["energy"]
-    rows = []
-    for n in sizes:
-        grid = gf.VelocityGrid(dimension, n, SUPPORT)
-        wall.check(grid)
-        f = _incoming(grid)
-        energy = grid_wall_energy(wall, grid, f, times)
-        closed = exact.vibrating_wall_energy_per_period_grid(grid, **WALL, incoming=f)["energy"]
-        rows.append({"N": n, "h": grid.spacing, "energy": energy,
-                     "grid": (energy - closed) / abs(closed),
-                     "continuum": (energy - continuous) / abs(continuous),
-                     "time": abs(grid_wall_energy(wall, grid, f, 2 * times) - energy)
-                     / abs(energy)})
-    return rows, continuous
+def test_every_arriving_particle_hits_the_wall_once_first():
+    """(1/2 pi) int p_a = 1 for every arriving speed a: exactly (to round-off) for a >= 1,
+    where nothing is hidden, and to the midpoint rule's error at the visibility edges for
+    slower particles (measured 8e-4 at a = 0.05 on 4096 phases)."""
+    theta = vibration.phases(4096)
+    for a in (1.0, 1.5, 4.0):
+        assert vibration.first_hit_density(a, theta).mean() == pytest.approx(1.0, abs=1e-14)
+    for a in (0.05, 0.3, 0.7):
+        assert vibration.first_hit_density(a, theta).mean() == pytest.approx(1.0, abs=2e-3)
 
 
-def test_the_injected_energy_per_period_is_the_closed_form():
-    """Against the grid's closed form to 1e-12 (measured 2e-16 to 3e-16), and against the
-    continuous one to O(h^2): measured -0.115, -0.0228, -0.0055 at N = 16, 32, 64
-    (orders 2.34, 2.05)."""
-    rows, continuous = injected_energy_rows()
-    assert continuous > 0.3                          # the hotter wall heats the gas
-    for row in rows:
-        assert abs(row["grid"]) < 1e-12, row
-        assert row["time"] < 1e-13, row              # 16 time points are converged
-    errors = [abs(row["continuum"]) for row in rows]
-    orders = [math.log2(a / b) for a, b in zip(errors[:-1], errors[1:])]
-    assert errors[-1] < 1e-2, errors
-    assert all(1.8 < p < 2.6 for p in orders), (errors, orders)
-
-
-def test_the_energy_of_the_vibration_is_its_closed_form_and_series():
-    """The half-range fluxes against quadrature; the period mean of J_2/J_0 against its
-    series in eps = A omega / sqrt(T_w): the remainder falls like eps^6 (measured ratios
-    63.9, 64.0 when eps halves), and the vibration's share is (1/2 - pi/8) eps^2 T_w Phi_in P
-    at second order."""
-    from scipy import integrate
-
-    for d, T, u in ((2, 1.3, 0.7), (3, 0.4, -0.9), (2, 2.0, 0.0)):
-        sigma = math.sqrt(T)
-
-        def m(v):
-            return math.exp(-(v - u) ** 2 / (2 * T)) / math.sqrt(2 * math.pi * T)
-        j0 = integrate.quad(lambda v: v * m(v), 0.0, u + 40 * sigma, epsabs=0, epsrel=1e-13)[0]
-        j2 = (0.5 * integrate.quad(lambda v: v ** 3 * m(v), 0.0, u + 40 * sigma, epsabs=0,
-                                   epsrel=1e-13)[0] + 0.5 * (d - 1) * T * j0)
-        assert exact.half_range_maxwellian_fluxes(d, T, u) == pytest.approx((j0, j2), rel=1e-12)
-    T, omega, flux = 1.3, 5.0, 0.8
-    remainders = []
-    for eps in (0.2, 0.1, 0.05):
-        amplitude = eps * math.sqrt(T) / omega
-        result = exact.vibrating_wall_energy_per_period(2, T, amplitude, omega, flux, 0.0)
-        remainders.append(result["energy"] - result["expansion"])
-        rest = exact.vibrating_wall_energy_per_period(2, T, 0.0, omega, flux, 0.0)["energy"]
-        heating = (0.5 - math.pi / 8) * eps ** 2 * T * flux * result["period"]
-        assert result["energy"] - rest == pytest.approx(heating, rel=eps ** 2 / 50)
-    ratios = [a / b for a, b in zip(remainders[:-1], remainders[1:])]
-    assert all(55 < r < 70 for r in ratios), (remainders, ratios)
-
-
-# -- mass, sides, device -------------------------------------------------------------------
+# -- on the grid -----------------------------------------------------------------------------
 
 MASS_GRIDS = ((2, 32, 5.0), (3, 16, 5.0))
+REFLECTIONS = ("diffuse", "specular")
 
 
+@pytest.mark.parametrize("reflection", REFLECTIONS)
 @pytest.mark.parametrize("d,n,support", MASS_GRIDS)
-def test_zero_mass_flux_at_every_time_on_both_sides(d, n, support):
-    """sum_v F dv = 0 to 1e-14 of the arriving flux at 40 times over three periods and at
-    the eighths of a period, on both sides, for random and drifting incoming values."""
+def test_zero_mass_flux_on_both_sides(d, n, support, reflection):
+    """sum_v F dv = 0 to 1e-14 of the arriving flux on both sides, for random and drifting
+    incoming values; a specular wall also at every tangential node."""
     grid = gf.VelocityGrid(d, n, support)
-    wall = Vibrating(**WALL)
+    wall = Vibrating(**WALL, reflection=reflection)
     wall.check(grid)
     positive, negative = upwind_speeds(grid)
     rng = numpy.random.default_rng(1)
-    times = numpy.concatenate([rng.uniform(0.0, 3 * wall.period, 40),
-                               numpy.arange(8) * wall.period / 8])
-    for incoming in (rng.uniform(0.1, 1.0, grid.shape), _incoming(grid)):
+    for incoming in (rng.uniform(0.1, 1.0, grid.shape), _incoming(grid, 0.7, -0.3)):
         arriving = float(numpy.sum(-negative * incoming))
-        for t in times:
-            for side in ("left", "right"):
-                out = wall.emit(incoming, grid, numpy, t=float(t), side=side)
-                net = float(numpy.sum(positive * out + negative * incoming))
-                assert abs(net) <= 1e-14 * arriving, (t, side, net / arriving)
+        for side in ("left", "right"):
+            out = wall.emit(incoming, grid, numpy, t=0.3, side=side)
+            net = positive * out + negative * incoming
+            assert abs(float(net.sum())) <= 1e-14 * arriving, (side, net.sum() / arriving)
+            if reflection == "specular":
+                assert numpy.abs(net.sum(axis=0)).max() <= 1e-14 * arriving
 
 
-def _lab_emission(grid, incoming_lab, temperature, velocity, into):
-    """What a diffuse wall moving with lab velocity ``velocity`` along x sends into the
-    domain from scratch: the grid Maxwellian of that velocity on the nodes of c^± (``into``
-    "+" for the left wall, "-" for the right one), scaled so that it carries away the lab
-    flux that arrives (c^∓)."""
-    positive, negative = (numpy.broadcast_to(c, grid.shape) for c in upwind_speeds(grid))
-    leave, arrive = (positive, -negative) if into == "+" else (-negative, positive)
-    m = grid.maxwellian(1.0, [velocity] + [0.0] * (grid.dimension - 1), temperature)
-    if into == "+":
-        # the node -L leaves the left wall at +L: the Maxwellian there at v_1 = +L
-        m[0] = grid.maxwellian(1.0, [-velocity] + [0.0] * (grid.dimension - 1), temperature)[0]
-    m = numpy.where(leave > 0, m, 0.0)
-    return m * numpy.sum(arrive * incoming_lab) / numpy.sum(leave * m), leave > 0
+def _node_energies(wall, grid):
+    """For each arriving node j (c^- < 0) alone: the normal energy that leaves per arriving
+    particle minus what arrived, sum_i c^+_i f_out,i v_i^2/2 / (|c^-_j| f_j) - v_j^2/2, and
+    the node's speed |v_1j| (the node -L arrives at L)."""
+    positive, negative = (c.ravel() for c in upwind_speeds(grid))
+    speed = numpy.abs(grid.points())
+    rows = []
+    for j in numpy.nonzero(negative < 0)[0]:
+        f = numpy.zeros(grid.shape)
+        f[j] = 1.0
+        out = wall.emit(f, grid, numpy).sum(axis=tuple(range(1, grid.dimension)))
+        leaving = numpy.where(positive > 0, out, 0.0)
+        gained = (positive * leaving * 0.5 * speed ** 2).sum() / (-negative[j] * grid.n_modes
+                                                                   ** (grid.dimension - 1))
+        rows.append((speed[j], gained - 0.5 * speed[j] ** 2))
+    return numpy.array(rows)
 
 
-@pytest.mark.parametrize("d,n,support", MASS_GRIDS)
-def test_the_right_wall_moves_with_the_same_lab_velocity(d, n, support):
-    """A wall moving with U(t) along +x in the lab: the left one (x = 0) emits the lab
-    Maxwellian of velocity U(t) into v_1 > 0, the right one (x = ell, called on the
-    reflected values and reflected back) the same Maxwellian into v_1 < 0, each with the
-    flux that arrives (to 1e-13); the right wall at t is the left one at t + P/2; at a time
-    of U = 0 both are the resting diffuse wall."""
-    grid = gf.VelocityGrid(d, n, support)
-    wall = Vibrating(**WALL)
-    lab = numpy.random.default_rng(2).uniform(0.1, 1.0, grid.shape)
-    for t in numpy.arange(8) * wall.period / 8 + 0.1:
-        t = float(t)
-        velocity = wall.speed * math.cos(wall.frequency * t)
-        left = wall.emit(lab, grid, numpy, t=t, side="left")
-        expected, leaving = _lab_emission(grid, lab, wall.temperature, velocity, "+")
-        assert numpy.allclose(left[leaving], expected[leaving], rtol=1e-13, atol=0.0)
-        right = reflect(wall.emit(reflect(lab, d), grid, numpy, t=t, side="right"), d)
-        expected, leaving = _lab_emission(grid, lab, wall.temperature, velocity, "-")
-        assert numpy.allclose(right[leaving], expected[leaving], rtol=1e-13, atol=0.0)
-        mirrored = wall.emit(lab, grid, numpy, t=t + 0.5 * wall.period, side="left")
-        assert numpy.allclose(wall.emit(lab, grid, numpy, t=t, side="right"), mirrored,
-                              rtol=1e-13, atol=0.0)
-    resting = Diffuse(temperature=wall.temperature)
-    for side in ("left", "right"):
-        assert numpy.allclose(wall.emit(lab, grid, numpy, t=wall.period / 4, side=side),
-                              resting.emit(lab, grid, numpy), rtol=1e-13, atol=0.0)
+@pytest.mark.parametrize("d,n", [(2, 32), (3, 16)])
+def test_the_specular_wall_gives_every_fast_node_its_closed_form(d, n):
+    """Each arriving node with a >= 3V leaves with 2 V^2 more normal energy per particle,
+    to round-off (the phase rule is exact on cos^k, and the shares between leaving nodes
+    keep the energy flux); slower nodes (shadowed, caught again) gain more; the tangential
+    velocity is kept."""
+    grid = gf.VelocityGrid(d, n, 5.0)
+    wall = Vibrating(speed=0.5, reflection="specular")
+    rows = _node_energies(wall, grid)
+    fast = (rows[:, 0] >= 1.5) & (rows[:, 0] < grid.half_width - 1.0)
+    assert fast.sum() >= 5
+    assert numpy.allclose(rows[fast, 1], 2 * 0.5 ** 2, rtol=1e-13, atol=0), rows[fast]
+    f = numpy.random.default_rng(4).uniform(0.1, 1.0, grid.shape)
+    out = wall.emit(f, grid, numpy)
+    positive, negative = upwind_speeds(grid)
+    tangential = tuple(range(1, d))
+    assert numpy.allclose((positive * out).sum(axis=0), (-negative * f).sum(axis=0),
+                          rtol=1e-13), tangential
 
 
-def test_the_grid_energy_per_period_is_the_same_on_both_sides():
-    """The right wall puts per period into the mirrored incoming values what the left one
-    puts into them (U and -U alternate over a period), to round-off."""
+def test_the_diffuse_wall_at_a_vanishing_speed_is_the_resting_diffuse_wall():
+    """V = 1e-3: the emission differs from the resting diffuse wall's by O(V) (measured
+    4e-4 of its largest value)."""
     grid = gf.VelocityGrid(2, 32, SUPPORT)
-    wall = Vibrating(**WALL)
-    f = _incoming(grid)
-    left = grid_wall_energy(wall, grid, f, 16, "left")
-    assert grid_wall_energy(wall, grid, f, 16, "right") == pytest.approx(left, rel=1e-13)
+    f = _incoming(grid, 0.6, -0.2)
+    moving = Vibrating(speed=1e-3).emit(f, grid, numpy)
+    resting = Diffuse().emit(f, grid, numpy)
+    assert numpy.abs(moving - resting).max() < 2e-3 * numpy.abs(resting).max()
 
+
+def grid_heating(wall, grid, incoming) -> float:
+    """The energy the grid wall adds per arriving particle to what the resting wall of the
+    same reflection sends back: sum_v (F_wall - F_rest) |v|^2/2 dv / sum_v |c^-| f dv."""
+    positive, negative = upwind_speeds(grid)
+    resting = Diffuse(temperature=wall.temperature) if wall.reflection == "diffuse" \
+        else Specular()
+    energy = 0.5 * grid.speed_squared()
+    out = wall.emit(incoming, grid, numpy) - resting.emit(incoming, grid, numpy)
+    return float((positive * out * energy).sum() / (-negative * incoming).sum())
+
+
+def heating_rows(sizes=(16, 32, 64), reflection="diffuse", gas_temperature=1.0):
+    """For each N on the box S = SUPPORT (2D, gas at rest at T, the wall :data:`WALL`): h,
+    the grid heating per arriving particle, and its relative distance from the layer's
+    integral (:func:`exact.vibrating_wall_heating`)."""
+    layer = exact.vibrating_wall_heating(WALL["speed"], WALL["temperature"], gas_temperature,
+                                         reflection)
+    wall = Vibrating(**WALL, reflection=reflection)
+    rows = []
+    for n in sizes:
+        grid = gf.VelocityGrid(2, n, SUPPORT)
+        heating = grid_heating(wall, grid, _incoming(grid, gas_temperature))
+        rows.append({"N": n, "h": grid.spacing, "heating": heating,
+                     "error": heating / layer - 1.0})
+    return rows, layer
+
+
+@pytest.mark.parametrize("reflection", REFLECTIONS)
+def test_the_grid_heating_converges_to_the_layer_at_second_order(reflection):
+    """Gas at rest at T = T_w = 1, V = 0.4, the box S = 3.5: relative errors (measured) at
+    N = 64, 128, 256, diffuse -9.3e-3, -8.6e-4, -2.2e-4 (orders 3.44, 1.99), specular
+    5.0e-3, 1.4e-3, 3.5e-4 (1.84, 1.98): second order once h < V (docs/space.md)."""
+    rows, _ = heating_rows((64, 128, 256), reflection=reflection)
+    errors = [abs(row["error"]) for row in rows]
+    orders = [math.log2(a / b) for a, b in zip(errors[:-1], errors[1:])]
+    assert errors[-1] < 5e-4, rows
+    assert all(p > 1.7 for p in orders), (errors, orders)
+    assert 1.8 < orders[-1] < 2.3, (errors, orders)
+
+
+def test_the_layer_against_its_series():
+    """(Delta e - series) / V^3 -> a constant (about -0.23 / sqrt(T)) for the diffuse wall:
+    an odd term in V; the specular remainder falls like V^4."""
+    diffuse, specular = [], []
+    for V in (0.05, 0.1, 0.2):
+        for reflection, out in (("diffuse", diffuse), ("specular", specular)):
+            value = exact.vibrating_wall_heating(V, 1.0, 1.0, reflection)
+            out.append((value - exact.vibrating_wall_heating_series(V, 1.0, 1.0, reflection))
+                       / V ** 3)
+    assert all(-0.27 < c < -0.2 for c in diffuse), diffuse
+    assert diffuse[0] - diffuse[-1] < 0.03
+    assert specular[1] / specular[0] == pytest.approx(2.0, rel=0.1), specular
+    assert specular[2] / specular[1] == pytest.approx(2.0, rel=0.1), specular
+
+
+@pytest.mark.parametrize("reflection,gas,speed,count", [("diffuse", 2.0, 0.3, 400_000),
+                                                        ("specular", 1.0, 0.4, 400_000)])
+def test_a_piston_that_really_oscillates_heats_as_the_layer_says(reflection, gas, speed, count):
+    """A = 1e-3, omega = V / A (the particle simulation of granframe.testing.piston): its
+    heating per arriving particle within 3 standard errors of the layer's integral; for
+    the diffuse wall with T = 2 T_w the count of hits (U - v_1)_+ on the arriving gas
+    alone, V^2 (pi/4 sqrt(T_w/T) + 1/4 + (d+1) T_w / (8T) - (d-1)/8) = 0.868 V^2, is
+    more than 10 errors away (the wall catches what it sent back, not the gas)."""
+    result = oscillating_piston(count, 1e-3, speed / 1e-3, reflection=reflection,
+                                gas_temperature=gas, seed=7)
+    layer = exact.vibrating_wall_heating(speed, 1.0, gas, reflection, speeds=1000)
+    error = result["heating_error"]
+    assert abs(result["heating"] - layer) < 3 * error, (result["heating"], layer, error)
+    if reflection == "diffuse":
+        count_only = speed ** 2 * (0.25 * math.pi * math.sqrt(1 / gas) + 0.25
+                                   + 3 / (8 * gas) - 1 / 8)
+        assert abs(result["heating"] - count_only) > 10 * error
+
+
+# -- device, conformance ---------------------------------------------------------------------
 
 @pytest.mark.parametrize("wall", [Specular(), Diffuse(temperature=1.5, velocity=0.3,
-                                                      accommodation=0.5), Vibrating(**WALL)],
-                         ids=["specular", "diffuse", "vibrating"])
+                                                      accommodation=0.5),
+                                  Vibrating(**WALL), Vibrating(**WALL, reflection="specular")],
+                         ids=["specular", "diffuse", "vibrating", "vibrating-specular"])
 def test_walls_copy_nothing_between_host_and_device_after_their_first_call(wall):
     """On the counting backend (NumPy standing for a device): after one call of ``emit``
     and ``ghosts``, twelve more at other times and sides cross nothing."""
@@ -230,9 +259,33 @@ def test_walls_copy_nothing_between_host_and_device_after_their_first_call(wall)
     assert numpy.array_equal(out, wall.emit(_incoming(grid), grid, numpy, t=0.2, side="right"))
 
 
-# -- the conformance kit on time-dependent walls ---------------------------------------------
+@attrs.frozen
+class Pulsing(contracts.Boundary):
+    """A wall that depends on t: fully diffuse at the temperature T_0 (1 + sin(omega t) / 2)
+    (a test double of a time-periodic wall), refusing a period shorter than 8 steps."""
 
-class WrongPeriod(Vibrating):
+    frequency: float = 5.0
+
+    @property
+    def period(self):
+        return 2 * math.pi / self.frequency
+
+    def check_time_step(self, time_step):
+        if self.period < 8 * time_step:
+            check.reject("Pulsing", "frequency", self.frequency, "must give a period of at "
+                         "least 8 time steps")
+
+    def _wall(self, t):
+        return Diffuse(temperature=1.0 + 0.5 * math.sin(self.frequency * t))
+
+    def ghosts(self, inside, grid, xp, *, t=0.0, side="left"):
+        return self._wall(t).ghosts(inside, grid, xp, t=t, side=side)
+
+    def emit(self, incoming, grid, xp, *, t=0.0, side="left"):
+        return self._wall(t).emit(incoming, grid, xp, t=t, side=side)
+
+
+class WrongPeriod(Pulsing):
     """Declares half its period."""
 
     @property
@@ -240,7 +293,7 @@ class WrongPeriod(Vibrating):
         return math.pi / self.frequency
 
 
-class LeakyOnTheRight(Vibrating):
+class LeakyOnTheRight(Pulsing):
     """Loses 1 % of what arrives, on the right only."""
 
     def emit(self, incoming, grid, xp, *, t=0.0, side="left"):
@@ -248,29 +301,50 @@ class LeakyOnTheRight(Vibrating):
         return 0.99 * out if side == "right" else out
 
 
+@pytest.mark.parametrize("reflection", REFLECTIONS)
+def test_the_vibrating_wall_passes_the_conformance_kit(reflection):
+    kit.check_boundary(Vibrating(**WALL, reflection=reflection))
+
+
 def test_the_kit_checks_walls_over_their_period_and_on_both_sides():
-    kit.check_boundary(Vibrating(**WALL))
+    kit.check_boundary(Pulsing())
     with pytest.raises(AssertionError, match=r"WrongPeriod: the emission at t \+ period "
                                              r"\(period = 0\.628319\) differs"):
-        kit.check_wall_period(WrongPeriod(**WALL))
+        kit.check_wall_period(WrongPeriod())
     with pytest.raises(AssertionError, match=r"LeakyOnTheRight: net mass flux through the wall "
                                              r".* at t = 0 on the right, 0\.01 of the arriving"):
-        kit.check_wall_mass_flux(LeakyOnTheRight(**WALL))
+        kit.check_wall_mass_flux(LeakyOnTheRight())
     eighths = [k * 2 * math.pi / 40 for k in range(8)]
-    assert kit._wall_times(Vibrating(**WALL)) == pytest.approx(eighths)
-    assert kit._wall_times(Specular()) == kit.WALL_TIMES
+    assert kit._wall_times(Pulsing()) == pytest.approx(eighths)
+    assert kit._wall_times(Vibrating(**WALL)) == kit.WALL_TIMES
+
+
+def test_a_description_refuses_a_time_step_its_walls_cannot_follow(monkeypatch):
+    """The space description asks each wall's check_time_step: a period of 2 pi / 400
+    against dt = 0.01 (1.6 steps) is refused by name."""
+    from granframe.run import space_description
+
+    build = space_description.Space.build
+
+    def with_pulsing(self, field):
+        return Pulsing(frequency=400.0) if field == "left" else build(self, field)
+
+    monkeypatch.setattr(space_description.Space, "build", with_pulsing)
+    space = {"cells": 8, "left": "diffuse", "right": "specular", "collisions": False}
+    with pytest.raises(ValueError, match=r"Pulsing: parameter 'frequency' = 400"):
+        Simulation(RunDescription.from_dict(_description(space, 0.02, 0.01)))
 
 
 # -- bad input -----------------------------------------------------------------------------
 
 @pytest.mark.parametrize("params,name,error", [
-    ({"amplitude": -0.1, "frequency": 5.0}, "amplitude", ValueError),
-    ({"amplitude": math.inf, "frequency": 5.0}, "amplitude", ValueError),
-    ({"amplitude": 0.1, "frequency": 0.0}, "frequency", ValueError),
-    ({"amplitude": 0.1, "frequency": -2.0}, "frequency", ValueError),
-    ({"amplitude": 0.1, "frequency": "fast"}, "frequency", TypeError),
-    ({"amplitude": 0.1, "frequency": 5.0, "temperature": 0.0}, "temperature", ValueError),
-    ({"amplitude": True, "frequency": 5.0}, "amplitude", TypeError),
+    ({"speed": -0.1}, "speed", ValueError),
+    ({"speed": 0.0}, "speed", ValueError),
+    ({"speed": math.inf}, "speed", ValueError),
+    ({"speed": "fast"}, "speed", TypeError),
+    ({"speed": True}, "speed", TypeError),
+    ({"speed": 0.1, "temperature": 0.0}, "temperature", ValueError),
+    ({"speed": 0.1, "reflection": "elastic"}, "reflection", ValueError),
 ])
 def test_bad_parameters_are_refused_naming_them(params, name, error):
     with pytest.raises(error, match=rf"^Vibrating: parameter '{name}' = .* is invalid; "):
@@ -278,14 +352,11 @@ def test_bad_parameters_are_refused_naming_them(params, name, error):
 
 
 @pytest.mark.parametrize("params,support,name,what", [
-    ({"amplitude": 0.5, "frequency": 10.0}, 3.5, "amplitude", r"A omega must be <= 1\.655"),
-    ({"amplitude": 1e200, "frequency": 1e200}, 3.5, "amplitude", "does not fit the velocity box"),
-    ({"amplitude": 0.3, "frequency": 5.0}, 5.0, "amplitude",
-     r"is not resolved by the nodes \(h = 1\.379\): its discrete half-range flux is off by 58 %"),
-    ({"amplitude": 0.01, "frequency": 5.0, "temperature": 0.2}, 3.5, "temperature",
-     r"must be >= h\^2 / 4 = 0\.2331"),
-    ({"amplitude": 0.01, "frequency": 5.0, "temperature": 3.0}, 3.5, "temperature",
-     "does not fit the velocity box"),
+    ({"speed": 7.0}, 3.5, "speed", r"must be below L - h = 6\.759"),
+    ({"speed": 1e200}, 3.5, "speed", "must be below L - h"),
+    ({"speed": 0.1, "temperature": 0.2}, 3.5, "temperature", r"must be >= h\^2 / 4 = 0\.2331"),
+    ({"speed": 0.1, "temperature": 3.0}, 3.5, "temperature", "does not fit the velocity box"),
+    ({"speed": 2.0}, 3.5, "temperature", "lower the speed"),
 ])
 def test_walls_that_do_not_fit_the_grid_are_refused(params, support, name, what):
     grid = gf.VelocityGrid(2, 16, support)
@@ -294,42 +365,28 @@ def test_walls_that_do_not_fit_the_grid_are_refused(params, support, name, what)
         Vibrating(**params).check(grid)
 
 
-def test_a_bad_side_and_bad_closed_form_arguments_are_refused():
-    grid = gf.VelocityGrid(2, 16, SUPPORT)
-    wall = Vibrating(**WALL)
-    with pytest.raises(ValueError, match=r"^Vibrating: parameter 'side' = 'top' is invalid; "
-                                         r"must be 'left' .* or 'right'"):
-        wall.emit(_incoming(grid), grid, numpy, t=0.0, side="top")
-    owner = "vibrating_wall_energy_per_period"
-    for args, name in (((4, 1.0, 0.1, 5.0, 1.0, 1.0), "dimension"),
-                       ((2, -1.0, 0.1, 5.0, 1.0, 1.0), "temperature"),
-                       ((2, 1.0, -0.1, 5.0, 1.0, 1.0), "amplitude"),
-                       ((2, 1.0, 0.1, 0.0, 1.0, 1.0), "frequency"),
-                       ((2, 1.0, 0.1, 5.0, 0.0, 1.0), "incoming_flux"),
-                       ((2, 1.0, 0.1, 5.0, 1.0, -1.0), "incoming_energy_flux")):
-        with pytest.raises(ValueError, match=rf"^{owner}: parameter '{name}'"):
-            exact.vibrating_wall_energy_per_period(*args)
-    for incoming, what in ((numpy.ones((16, 8)), "grid's shape"),
-                           (numpy.where(grid.mesh()[0] < 0, 0.0, 1.0) * numpy.ones(grid.shape),
-                            "positive arriving flux")):
-        with pytest.raises(ValueError, match=rf"(?s)^{owner}_grid: parameter 'incoming' .*{what}"):
-            exact.vibrating_wall_energy_per_period_grid(grid, 1.0, 0.1, 5.0, incoming)
-    with pytest.raises(ValueError, match=r"^half_range_maxwellian_fluxes: parameter 'velocity'"):
-        exact.half_range_maxwellian_fluxes(2, 1.0, math.nan)
+def test_bad_closed_form_arguments_are_refused():
+    for function in (exact.vibrating_wall_heating, exact.vibrating_wall_heating_series):
+        owner = function.__name__
+        for args, name in (((0.0, 1.0, 1.0, "diffuse"), "speed"),
+                           ((0.1, -1.0, 1.0, "diffuse"), "wall_temperature"),
+                           ((0.1, 1.0, math.nan, "diffuse"), "gas_temperature"),
+                           ((0.1, 1.0, 1.0, "sticky"), "reflection")):
+            with pytest.raises(ValueError, match=rf"^{owner}: parameter '{name}'"):
+                function(*args)
 
 
 def test_a_description_with_a_wall_that_does_not_fit_is_refused():
-    space = {"cells": 8, "left": {"name": "vibrating", "amplitude": 0.5, "frequency": 10.0},
+    space = {"cells": 8, "left": {"name": "vibrating", "speed": 7.0},
              "right": "specular", "collisions": False}
-    with pytest.raises(ValueError, match=r"Vibrating: parameter 'amplitude' = 0\.5 is invalid"):
+    with pytest.raises(ValueError, match=r"Vibrating: parameter 'speed' = 7(\.0)? is invalid"):
         Simulation(RunDescription.from_dict(_description(space, 0.01, 0.01)))
 
 
 # -- a space run ---------------------------------------------------------------------------
 
 RUN_GRID = {"dimension": 2, "n_modes": 16, "support_radius": 3.5}
-#: the run's wall: T_w = 1, A omega = 0.5, period pi / 10 (0.31)
-RUN_WALL = {"name": "vibrating", "temperature": 1.0, "amplitude": 0.025, "frequency": 20.0}
+RUN_WALL = {"name": "vibrating", "temperature": 1.0, "speed": 0.5}
 RESTING = {"name": "diffuse", "temperature": 1.0}
 
 
@@ -340,62 +397,46 @@ def _description(space, final_time, time_step):
             "output": {"snapshot_interval": final_time}, "space": space}
 
 
-def vibrating_run_energy(side: str, cells: int = 8):
-    """Collisionless runs over one period from the Maxwellian at the wall's temperature,
-    MUSCL, dt = P / ceil(P / CFL limit), with the vibrating wall on ``side`` and a specular
-    one on the other, and the same with a resting diffuse wall: the datasets, and the
-    closed form's energy per period of the vibration, Delta E_h(A) - Delta E_h(0), for the
-    initial face values (:func:`exact.vibrating_wall_energy_per_period_grid`)."""
+def vibrating_run_energy(side: str, cells: int = 8, steps: int = 4):
+    """Collisionless runs of ``steps`` steps at the MUSCL CFL limit from the Maxwellian at
+    the wall's temperature, the vibrating wall on ``side`` and a specular one on the
+    other, and the same with a resting diffuse wall: the datasets, and the grid wall's
+    extra energy per unit time for the initial face values (:func:`grid_heating` times
+    the arriving flux), times the run's duration."""
     grid = gf.VelocityGrid(**RUN_GRID)
-    period = 2 * math.pi / RUN_WALL["frequency"]
-    limit = 2 * 0.5 * (1.0 / cells) / (grid.half_width - grid.spacing)
-    dt = period / math.ceil(period / limit)
+    dt = 2 * 0.5 * (1.0 / cells) / (grid.half_width - grid.spacing)
 
     def run(wall):
         ends = {"left": wall, "right": "specular"} if side == "left" else \
             {"left": "specular", "right": wall}
         space = {"cells": cells, "reconstruction": "muscl", "collisions": False, **ends}
-        return Simulation(RunDescription.from_dict(_description(space, period, dt))).run(
+        return Simulation(RunDescription.from_dict(_description(space, steps * dt, dt))).run(
             None, progress=False).dataset
 
     vibrating, resting = run(RUN_WALL), run(RESTING)
-    face = vibrating.f.values[0, 0 if side == "left" else -1]
-    face = face if side == "left" else reflect(face, grid.dimension)
-    params = {k: RUN_WALL[k] for k in ("temperature", "amplitude", "frequency")}
-    closed = (exact.vibrating_wall_energy_per_period_grid(grid, **params, incoming=face)["energy"]
-              - exact.vibrating_wall_energy_per_period_grid(
-                  grid, **{**params, "amplitude": 0.0}, incoming=face)["energy"])
-    return vibrating, resting, closed, dt
+    face = vibrating.f.values[0, 0]                      # even in v_1: the same on both sides
+    wall = Vibrating(speed=RUN_WALL["speed"], temperature=RUN_WALL["temperature"])
+    negative = upwind_speeds(grid)[1]
+    arriving = float((-negative * face).sum() * grid.cell_volume)
+    return vibrating, resting, grid_heating(wall, grid, face) * arriving * steps * dt
 
 
 @pytest.mark.parametrize("side", ["left", "right"])
 def test_a_run_with_a_vibrating_wall_keeps_its_mass_and_gets_the_energy_of_the_vibration(side):
-    """Mass to round-off, the energy balance of the walls to round-off; the step's energy
-    from the vibration (vibrating run minus resting run) follows the wall's lab velocity:
-    +cos(omega t) on the left, -cos on the right (the right wall moving along +x recedes
-    from the gas); over the period it is the closed form for the initial face values, to
-    3 % (measured -0.50 % on the left, +1.40 % on the right; -0.28 %, +1.28 % on 32 cells:
-    the arriving flux changes a little within the period in the run, and the closed form
-    holds it fixed). A transport that did not tell the wall its time would put in a
-    first-order energy (about 0.04 here against 0.0032), one that did not tell its side
-    the opposite sign of cos."""
-    vibrating, resting, closed, dt = vibrating_run_energy(side)
+    """Mass to round-off, the energy balance of the walls to round-off; the energy of the
+    vibration (vibrating run minus resting run, through the wall) is the grid wall's for
+    the initial face values to 2 % (measured +0.35 % on both sides: the face values change
+    a little over the four steps)."""
+    vibrating, resting, closed = vibrating_run_energy(side)
     wall = 0 if side == "left" else 1
     mass = vibrating.mass.values
     assert numpy.abs(mass / mass[0] - 1).max() < 1e-13
     assert numpy.abs(vibrating.wall_mass.values).max() < 1e-15 * mass[0]
     energy = vibrating.kinetic_energy.values
     assert abs(energy[-1] - energy[0] - vibrating.wall_energy.values.sum()) < 1e-14 * energy[0]
-    times = vibrating.step_time.values
-    assert times[-1] == pytest.approx(2 * math.pi / RUN_WALL["frequency"], rel=1e-12)
     extra = (vibrating.wall_energy.values[1:, wall] - resting.wall_energy.values[1:, wall])
-    lab = numpy.cos(RUN_WALL["frequency"] * (times[1:] - 0.5 * dt))
-    sign = 1.0 if side == "left" else -1.0
-    strong = numpy.abs(lab) > 0.25
-    assert numpy.all(numpy.sign(extra[strong]) == sign * numpy.sign(lab[strong])), (extra, lab)
-    assert sign * numpy.sum(extra * lab) > 0.95 * numpy.linalg.norm(extra) * numpy.linalg.norm(lab)
     assert closed > 0
-    assert extra.sum() == pytest.approx(closed, rel=0.03), (extra.sum(), closed)
+    assert extra.sum() == pytest.approx(closed, rel=0.02), (extra.sum(), closed)
 
 
 # -- the momentum through the walls: pressure and shear stress -----------------------------

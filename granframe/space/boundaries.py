@@ -36,10 +36,10 @@ import math
 
 import attrs
 import numpy
-from scipy import special
 
 from granframe import abc as contracts
 from granframe import validators as check
+from granframe.space import vibration
 from granframe.space.transport import reflect, upwind_speeds
 
 
@@ -232,181 +232,149 @@ class Diffuse(contracts.Boundary):
         return xp.where(leaving, out, incoming)
 
 
-def _normal_sign(side) -> float:
-    """+1 for the left wall, -1 for the right one: the normal velocity in the wall's own
-    frame is the lab velocity along +x times this (:attr:`granframe.abc.Side.normal_sign`).
-    The sides of the interval only: a space run's walls are at the ends of x."""
-    try:
-        named = contracts.Side.named(side)
-    except ValueError:
-        named = None
-    if named is None or named.axis != 0:
-        check.reject("Vibrating", "side", side, "must be 'left' (the wall at x = 0) or "
-                     "'right' (the wall at x = ell)")
-    return named.normal_sign
-
-
-def _half_range_flux_error(grid, temperature: float, u: float) -> float:
-    r"""Relative error of the grid's half-range flux of exp(-|v_1 - u|^2 / (2T)) against
-    its exact value, sum_v c^+ M dv_1 / int_{v_1 > 0} v_1 M dv_1 - 1 (the node -L counted as
-    +L at the speed c^+ = L/2). Both are scaled by exp(u^2 / (2T)), so that neither
-    underflows for u << -sqrt(T):
-
-    .. math:: \int_0^\infty v e^{-(v^2 - 2 v u)/(2T)} dv
-              = T \left(1 + \sqrt{\pi/2}\, s\, \mathrm{erfcx}(-s/\sqrt{2})\right),
-              \quad s = u/\sqrt{T}.
-    """
-    positive, _ = upwind_speeds(grid, numpy)
-    speed = numpy.abs(grid.points()).reshape(positive.shape)
-    discrete = float(numpy.sum(positive * numpy.exp(-(speed * speed - 2.0 * speed * u)
-                                                    / (2.0 * temperature)))) * grid.spacing
-    s = u / math.sqrt(temperature)
-    exact = temperature * (1.0 + math.sqrt(0.5 * math.pi) * s
-                           * float(special.erfcx(-s / math.sqrt(2.0))))
-    return discrete / exact - 1.0
-
-
-#: the fewest time steps in a period of a vibrating wall (:meth:`Vibrating.check_time_step`):
-#: its phase advances by at most 45 degrees a step, and the stages of the transport's two
-#: half steps take its velocity at least 48 times a period
-STEPS_PER_PERIOD = 8
+#: what a vibrating wall does to a particle it hits
+REFLECTIONS = ("diffuse", "specular")
 
 
 @attrs.frozen
 class Vibrating(contracts.Boundary):
-    r"""A fully diffuse wall at temperature T_w vibrating along x, in the small-amplitude
-    approximation.
+    r"""A wall vibrating along its normal, in the limit of small amplitude at fixed speed:
+    A -> 0 at fixed V = A omega (:mod:`granframe.space.vibration`; docs/space.md,
+    "Vibrating walls").
 
-    In the lab frame the wall is at x_w + A sin(omega t) and moves with the velocity
-    U(t) = A omega cos(omega t) along +x. It stays at x_w (its displacement, small against
-    the mean free path and the cell, is dropped; its velocity is kept), and for
-    c^+ > 0 it sends back, in its own frame (the domain at x > 0),
+    The wall at X(t) = A sin(omega t) sweeps a collisionless layer of thickness 2A; in the
+    limit it is a boundary condition that does not depend on time. An arriving particle
+    of normal speed a hits the wall at the rate of their relative speed, first at a phase
+    theta of density p_a(theta) = (a + cos theta) / a where it is not hidden by the wall's
+    earlier motion; a ``diffuse`` wall sends it back from its own frame with the
+    flux-weighted Maxwellian at T_w (lab normal speed V cos theta + w), a ``specular`` one
+    with the lab speed 2 V cos theta + a; a particle slower than the wall can follow is
+    caught again (the escape slope S(theta)) and sent back again. On the grid, with
+    c^+ > 0 the leaving nodes and c^- < 0 the arriving ones,
 
-    .. math:: f_{out}(v) = \Phi\, \frac{M_{u}(v)}{\sum_v c^+ M_{u} \Delta v},\quad
-              \Phi = \sum_v |c^-| f_{in}(v) \Delta v,\quad
-              M_u(v) = e^{-(|v_1| - u)^2 / (2T_w)} e^{-|v_t|^2 / (2T_w)},
+    .. math:: f_{out}(v_1, v_t) = M_t(v_t) \sum_j K_{ij}\, \Phi_j \quad	ext{(diffuse)},
+              \qquad \Phi_j = \sum_{v_t} |c^-_j|\, f_{in}(v_{1j}, v_t)\, h^{d-1},
 
-    with u = u_n(t) = +U(t) for the left wall and -U(t) for the right one (the reflection
-    v_1 -> -v_1 that maps it onto a left wall reverses the normal), v_t = (v_2, ..., v_d),
-    and |v_1| the speed with which a node leaves the wall (the node -L leaves at +L, with
-    c^+ = L/2). The sum over the nodes of c^+ f_out Δv is Φ to round-off at every
-    t: no mass is lost or made. The energy it injects per period into a given incoming f
-    is :func:`granframe.space.exact.vibrating_wall_energy_per_period` (docs/space.md,
-    "Moving and vibrating walls"). Kinetic theories of vibrated granular gases use this
-    wall at a fixed place (e.g. V. Kumaran, J. Fluid Mech. 364 (1998) 163-185; the diffuse
-    emission: J. C. Maxwell, Phil. Trans. R. Soc. 170 (1879) 231-256).
+              f_{out}(v_1, v_t) = \sum_j K_{ij}\, |c^-_j|\, f_{in}(v_{1j}, v_t)
+              \quad	ext{(specular)},
+
+    with M_t the tangential Maxwellian at T_w normalised to sum h^(d-1) = 1 and the kernel
+    K_{ij} of leaving node i and arriving node j normalised to sum_i c^+_i K_{ij} = 1, so
+    that what arrives at every node leaves, to round-off. For the diffuse wall K_{ij} is
+    the layer's escape flux density g(|v_{1i}| | |v_{1j}|) over the leaving speed; for
+    the specular one each escape speed b of the phase rule is shared between the two
+    leaving nodes around it with the shares that keep its flux and its energy flux b^2/2,
+    so that the energy of each arriving node comes out as the layer's, to round-off (2 V^2
+    per particle from every node with a >= 3V). The tangential velocity of a specular hit
+    is kept.
 
     Parameters
     ----------
-    amplitude : float
-        A >= 0, the amplitude of the wall's displacement A sin(omega t) along +x.
-    frequency : float
-        omega > 0, the angular frequency; the period is 2 pi / omega.
+    speed : float
+        V = A omega > 0, the wall's largest speed.
     temperature : float
-        T_w > 0, in granframe's temperature units (T = int |v-u|^2 f / (d rho)).
+        T_w > 0 of a diffuse wall, in granframe's temperature units.
+    reflection : str
+        "diffuse" (default) or "specular".
     """
 
-    amplitude: float = attrs.field(converter=check.to_float, validator=check.real(0.0, math.inf))
-    frequency: float = attrs.field(converter=check.to_float,
-                                   validator=check.real(0.0, math.inf, lower_open=True))
+    speed: float = attrs.field(converter=check.to_float,
+                               validator=check.real(0.0, math.inf, lower_open=True))
     temperature: float = attrs.field(default=1.0, converter=check.to_float,
                                      validator=check.real(0.0, math.inf, lower_open=True))
+    reflection: str = attrs.field(default="diffuse")
 
-    @property
-    def period(self) -> float:
-        """2 pi / omega."""
-        return 2.0 * math.pi / self.frequency
-
-    def check_time_step(self, time_step: float) -> None:
-        """Refuse a period shorter than :data:`STEPS_PER_PERIOD` steps: the wall velocity
-        A omega cos(omega t) is taken at the transport stages of each step, and fewer
-        steps alias it (a period of 6e-12 with dt = 3e-3 ran, its work sampled at the
-        stages' phases)."""
-        if self.period < STEPS_PER_PERIOD * time_step * (1 - 1e-12):
-            check.reject("Vibrating", "frequency", self.frequency,
-                         f"must give a period 2 pi / omega = {self.period:.4g} of at least "
-                         f"{STEPS_PER_PERIOD} time steps (time_step = {time_step:g}): "
-                         f"omega <= {2.0 * math.pi / (STEPS_PER_PERIOD * time_step):.4g}, "
-                         "or a smaller time_step; the steps sample the wall's motion")
-
-    @property
-    def speed(self) -> float:
-        """A omega, the largest wall speed."""
-        return self.amplitude * self.frequency
-
-    def normal_velocity(self, t: float = 0.0, side: str = "left") -> float:
-        """u_n(t) = A omega cos(omega t) for the left wall, -A omega cos(omega t) for the
-        right one: the wall's velocity along the normal into the domain."""
-        return _normal_sign(side) * self.speed * math.cos(self.frequency * t)
+    @reflection.validator
+    def _check_reflection(self, attribute, value):
+        if value not in REFLECTIONS:
+            check.reject("Vibrating", "reflection", value,
+                         f"must be one of {', '.join(map(repr, REFLECTIONS))}")
 
     def check(self, grid) -> None:
-        """The wall Maxwellian must fit the grid at every wall velocity |u| <= A omega:
-        resolved by the nodes at rest, sqrt(T_w) >= h / 2 (as :class:`Diffuse`); below 1e-8
-        of its peak on the faces of the box at u = A omega, (L - A omega)^2 / (2 T_w) >=
-        ln 1e8; and resolved when the wall recedes fastest (u = -A omega), where the emission
-        falls from v_1 = 0 over T_w / (A omega) once A omega > sqrt(T_w): its discrete
-        half-range flux sum c^+ M_u dv_1 must be within 50 % of the exact one (46 % is the
-        error of a wall at rest with sqrt(T_w) = h/2)."""
+        """The wall must fit the grid: its speed below L - h (a specular wall sends the
+        fastest arriving nodes back up to 2V faster; what would leave beyond L is put on the
+        node -L); a diffuse wall's Maxwellian resolved by the nodes, sqrt(T_w) >= h / 2 (as
+        :class:`Diffuse`), and below 1e-8 of its peak on the faces of the box when the wall
+        moves at V, (L - V)^2 / (2 T_w) >= ln 1e8."""
         h, L = grid.spacing, grid.half_width
+        if self.speed >= L - h:
+            check.reject("Vibrating", "speed", self.speed,
+                         f"must be below L - h = {L - h:.4g}, the fastest node of the velocity "
+                         "grid; lower it or widen the grid (support_radius)")
+        if self.reflection == "specular":
+            return
         _check_resolved("Vibrating", self.temperature, grid)
-        if math.exp(-L * L / (2.0 * self.temperature)) > 1e-8:
-            check.reject("Vibrating", "temperature", self.temperature,
-                         f"gives a wall Maxwellian that does not fit the velocity box "
-                         f"[-{L:g}, {L:g}]^{grid.dimension} (above 1e-8 of its peak on its "
-                         f"faces): lower it below {L * L / (2 * math.log(1e8)):.4g} or widen "
-                         "the grid (support_radius)")
         gap = L - self.speed
-        if not (gap > 0 and math.exp(-gap * gap / (2.0 * self.temperature)) <= 1e-8):
-            largest = L - math.sqrt(2.0 * self.temperature * math.log(1e8))
-            check.reject("Vibrating", "amplitude", self.amplitude,
-                         f"with frequency {self.frequency:g} gives the wall speed A omega = "
-                         f"{self.speed:.4g}, at which the wall Maxwellian (T_w = "
-                         f"{self.temperature:g}) does not fit the velocity box [-{L:g}, {L:g}] "
-                         f"(above 1e-8 of its peak on its faces): A omega must be <= "
-                         f"{largest:.4g}; lower the amplitude or the frequency, or widen the "
-                         "grid (support_radius)")
-        error = _half_range_flux_error(grid, self.temperature, -self.speed)
-        if abs(error) > 0.5:
-            check.reject("Vibrating", "amplitude", self.amplitude,
-                         f"with frequency {self.frequency:g} gives the wall speed A omega = "
-                         f"{self.speed:.4g}, at which the receding wall's emission (falling "
-                         f"from v_1 = 0 over about T_w / (A omega) = "
-                         f"{self.temperature / self.speed:.3g}) is not resolved by the nodes "
-                         f"(h = {h:.4g}): its discrete half-range flux is off by "
-                         f"{100 * abs(error):.0f} % (at most 50 % allowed); lower the "
-                         "amplitude or the frequency, refine the grid (n_modes) or warm the "
-                         "wall")
+        if math.exp(-gap * gap / (2.0 * self.temperature)) > 1e-8:
+            check.reject("Vibrating", "temperature", self.temperature,
+                         f"with speed {self.speed:g} gives a wall Maxwellian that does not fit "
+                         f"the velocity box [-{L:g}, {L:g}] (above 1e-8 of its peak on its "
+                         f"faces): lower it below {gap * gap / (2 * math.log(1e8)):.4g}, "
+                         "lower the speed, or widen the grid (support_radius)")
 
     def _host_constants(self, grid):
-        """NumPy arrays: the speed |v_1| with which each node leaves the wall, c^+ h, the mask
-        c^+ > 0 (shape (N, 1, ..., 1)), the tangential Maxwellian exp(-|v_t|^2 / (2T_w))
-        normalised to h^(d-1) sum = 1 (shape (1, N, ..., N)), and the arriving weights
-        |c^-| dv (see :func:`_constants`)."""
+        """NumPy arrays: the kernel K (N, N) along v_1 (zero outside the leaving rows and
+        arriving columns), the arriving weights |c^-| (N, 1, ..., 1), the mask c^+ > 0,
+        and the tangential Maxwellian M_t (1, N, ..., N) normalised to h^(d-1) sum = 1
+        (ones for a specular wall, unused); see :func:`_constants`."""
         positive, negative = upwind_speeds(grid, numpy)
-        speed = numpy.abs(grid.points()).reshape(positive.shape)       # the node -L leaves at +L
-        tangential = numpy.exp(-sum(c * c for c in grid.mesh()[1:]) / (2.0 * self.temperature))
-        tangential = tangential / (tangential.sum() * grid.spacing ** (grid.dimension - 1))
-        return (speed, positive * grid.spacing, positive > 0, tangential,
-                -negative * grid.cell_volume)
+        plus, minus = positive.ravel(), -negative.ravel()
+        speed = numpy.abs(grid.points())                        # the node -L moves at L
+        out, into = numpy.nonzero(plus > 0)[0], numpy.nonzero(minus > 0)[0]
+        layer = vibration.Layer(self.speed, self.temperature)
+        kernel = numpy.zeros((grid.n_modes, grid.n_modes))
+        if self.reflection == "diffuse":
+            block = layer.diffuse_escape(speed[out], speed[into]) / speed[out][:, None]
+            tangential = numpy.exp(-sum(c * c for c in grid.mesh()[1:])
+                                   / (2.0 * self.temperature))
+            tangential = tangential / (tangential.sum() * grid.spacing ** (grid.dimension - 1))
+        else:
+            block = self._shares(speed[out], *layer.specular_escape(speed[into]))
+            block = block / plus[out][:, None]
+            tangential = numpy.ones((1,) * grid.dimension)
+        block = block / (plus[out][:, None] * block).sum(axis=0)
+        kernel[numpy.ix_(out, into)] = block
+        return kernel, minus.reshape(negative.shape), (plus > 0).reshape(positive.shape), \
+            tangential
+
+    @staticmethod
+    def _shares(nodes, exits, weight):
+        r"""The flux (len(nodes), arriving) each leaving node receives when the escape speeds
+        ``exits`` (phases, arriving) with ``weight`` are shared between the two nodes
+        b_i <= b < b_{i+1} around each, t b_i^2 + (1 - t) b_{i+1}^2 = b^2 (flux and energy
+        flux kept); below the slowest node or above the fastest all goes to that node."""
+        order = numpy.argsort(nodes)
+        sorted_nodes = nodes[order]
+        squares = sorted_nodes ** 2
+        flat, w = exits.ravel(), weight.ravel()
+        column = numpy.broadcast_to(numpy.arange(exits.shape[1]), exits.shape).ravel()
+        i = numpy.clip(numpy.searchsorted(sorted_nodes, flat, side="right") - 1, 0,
+                       nodes.size - 2)
+        t = (squares[i + 1] - flat ** 2) / (squares[i + 1] - squares[i])
+        t = numpy.clip(t, 0.0, 1.0)
+        shares = numpy.zeros((nodes.size, exits.shape[1]))
+        numpy.add.at(shares, (order[i], column), w * t)
+        numpy.add.at(shares, (order[i + 1], column), w * (1.0 - t))
+        return shares
 
     def ghosts(self, inside, grid, xp, *, t=0.0, side="left"):
-        """The linear extension through the wall of :func:`_emitting_ghosts`, with the
-        emission at time t."""
+        """The linear extension through the wall of :func:`_emitting_ghosts`."""
         return _emitting_ghosts(self, inside, grid, xp, t, side, _constants(self, grid, xp)[2])
 
     def emit(self, incoming, grid, xp, *, t=0.0, side="left"):
-        """The emission of the class notes at time ``t`` (a Python float) on ``side``.
-
-        Only the factor exp(-(|v_1| - u_n(t))^2 / (2 T_w)) on the N nodes of v_1 and its
-        normalisation are computed per call, in ``xp`` from the cached node values; the
-        normalisation stays a device scalar."""
-        speed, weight, leaving, tangential, arriving = _constants(self, grid, xp)
-        u = self.normal_velocity(t, side)
-        normal = xp.exp((speed - u) ** 2 * (-0.5 / self.temperature)) * leaving
-        normal = normal / (weight * normal).sum()
-        axes = tuple(range(incoming.ndim - grid.dimension, incoming.ndim))
-        flux = (arriving * incoming).sum(axis=axes, keepdims=True)
-        return xp.where(leaving, flux * (normal * tangential), incoming)
+        """The emission of the class notes; the same at every t and on both sides (the
+        limit averages over the phase, and a phase shift of half a period reverses U)."""
+        kernel, arriving, leaving, tangential = _constants(self, grid, xp)
+        d = grid.dimension
+        normal = incoming.ndim - d
+        weighted = arriving * incoming
+        if self.reflection == "diffuse":
+            flux = weighted.sum(axis=tuple(range(normal + 1, incoming.ndim))) \
+                * grid.spacing ** (d - 1)
+            out = (flux @ kernel.T).reshape(flux.shape + (1,) * (d - 1)) * tangential
+        else:
+            out = xp.moveaxis(xp.tensordot(kernel, weighted, axes=([1], [normal])), 0, normal)
+        return xp.where(leaving, out, incoming)
 
 
 @functools.lru_cache(maxsize=32)

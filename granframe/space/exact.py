@@ -5,7 +5,7 @@
 - free transport d_t f + c d_x f = 0: a periodic sine, and specular walls by the method
   of images;
 - the mean free path and the Knudsen number of the kernels in granframe's conventions;
-- the energy a vibrating diffuse wall puts in per period.
+- the energy a vibrating wall adds per arriving particle.
 
 The Riemann problem of the Euler equations (the hydrodynamic limit eps -> 0) is
 :mod:`granframe.theory.euler`.
@@ -575,225 +575,75 @@ def knudsen_number(kernel, dimension: int, density: float, temperature: float,
         "knudsen_number", "length", length)
 
 
-# -- Moving and vibrating walls -------------------------------------------------------------
+# -- Vibrating walls --------------------------------------------------------------------------
+
+#: the mean of (S(theta) - cos theta)^2 over the phase, S the layer's escape slope
+#: (:func:`granframe.space.vibration.escape_slope`): 1/2 (to 1e-15 on 4096 phases)
+CATCH_MOMENT = 0.5
 
 
-def _wall_arguments(owner, temperature, amplitude, frequency):
-    temperature = _positive(owner, "temperature", temperature)
-    if not check.is_real(amplitude) or not 0.0 <= float(amplitude) < math.inf:
-        check.reject(owner, "amplitude", amplitude, "must be a finite real number >= 0")
-    frequency = _positive(owner, "frequency", frequency)
-    return temperature, float(amplitude), frequency
+def vibrating_wall_heating_series(speed: float, wall_temperature: float,
+                                  gas_temperature: float, reflection: str) -> float:
+    r"""The energy a vibrating wall (:class:`granframe.space.boundaries.Vibrating`) adds,
+    per arriving particle of a gas at rest at temperature T, to what the wall at rest
+    sends back: the leading term of its expansion in V / sqrt(T) (docs/space.md,
+    "Vibrating walls"),
 
+    .. math:: \Delta e_{diffuse} = V^2 \Bigl(\frac{\pi}{4}\sqrt{\frac{T_w}{T}}
+              + \frac14 + \frac12\langle (S - \cos\theta)^2\rangle\Bigr)
+              = V^2 \Bigl(\frac{\pi}{4}\sqrt{\frac{T_w}{T}} + \frac12\Bigr),
+              \qquad \Delta e_{specular} = 2 V^2,
 
-def half_range_maxwellian_fluxes(dimension: int, temperature: float,
-                                 velocity: float) -> tuple[float, float]:
-    r"""The mass and energy fluxes across a plane, over v_1 > 0, of the unit-density
-    Maxwellian M_{u,T}(v) = (2 pi T)^{-d/2} exp(-((v_1 - u)^2 + |v_t|^2) / (2T)) moving with
-    u along the normal v_1:
-
-    .. math:: J_0(u) = \int_{v_1>0} v_1 M\,dv = u\,\Phi(s) + \sigma\,\varphi(s),
-
-              J_2(u) = \frac12 \int_{v_1>0} v_1 |v|^2 M\,dv
-                     = \frac12\left[(u^3 + 3uT)\,\Phi(s) + \sigma (u^2 + 2T)\,\varphi(s)\right]
-                       + \frac{d-1}{2} T\, J_0(u),
-
-    sigma = sqrt(T), s = u / sigma, Phi and phi the standard normal distribution function
-    and density. (With v_1 = u + sigma z: int_{-s}^inf z phi = phi(s), int z^2 phi =
-    Phi(s) - s phi(s), int z^3 phi = (s^2 + 2) phi(s); each of the d - 1 tangential
-    directions adds T/2 per particle.) At u = 0, J_0 = sqrt(T / (2 pi)) and J_2 / J_0 =
-    (d + 1) T / 2. The incoming fluxes of a Maxwellian of density rho and normal velocity
-    u_in arriving at a wall from x > 0 are rho J_0(-u_in) and rho J_2(-u_in).
-
-    Returns
-    -------
-    (float, float)
-        J_0(u), J_2(u).
+    the first from the first hits' correlation with the wall's speed (the hit rate
+    (a + U)/a times the work U w_1 + U^2/2 on an emission of mean normal speed
+    sqrt(pi T_w / 2)), the last from the wall catching what it sent back too slowly
+    (each catch renews a normal energy of about T_w, with probability
+    V^2 (S - cos theta)^2 / (2 T_w)); the specular value holds exactly for every arriving
+    speed a >= 3V. The remainder is O(V^3 / sqrt(T)).
     """
-    owner = "half_range_maxwellian_fluxes"
-    _check_dimension(owner, dimension)
-    temperature = _positive(owner, "temperature", temperature)
-    if not check.is_real(velocity) or not math.isfinite(float(velocity)):
-        check.reject(owner, "velocity", velocity, "must be a finite real number")
-    u, sigma = float(velocity), math.sqrt(temperature)
-    s = u / sigma
-    cdf = 0.5 * math.erfc(-s / math.sqrt(2.0))
-    pdf = math.exp(-0.5 * s * s) / math.sqrt(2.0 * math.pi)
-    j0 = u * cdf + sigma * pdf
-    j2 = (0.5 * ((u ** 3 + 3.0 * u * temperature) * cdf + sigma * (u * u + 2.0 * temperature) * pdf)
-          + 0.5 * (dimension - 1) * temperature * j0)
-    return j0, j2
+    owner = "vibrating_wall_heating_series"
+    V = _positive(owner, "speed", speed)
+    Tw = _positive(owner, "wall_temperature", wall_temperature)
+    T = _positive(owner, "gas_temperature", gas_temperature)
+    if reflection == "specular":
+        return 2.0 * V * V
+    if reflection != "diffuse":
+        check.reject(owner, "reflection", reflection, "must be 'diffuse' or 'specular'")
+    return V * V * (0.25 * math.pi * math.sqrt(Tw / T) + 0.25 + 0.5 * CATCH_MOMENT)
 
 
-#: the coefficients c_2, c_4 of the period average of the emitted energy per particle,
-#: <J_2/J_0> = (d+1) T_w / 2 + T_w (c_2 eps^2 + c_4 eps^4 + O(eps^6)), eps = A omega / sqrt(T_w)
-VIBRATING_WALL_COEFFICIENTS = (0.5 - math.pi / 8.0,
-                               3.0 * math.pi / 16.0 - 0.125 - 3.0 * math.pi ** 2 / 64.0)
-
-
-def _incoming_arguments(owner, incoming_flux, incoming_energy_flux):
-    flux = _positive(owner, "incoming_flux", incoming_flux)
-    if not check.is_real(incoming_energy_flux) or not 0.0 <= float(incoming_energy_flux) < math.inf:
-        check.reject(owner, "incoming_energy_flux", incoming_energy_flux,
-                     "must be a finite real number >= 0")
-    return flux, float(incoming_energy_flux)
-
-
-def _period_mean(energy, speed):
-    """(1 / 2 pi) int_0^{2 pi} energy(speed cos theta) d theta by the periodic trapezoid rule
-    on M points, M doubled from 16 until two values agree to 1e-15 of the largest sample
-    (the integrand is analytic and periodic: the error falls geometrically in M)."""
-    previous, m = None, 16
-    while True:
-        samples = [energy(speed * math.cos(2.0 * math.pi * k / m)) for k in range(m)]
-        mean = math.fsum(samples) / m
-        if previous is not None and abs(mean - previous) <= 1e-15 * max(map(abs, samples)):
-            return mean
-        if m >= 1 << 16:
-            raise ArithmeticError(f"the period mean has not converged with {m} points "
-                                  f"({previous!r}, {mean!r})")
-        previous, m = mean, 2 * m
-
-
-def _vibrating_wall_result(mean, flux, energy_flux, temperature, amplitude, frequency,
-                           dimension):
-    period = 2.0 * math.pi / frequency
-    eps2 = (amplitude * frequency) ** 2 / temperature
-    c2, c4 = VIBRATING_WALL_COEFFICIENTS
-    series = 0.5 * (dimension + 1) * temperature + temperature * (c2 * eps2 + c4 * eps2 * eps2)
-    return {"energy": period * (flux * mean - energy_flux), "period": period,
-            "mean_energy": mean, "incoming_flux": flux, "incoming_energy_flux": energy_flux,
-            "expansion": period * (flux * series - energy_flux)}
-
-
-def vibrating_wall_energy_per_period(dimension: int, temperature: float, amplitude: float,
-                                     frequency: float, incoming_flux: float,
-                                     incoming_energy_flux: float) -> dict:
-    r"""The energy a vibrating diffuse wall (:class:`granframe.space.boundaries.Vibrating`)
-    puts per period into a given, steady incoming distribution (continuous velocities).
-
-    The wall at temperature T = T_w has the normal velocity u(t) = A omega cos(omega t) and
-    stays at its place (small amplitude). Of what arrives, the mass flux Phi_in and the
-    energy flux E_in, it sends back n(t) M_{u(t),T} over v_1 > 0 with n(t) J_0(u) = Phi_in
-    (no mass made or lost), whose energy flux is Phi_in J_2(u) / J_0(u)
-    (:func:`half_range_maxwellian_fluxes`). Over a period P = 2 pi / omega it puts in
-
-    .. math:: \Delta E = \int_0^P \left[\Phi_{in} \frac{J_2(u(t))}{J_0(u(t))}
-              - E_{in}\right] dt = P\left[\Phi_{in} \langle J_2/J_0 \rangle - E_{in}\right],
-
-    the period mean <J_2/J_0> = (1/2 pi) int_0^{2 pi} J_2/J_0 (A omega cos theta) d theta
-    taken by the periodic trapezoid rule to round-off (:func:`_period_mean`). With
-    eps = A omega / sqrt(T) (docs/space.md, "Moving and vibrating walls"),
-
-    .. math:: \frac{J_2}{J_0}(u) = \frac{d+1}{2} T + \sqrt{\frac{\pi}{8}}\,\sigma u
-              + \left(1 - \frac{\pi}{4}\right) u^2 + \frac{\pi - 3}{8}\sqrt{2\pi}
-              \frac{u^3}{\sigma} + \left(\pi - \frac23 - \frac{\pi^2}{4}\right)
-              \frac{u^4}{2T} + O(u^5),
-
-    .. math:: \langle J_2/J_0 \rangle = \frac{d+1}{2} T + T\left[\left(\frac12 -
-              \frac{\pi}{8}\right) \epsilon^2 + \left(\frac{3\pi}{16} - \frac18 -
-              \frac{3\pi^2}{64}\right) \epsilon^4 + O(\epsilon^6)\right],
-
-    c_2 = 0.10730, c_4 = 1.411e-3 (:data:`VIBRATING_WALL_COEFFICIENTS`): the wall heats
-    what it sends back by (1/2 - pi/8) (A omega)^2 per particle at second order, whatever
-    arrives.
-
-    Parameters
-    ----------
-    dimension : int
-        d, 2 or 3.
-    temperature, amplitude, frequency : float
-        T_w > 0, A >= 0, omega > 0.
-    incoming_flux, incoming_energy_flux : float
-        Phi_in > 0 and E_in >= 0, the mass and energy fluxes arriving at the wall (per unit
-        time and area), e.g. rho J_0(-u_in), rho J_2(-u_in) of an arriving Maxwellian.
-
-    Returns
-    -------
-    dict
-        ``energy`` (Delta E), ``period`` (P), ``mean_energy`` (<J_2/J_0>), the incoming
-        fluxes, and ``expansion``: Delta E from the series through eps^4.
+def vibrating_wall_heating(speed: float, wall_temperature: float, gas_temperature: float,
+                           reflection: str, speeds: int = 3000) -> float:
+    r"""The same energy from the layer's kernel without expansion
+    (:class:`granframe.space.vibration.Layer`): the arriving normal speeds of the
+    flux-weighted half-range Maxwellian at T, (a / T) exp(-a^2 / (2T)), on ``speeds``
+    midpoints of [0, 12 sqrt(T)]; the leaving speeds of the diffuse wall on as many
+    midpoints of [0, 12 sqrt(T_w) + V], each arriving speed's escape density normalised
+    to one particle. Returns sum_a (e_out(a) - e_rest) F(a) da / sum_a F(a) da, with
+    e_out(a) the mean normal energy b^2/2 that leaves for arrival speed a, e_rest = T_w
+    (diffuse; the tangential energy is T_w/2 per component either way) or a^2/2
+    (specular). Converges as speeds^-2 (the midpoint rule on smooth integrands).
     """
-    owner = "vibrating_wall_energy_per_period"
-    _check_dimension(owner, dimension)
-    temperature, amplitude, frequency = _wall_arguments(owner, temperature, amplitude, frequency)
-    flux, energy_flux = _incoming_arguments(owner, incoming_flux, incoming_energy_flux)
+    from granframe.space.vibration import Layer
 
-    def energy(u):
-        j0, j2 = half_range_maxwellian_fluxes(dimension, temperature, u)
-        return j2 / j0
-
-    mean = _period_mean(energy, amplitude * frequency)
-    return _vibrating_wall_result(mean, flux, energy_flux, temperature, amplitude, frequency,
-                                  dimension)
-
-
-def vibrating_wall_energy_per_period_grid(grid, temperature: float, amplitude: float,
-                                          frequency: float, incoming) -> dict:
-    r""":func:`vibrating_wall_energy_per_period` with the velocity grid's own sums: what the
-    grid wall puts per period into the face values ``incoming`` (the left wall's frame; the
-    right wall's incoming values reflected, v_1 -> -v_1).
-
-    With the upwind speeds c^± of the nodes (:func:`granframe.space.transport.upwind_speeds`)
-    and Delta v = h^d,
-
-    .. math:: \Phi_{in} = \sum_v |c^-| f_{in} \Delta v,\quad
-              E_{in} = \sum_v |c^-| \frac{|v|^2}{2} f_{in} \Delta v,\quad
-              \frac{J_2}{J_0}\Big|_h(u) = \frac{\sum_i c^+_i m_i w_i^2/2}{\sum_i c^+_i m_i}
-              + \frac{\sum_t |v_t|^2/2\; g_t}{\sum_t g_t},
-
-    m_i = exp(-(w_i - u)^2 / (2T)) on the v_1 nodes of c^+ > 0 with w_i = |v_1| the speed
-    with which node i leaves the wall (the node -L leaves at +L, with c^+ = L/2), and
-    g_t = exp(-|v_t|^2 / (2T)) on the tangential nodes. The normal sums are the
-    trapezoidal rule on [0, L] of integrands with a kink at v_1 = 0, so they differ from
-    the continuous J_0 and J_2 by O(h^2) (h^4 for J_2's v_1^3 part), as the incoming
-    fluxes do for a smooth f: Delta E_h - Delta E = O(h^2) for a fixed box.
-
-    Parameters
-    ----------
-    grid : VelocityGrid
-    temperature, amplitude, frequency : float
-        T_w > 0, A >= 0, omega > 0.
-    incoming : array_like
-        f_in at the wall, of the grid's shape, with a positive arriving flux.
-
-    Returns
-    -------
-    dict
-        As :func:`vibrating_wall_energy_per_period`, with the grid's sums.
-    """
-    from granframe.space.transport import upwind_speeds
-
-    owner = "vibrating_wall_energy_per_period_grid"
-    temperature, amplitude, frequency = _wall_arguments(owner, temperature, amplitude, frequency)
-    positive, negative = upwind_speeds(grid)
-    flux, energy_flux = _arriving_fluxes(owner, grid, incoming, negative)
-    c = positive.ravel()
-    leaving = c > 0.0
-    w = numpy.abs(grid.points())[leaving]
-    c = c[leaving]
-    tangential = sum(v * v for v in grid.mesh()[1:])
-    g = numpy.exp(-tangential / (2.0 * temperature))
-    e_tangential = float(numpy.sum(0.5 * tangential * g) / numpy.sum(g))
-
-    def energy(u):
-        m = c * numpy.exp(-(w - u) ** 2 / (2.0 * temperature))
-        return float(numpy.sum(m * 0.5 * w * w) / numpy.sum(m)) + e_tangential
-
-    mean = _period_mean(energy, amplitude * frequency)
-    return _vibrating_wall_result(mean, flux, energy_flux, temperature, amplitude, frequency,
-                                  grid.dimension)
-
-
-def _arriving_fluxes(owner, grid, incoming, negative):
-    """Phi_in, E_in of :func:`vibrating_wall_energy_per_period_grid`, ``incoming`` checked."""
-    f = numpy.asarray(incoming, dtype=float)
-    if f.shape != tuple(grid.shape) or not numpy.isfinite(f).all():
-        check.reject(owner, "incoming", incoming, f"must be a finite array of the grid's "
-                     f"shape {tuple(grid.shape)}")
-    arriving = -negative * grid.cell_volume
-    flux = float(numpy.sum(arriving * f))
-    if not flux > 0.0:
-        check.reject(owner, "incoming", incoming, "must have a positive arriving flux "
-                     "sum |c^-| f dv (values > 0 at v_1 < 0)")
-    return flux, float(numpy.sum(arriving * 0.5 * grid.speed_squared() * f))
+    owner = "vibrating_wall_heating"
+    V = _positive(owner, "speed", speed)
+    Tw = _positive(owner, "wall_temperature", wall_temperature)
+    T = _positive(owner, "gas_temperature", gas_temperature)
+    if reflection not in ("diffuse", "specular"):
+        check.reject(owner, "reflection", reflection, "must be 'diffuse' or 'specular'")
+    if not check.is_integer(speeds) or speeds < 100:
+        check.reject(owner, "speeds", speeds, "must be an integer >= 100")
+    top = 12.0 * math.sqrt(T)
+    a = (numpy.arange(speeds) + 0.5) * (top / speeds)
+    arriving = a / T * numpy.exp(-a * a / (2.0 * T))
+    layer = Layer(V, Tw)
+    if reflection == "diffuse":
+        edge = 12.0 * math.sqrt(Tw) + V
+        b = (numpy.arange(speeds) + 0.5) * (edge / speeds)
+        g = layer.diffuse_escape(b, a)
+        gained = (0.5 * b * b) @ g / g.sum(axis=0) - Tw
+    else:
+        b, weight = layer.specular_escape(a)
+        gained = (0.5 * b * b * weight).sum(axis=0) / weight.sum(axis=0) - 0.5 * a * a
+    return float((gained * arriving).sum() / arriving.sum())
