@@ -28,7 +28,12 @@ own formulation (f, or the profile g of a rescaled run, and its time t or s):
 ``spectral_tail``
     The error the spectral tail of :math:`\hat f` predicts, ``tail_error`` of
     :func:`granframe.velocity.estimators.resolution_report` (its value, not computed
-    again).
+    again); space-homogeneous runs.
+``fields_shell``
+    The largest change of a cell's fields (rho, u / sqrt(T), T, q / (rho T^{3/2})) when
+    the outermost shell of modes is taken out of f
+    (:meth:`granframe.velocity.moments.FieldMoments.resolution`): space runs, where a
+    wall's jump of f at v_1 = 0 makes the spectral tail large at every N.
 
 Each is compared with ``health.accuracy_tolerance``; above it the monitor warns and
 names the setting to raise (:data:`REMEDIES`); with ``health.stop_on_accuracy`` it
@@ -49,7 +54,8 @@ from granframe.model.restitution import is_elastic
 from granframe.velocity.estimators import resolution_entry
 
 #: The monitors, in the order they are reported.
-MONITORS = ("momentum", "temperature", "edge_mass", "edge_energy", "spectral_tail")
+MONITORS = ("momentum", "temperature", "edge_mass", "edge_energy", "spectral_tail",
+            "fields_shell")
 
 #: What each monitor measures, in words (warnings, ``granframe info``).
 MEANINGS = {
@@ -59,13 +65,14 @@ MEANINGS = {
     "edge_energy": "share of the energy int |v - u|^2 f beyond the edge radius "
                    "r_e = 2L - R - S = {radius:.4g}",
     "spectral_tail": "error predicted by the spectral tail of f-hat",
+    "fields_shell": "change of the fields without the outermost shell of modes",
 }
 
 #: The setting to raise, per monitor: the operator's quadrature for the drifts (then the
 #: time step), the box for the edge shares, the modes for the tail.
 REMEDIES = {"momentum": "quadrature", "temperature": "quadrature",
             "edge_mass": "grid.support_radius", "edge_energy": "grid.support_radius",
-            "spectral_tail": "grid.n_modes"}
+            "spectral_tail": "grid.n_modes", "fields_shell": "grid.n_modes"}
 
 
 def edge_radius(grid) -> float:
@@ -306,7 +313,7 @@ class AccuracyMonitors:
         not already warn of it)."""
         return [self.warning(name, self.values[name]) for name in MONITORS
                 if self.values[name] > self.tolerance
-                and not (name == "spectral_tail" and self._tail_warned)]
+                and not (name in ("spectral_tail", "fields_shell") and self._tail_warned)]
 
     def report(self) -> dict:
         """The ``accuracy`` entry of a commit (JSON-ready; NaN values left out)."""
@@ -342,28 +349,29 @@ def describe(entry: dict, time: float) -> list[str]:
 #: The per-cell indicators of :meth:`granframe.velocity.moments.FieldMoments.resolution`, in
 #: its column order.
 CELL_INDICATORS = ("spectral_tail", "pairs_beyond_support", "negative_mass_fraction",
-                   "heat_flux_shell")
+                   "heat_flux_shell", "fields_shell")
 
 #: The opening words of each warning of
 #: :func:`~granframe.velocity.estimators.resolution_entry`, and its indicator.
-_WARNED = {"velocity resolution": "spectral_tail", "positivity": "negative_mass_fraction",
-           "support": "pairs_beyond_support"}
+_WARNED = {"positivity": "negative_mass_fraction", "support": "pairs_beyond_support"}
 
 
 def cell_resolution_report(grid, indicators, centres, tolerance: float) -> dict:
     r"""The resolution report of a space run from the indicators of every cell.
 
-    ``indicators`` (cells, 4), the columns of :data:`CELL_INDICATORS`
-    (:meth:`~granframe.velocity.moments.FieldMoments.resolution`); ``centres`` the cell centres.
-    The report of a space-homogeneous run
+    ``indicators`` (cells, 5), the columns of :data:`CELL_INDICATORS`
+    (:meth:`~granframe.velocity.moments.FieldMoments.resolution`); ``centres`` the cell
+    centres. The report of a space-homogeneous run
     (:func:`~granframe.velocity.estimators.resolution_entry`) is made from the largest
-    value of each indicator over the cells, and each warning names the cell it comes from.
-    Added to it: ``heat_flux_shell``, the largest heat flux of the outermost shell of modes
-    in units of 
-ho T^{3/2} (the estimated error of the heat flux on the grid), which warns
-    above ``tolerance`` and names ``grid.n_modes``; ``cells``, the index of the worst cell
-    of each indicator; ``x``, its centre. Cells where an indicator is NaN (no mass) are
-    left out of its largest value.
+    value of each indicator over the cells, and each warning names the cell it comes from,
+    with one difference: the velocity resolution warns on ``fields_shell``, the largest
+    change of a cell's fields without the outermost shell of modes (the estimated error
+    of the fields on the grid), not on the spectral tail, which a wall's jump of f at
+    v_1 = 0 keeps large at every N (docs/space.md, "Resolution indicators of a cell"); it
+    names ``grid.n_modes``. Added to the report: ``heat_flux_shell`` and ``fields_shell``
+    (their largest values), ``cells``, the index of the worst cell of each indicator;
+    ``x``, its centre. Cells where an indicator is NaN (no mass) are left out of its
+    largest value.
     """
     indicators = numpy.asarray(indicators, dtype=float)
     finite = numpy.where(numpy.isfinite(indicators), indicators, -numpy.inf)
@@ -377,22 +385,27 @@ ho T^{3/2} (the estimated error of the heat flux on the grid), which warns
     def where(name):
         return f" (in cell {worst[name]}, x = {float(centres[worst[name]]):.4g})"
 
-    warnings = [warning + where(_WARNED[warning.split(":")[0]])
-                for warning in report["warnings"]]
-    heat = largest["heat_flux_shell"]
-    if heat > tolerance:
-        shown, limit = check.distinct(heat, tolerance)
-        warnings.append(f"heat-flux resolution: the outermost shell of modes carries a heat "
-                        f"flux {shown} rho T^(3/2) > health.resolution_tolerance = {limit}; "
-                        f"raise grid.n_modes (N = {grid.n_modes})" + where("heat_flux_shell"))
-    return {**report, "heat_flux_shell": heat, "warnings": warnings,
-            "cells": worst, "x": {name: float(centres[i]) for name, i in worst.items()}}
+    warnings = []
+    fields = largest["fields_shell"]
+    if fields > tolerance:
+        shown, limit = check.distinct(fields, tolerance)
+        warnings.append(f"velocity resolution: the outermost shell of modes changes the "
+                        f"fields by {shown} (the largest of |d rho|/rho, |d u|/sqrt(T), "
+                        f"|d T|/T, |q|/(rho T^(3/2))) > health.resolution_tolerance = "
+                        f"{limit}; raise grid.n_modes (N = {grid.n_modes})"
+                        + where("fields_shell"))
+    warnings += [warning + where(_WARNED[warning.split(":")[0]])
+                 for warning in report["warnings"]
+                 if warning.split(":")[0] in _WARNED]
+    return {**report, "heat_flux_shell": largest["heat_flux_shell"], "fields_shell": fields,
+            "warnings": warnings, "cells": worst,
+            "x": {name: float(centres[i]) for name, i in worst.items()}}
 
 
 class CellEdgeMonitors(AccuracyMonitors):
     """The edge monitors of a space run: ``edge_mass`` and ``edge_energy`` of every cell
     (:func:`edge_shares` about the cell's own bulk velocity), the largest over the cells,
-    and the ``spectral_tail`` of the worst cell (from :func:`cell_resolution_report`).
+    and the ``fields_shell`` of the worst cell (from :func:`cell_resolution_report`).
 
     The drifts and the temperature law of :class:`AccuracyMonitors` belong to a gas that
     conserves its momentum or follows a law as a whole, which walls break. ``state``: the
@@ -410,8 +423,9 @@ class CellEdgeMonitors(AccuracyMonitors):
         """The largest ``edge_mass`` and ``edge_energy`` over the cells from ``shares``
         (cells, 2), each cell's about its own bulk velocity (computed for every cell at
         once on the backend, :meth:`granframe.velocity.moments.FieldMoments.edge_shares`;
-        none when r_e <= 0, ``shares`` None), and ``spectral_tail``, the tail error of the
-        worst cell of ``resolution`` (:func:`cell_resolution_report`)."""
+        none when r_e <= 0, ``shares`` None), and ``spectral_tail`` and ``fields_shell``,
+        the tail error and the change of the fields of the worst cells of ``resolution``
+        (:func:`cell_resolution_report`); the latter is the one that warns."""
         values = {}
         if shares is not None:
             shares = numpy.asarray(shares, dtype=float)
@@ -419,6 +433,6 @@ class CellEdgeMonitors(AccuracyMonitors):
                       else math.nan
                       for name, column in zip(("edge_mass", "edge_energy"), shares.T)}
         if resolution is not None:
-            values["spectral_tail"] = float(resolution["tail_error"])
-            self._tail_warned = values["spectral_tail"] > self.resolution_tolerance
+            values["fields_shell"] = float(resolution["fields_shell"])
+            self._tail_warned = values["fields_shell"] > self.resolution_tolerance
         return values

@@ -339,9 +339,9 @@ class FieldMoments:
 
 
     def resolution(self, f, backend):
-        r"""The resolution indicators of every cell of f, (cells, 4) on the device: the
-        spectral tail, the share of pairs beyond 2S, the negative mass share and the heat
-        flux of the outermost shell.
+        r"""The resolution indicators of every cell of f, (cells, 5) on the device: the
+        spectral tail, the share of pairs beyond 2S, the negative mass share, the heat
+        flux of the outermost shell and the change of the fields without that shell.
 
         With \hat f_{c,k} the DFT of cell c over the velocity axes and B the outermost
         evolved shell, max_i |k_i| = N/2 - 1 (:func:`~granframe.velocity.estimators.outer_band`):
@@ -361,7 +361,21 @@ class FieldMoments:
           the heat flux carried by the last modes the grid keeps, in units of the cell's
           thermal heat flux scale (the estimate of what the modes it cuts off carry).
           The weight v |v|^2 is of size L^3 at the faces of the box, where the modes of B
-          spread, so q needs more of N than f does.
+          spread, so q needs more of N than f does;
+        - fields of the shell: the largest relative change of the fields a run reports
+          when the shell is taken out of f_c, with (rho', u', T') those of f_c - s_c,
+
+          .. math:: \max\Bigl(\frac{|\rho' - \rho_c|}{\rho_c},
+                    \frac{|u' - u_c|_\infty}{\sqrt{T_c}}, \frac{|T' - T_c|}{T_c},
+                    \frac{|q[s_c]|}{\rho_c T_c^{3/2}}\Bigr):
+
+          the error of the fields that the last modes the grid keeps carry, which
+          estimates what the modes it cuts off carry (the coarsening of the velocity
+          grid by one shell). A jump of f at v_1 = 0, where a wall joins what it sends
+          back to what arrives, spreads over every shell and makes the spectral tail
+          decay like 1/N, but its last shell changes the fields like 1/N^2 (the
+          trapezoid sums of a piecewise smooth f): this indicator sees the resolution of
+          the fields, not the jump (docs/space.md, "Resolution indicators of a cell").
 
         Three batched FFTs over the cells, by ``backend``'s transforms (``rfftn``,
         ``irfftn``: on its device); NaN where the mass or T is not positive.
@@ -391,11 +405,17 @@ class FieldMoments:
         shell = backend.irfftn(spectrum * self._band, tuple(grid.shape), axes=axes)
         rho, u, temperature, _ = self.primitives(f)
         heat = self._heat_flux(self.raw(shell), u)
+        rest = self.primitives(f - shell)
         with numpy.errstate(divide="ignore", invalid="ignore"):
+            valid = (rho > 0.0) & (temperature > 0.0)
             scale = rho * xp.abs(temperature) ** 1.5
-            share = xp.where((rho > 0.0) & (temperature > 0.0),
-                             xp.sqrt((heat * heat).sum(axis=1)) / scale, xp.nan)
-        return xp.stack([tail, pairs, negative, share], axis=1)
+            share = xp.where(valid, xp.sqrt((heat * heat).sum(axis=1)) / scale, xp.nan)
+            fields = xp.stack([xp.abs(rest[0] - rho) / rho,
+                               xp.abs(rest[1] - u).max(axis=1) / xp.sqrt(xp.abs(temperature)),
+                               xp.abs(rest[2] - temperature) / xp.abs(temperature), share],
+                              axis=1).max(axis=1)
+            fields = xp.where(valid, fields, xp.nan)
+        return xp.stack([tail, pairs, negative, share, fields], axis=1)
 
     def _heat_flux(self, raw, velocity):
         """q_i = (M3_i - 2 u_j M_ij - u_i tr M + 2 rho u_i |u|^2) / 2 of the raw moments
