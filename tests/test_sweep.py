@@ -1,6 +1,7 @@
 """Sweeps on Dask (granframe.run.sweep): expansion, the store, and a worker killed mid-sweep."""
 
 import logging
+import math
 import os
 import signal
 import threading
@@ -12,7 +13,7 @@ import pytest
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.run.storage import RunStore, StoreError
-from granframe.run.sweep import Sweep, apply, read_table, run_name, run_sweep
+from granframe.run.sweep import Sweep, apply, open_sweep, read_table, run_name, run_sweep
 
 distributed = pytest.importorskip("distributed")
 
@@ -498,32 +499,43 @@ def test_the_table_and_info_flag_the_runs_that_end_under_resolved(cluster, tmp_p
     assert "velocity resolution: spectral tail" in text
 
 
-SPACE = {"cells": 8, "left": "specular", "right": "specular"}
+SPACE = {"cells": 8, "left": {"name": "diffuse", "temperature": 1.2}, "right": "specular"}
+SPACE_BASE = {**BASE, "final_time": 0.02, "time_step": 0.005, "heat_bath": 0.0,
+              "output": {"snapshot_interval": 0.01}, "space": SPACE}
 
 
-@pytest.mark.parametrize("changes, parameter", [
-    ({"base": {**BASE, "space": SPACE}}, "base.space"),
-    ({"product": {"space.cells": [8, 16]}}, "space.cells"),
-    ({"zip": {"space": [SPACE]}}, "space"),
-])
-def test_a_sweep_of_space_runs_is_refused_before_its_store_is_made(tmp_path, capsys, changes,
-                                                                  parameter):
-    """A space description would end in a traceback of the table (its moments are per
-    cell) and a store left running: it is refused up front, nothing written."""
+def test_a_sweep_of_space_runs_makes_a_store_per_run_and_a_table(tmp_path, capsys):
+    """space.cells (product) and the velocity grid (zip with the support): each run a
+    store in the sweep, finished; the table holds the gas's temperature (sum rho T /
+    sum rho, as the run store's fields give it), its mass and the largest change of a
+    cell's fields without the outermost shell; kurtosis and a_2 are NaN; the CLI runs the
+    same TOML and info describes it."""
     import tomli_w
 
+    import granframe
     from granframe.tools.cli import main
 
-    data = {"base": BASE, "product": {"kernel": ["maxwell"]}, **changes}
-    with pytest.raises(ValueError, match=rf"^Sweep: parameter '{parameter}' = .* is invalid; "
-                                         "is not supported: a sweep runs space-homogeneous"):
-        Sweep.from_dict(data)
-    (tmp_path / "sweep.toml").write_text(tomli_w.dumps(data))
-    out = tmp_path / "out.zarr"
-    assert main(["sweep", str(tmp_path / "sweep.toml"), "--out", str(out)]) == 2
-    err = capsys.readouterr().err
-    assert "Traceback" not in err and f"parameter '{parameter}'" in err
-    assert not out.exists()
+    sweep = Sweep(SPACE_BASE, product={"space.cells": [8, 12]},
+                  zip={"grid.n_modes": [16, 24], "grid.support_radius": [3.5, 4.0]})
+    out = tmp_path / "space.zarr"
+    result = run_sweep(sweep, out, workers=1, progress=False)
+    assert (result.finished, result.failed) == (4, 0)
+    table = read_table(out)
+    assert list(table["status"]) == ["finished"] * 4
+    ds = open_sweep(out)
+    assert ds.temperature.dims == ("space_cells", "grid_n_modes")
+    for index, name in enumerate(table["name"]):
+        run = granframe.open_run(out / "runs" / str(name))
+        mean = float((run.density[-1] * run.temperature[-1]).sum() / run.density[-1].sum())
+        assert table["temperature"][index] == pytest.approx(mean, rel=1e-14)
+        assert table["mass"][index] == pytest.approx(float(run.mass[-1]), rel=1e-14)
+        assert math.isnan(table["kurtosis"][index]) and table["fields_shell"][index] > 0
+    (tmp_path / "sweep.toml").write_text(tomli_w.dumps(sweep.to_dict()))
+    assert main(["sweep", str(tmp_path / "sweep.toml"), "--out", str(tmp_path / "cli.zarr"),
+                 "--workers", "1"]) == 0
+    capsys.readouterr()
+    assert main(["info", str(tmp_path / "cli.zarr")]) == 0
+    assert "points      4: 4 finished" in capsys.readouterr().out
 
 
 def test_info_counts_a_failed_run_as_failed_and_names_inaccurate_runs(tmp_path, monkeypatch,

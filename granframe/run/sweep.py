@@ -66,8 +66,10 @@ SCHEMA = "granframe.run.sweep/1"
 #: the final moments of a run the table keeps
 TABLE_MOMENTS = ("temperature", "kurtosis", "sonine_a2", "mass", "negative_mass_fraction")
 #: the resolution indicators of a run's last commit the table keeps
-#: (:func:`granframe.velocity.estimators.resolution_report`), and its warnings as one text
-TABLE_RESOLUTION = ("tail_error", "pairs_beyond_support")
+#: (:func:`granframe.velocity.estimators.resolution_report`; ``fields_shell`` of a space
+#: run, :func:`granframe.run.monitors.cell_resolution_report`, NaN for a homogeneous one),
+#: and its warnings as one text
+TABLE_RESOLUTION = ("tail_error", "pairs_beyond_support", "fields_shell")
 #: the columns a table written before them lacks, and their values there; the warnings of
 #: the run's last commit are what ``granframe run`` prints when the run ends
 _NO_RESOLUTION = {**{name: math.nan for name in TABLE_RESOLUTION}, "resolution_warning": "",
@@ -85,12 +87,6 @@ def _axes(owner: str, name: str, value) -> dict:
         check.reject(owner, name, value, "must be a table of dotted parameter -> non-empty list "
                      "of values", error=TypeError)
     return {k: list(v) for k, v in value.items()}
-
-
-#: why a sweep of space runs is refused (before its store is made)
-_SPACE_REFUSED = ("is not supported: a sweep runs space-homogeneous descriptions (its table "
-                  "holds their final moments); run the points of a space description with "
-                  "granframe run --set, one store each")
 
 
 @attrs.frozen
@@ -129,12 +125,6 @@ class Sweep:
             check.reject("Sweep", "zip", sorted(both), "must not repeat a product parameter")
         if not self.product and not self.zip:
             check.reject("Sweep", "product", {}, "or zip must give at least one axis")
-        spatial = [key for key in (*self.product, *self.zip) if key.split(".")[0] == "space"]
-        if "space" in self.base:
-            check.reject("Sweep", "base.space", self.base["space"], _SPACE_REFUSED)
-        if spatial:
-            check.reject("Sweep", spatial[0], {**self.product, **self.zip}[spatial[0]],
-                         _SPACE_REFUSED)
 
     @classmethod
     def from_dict(cls, data: dict) -> "Sweep":
@@ -201,8 +191,17 @@ def _summary(path) -> dict:
            "wall_seconds": float(progress.get("wall_seconds", 0.0)),
            "steps": int(progress.get("step", 0)), "time": float(progress.get("time", 0.0))}
     n = int(progress.get("records", 0))
+    group = store.group
+    space = group["temperature"].ndim == 2           # (time, x): the fields of each cell
     for name in TABLE_MOMENTS:
-        row[name] = float(store.group[name][n - 1]) if n else math.nan
+        if not n or (space and name not in ("temperature", "mass",
+                                            "negative_mass_fraction")):
+            row[name] = math.nan
+        elif space and name == "temperature":      # the gas's: sum rho T / sum rho
+            density = numpy.asarray(group["density"][n - 1])
+            row[name] = float((density * group["temperature"][n - 1]).sum() / density.sum())
+        else:
+            row[name] = float(group[name][n - 1])
     resolution = progress.get("resolution") or {}
     row.update({name: float(resolution.get(name, math.nan)) for name in TABLE_RESOLUTION})
     row["resolution_warning"] = "; ".join(resolution.get("warnings", ()))
@@ -548,13 +547,18 @@ _RESULTS = {
     "steps": {"long_name": "time steps taken", "units": "1"},
     "time": {"long_name": "time reached by the run", "units": "1"},
     **{name: {"long_name": f"{LONG_NAMES[name]} at the end of the run (NaN unless "
-                           "finished)", "units": "1"} for name in TABLE_MOMENTS},
+                           "finished; of a space run the gas's, sum rho T / sum rho over "
+                           "the cells for the temperature, NaN for kurtosis and a_2)",
+              "units": "1"} for name in TABLE_MOMENTS},
     "tail_error": {"long_name": "error predicted by the spectral tail of f at the last "
                                 "commit (3 max |hat f_k| / |hat f_0| on the outermost shell)",
                    "units": "1"},
     "pairs_beyond_support": {"long_name": "share of pairs of f at the last commit with "
                                           "relative speed beyond 2S (cut off by the "
                                           "operators)", "units": "1"},
+    "fields_shell": {"long_name": "largest change of a cell's fields without the outermost "
+                                  "shell of modes at the last commit (space runs; NaN "
+                                  "for a homogeneous one)", "units": "1"},
     "resolution_warning": {"long_name": "what the run's resolution warnings say to raise "
                                         "(grid.n_modes, grid.support_radius); empty when f "
                                         "was resolved"},
