@@ -70,7 +70,8 @@ def test_every_command_help_has_a_description_and_examples_that_parse(capsys):
 def test_a_mistyped_command_gets_the_closest(capsys):
     assert fails(capsys, ["rn", "x"]).endswith("invalid choice: 'rn' (choose from 'plugins', "
                                                "'bench', 'run', 'plot', 'info', 'check', "
-                                               "'sweep', 'advise', 'limits'); did you mean 'run'?")
+                                               "'sweep', 'refine', 'advise', 'limits'); did you "
+                                               "mean 'run'?")
     assert fails(capsys, ["bench", "--precision", "float23"]) == (
         "granframe bench: error: argument --precision: invalid choice: 'float23' (choose from "
         "'float64', 'float32'); did you mean 'float32'?")

@@ -34,6 +34,12 @@ sweep SWEEP.toml --out STORE [--scheduler ADDRESS] [--workers N] [--overwrite]
       [--retry-failed] [--progress]
     Run every point of a parameter sweep on Dask into one zarr store (docs/scaling.md);
     running it again skips ended runs and resumes cut ones. Exit status 3 when a run failed.
+refine DESCRIPTION.toml --vary KEY=V1,V2,... [--vary ...] --quantity SPEC [...] --out DIR
+       [--workers N] [--formal-order P] [--overwrite] [--progress]
+    Run a description refined together along its velocity grid, cells or time step (one
+    store each, on Dask) and report each quantity's observed order, Richardson estimate
+    and grid convergence index with a figure (docs/runner.md, "Error bars from
+    refinement"). Exit status 3 when a member did not finish.
 advise SCENE.toml [--out DESCRIPTION.toml] [--json]
     Propose the cheapest configuration predicted to meet the scene's tolerance
     (docs/advise.md); --out writes it as a run description for ``granframe run``. A scene
@@ -55,7 +61,7 @@ import sys
 from granframe._version import __version__
 from granframe.tools.cli_inspect import check_command, info_command, plot_command, plugins_command
 from granframe.tools.cli_plan import advise_command, bench_command, limits_command
-from granframe.tools.cli_run import processes, run_command, sweep_command
+from granframe.tools.cli_run import processes, refine_command, run_command, sweep_command
 
 
 def _dpi(text: str) -> float:
@@ -194,6 +200,17 @@ failed.""",
   granframe sweep sweep.toml --out runs/sweep.zarr --workers 2
   granframe sweep sweep.toml --out runs/sweep.zarr --retry-failed
   granframe sweep sweep.toml --out runs/sweep.zarr --overwrite"""),
+    "refine": ("""\
+Run a description refined together along its velocity grid (grid.n_modes), its cells
+(space.cells) or its time step, coarse to fine and by the same ratio at every level, one
+store per member in a sweep store OUT/family.zarr (on Dask; running it again resumes it),
+and report each quantity's values, observed order, Richardson estimate and grid
+convergence index of the finest member (Roache 1994; Celik et al. 2008) in
+OUT/refinement.md, .json and a figure OUT/refinement.png (docs/runner.md, "Error bars from
+refinement"). Exit status 3 when a member did not finish.""",
+               """\
+  granframe refine sod.toml --vary grid.n_modes=24,32,48 --quantity temperature@t=0.2,x=0.5 --out ref
+  granframe refine sod.toml --vary space.cells=50,100,200 --vary time_step=0.004,0.002,0.001 --quantity density@t=0.2,x=0.6 --out ref"""),
     "advise": ("""\
 Propose the cheapest configuration (grid, quadratures, time step) predicted to meet a
 scene's tolerance on its temperature or distribution (docs/advise.md). A scene with a
@@ -320,6 +337,28 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                        help="progress bar (default: only on a terminal)")
     sweep.set_defaults(handler=sweep_command)
+    refine = commands.add_parser("refine", help="error bars from refinement: observed order, "
+                                 "Richardson estimate, grid convergence index")
+    refine.add_argument("description", metavar="DESCRIPTION.toml", help="a run description")
+    refine.add_argument("--vary", action="append", required=True, metavar="KEY=V1,V2,...",
+                        help="a parameter refined from coarse to fine: grid.n_modes, "
+                             "space.cells or time_step; several are refined together, by "
+                             "the same ratio")
+    refine.add_argument("--quantity", action="append", required=True, metavar="SPEC",
+                        help="NAME[.v1[.v2]][@t=T][,x=X|x=mean][,wall=left|right], e.g. "
+                             "temperature@t=1,x=0.5 or wall_energy@wall=left")
+    refine.add_argument("--out", required=True, metavar="DIR",
+                        help="folder for the family's store, the table and the figure")
+    refine.add_argument("--workers", type=int, default=None,
+                        help="Dask worker processes (default: one per core)")
+    refine.add_argument("--formal-order", type=float, default=None,
+                        help="the scheme's order, for two members or where no order can be "
+                             "observed")
+    refine.add_argument("--overwrite", action="store_true",
+                        help="replace an existing family store (nothing else)")
+    refine.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                        help="progress bar (default: only on a terminal)")
+    refine.set_defaults(handler=refine_command)
     advise = commands.add_parser("advise", help="the cheapest configuration for a scene and "
                                  "tolerance")
     advise.add_argument("scene", metavar="SCENE.toml",

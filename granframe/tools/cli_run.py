@@ -265,6 +265,58 @@ def sweep_command(args) -> int:
     return 3 if result.failed else 0
 
 
+def _vary(text: str):
+    """``KEY=V1,V2,...`` of ``granframe refine --vary``: the key and its values (integers
+    where they are whole)."""
+    key, sep, values = text.partition("=")
+    if not sep or not key.strip() or not values.strip():
+        raise ValueError(f"refine: parameter '--vary' = {text!r} is invalid; must read "
+                         "KEY=V1,V2,... (e.g. grid.n_modes=24,32,48)")
+    numbers = []
+    for value in values.split(","):
+        try:
+            number = float(value)
+        except ValueError:
+            raise ValueError(f"refine: parameter '--vary' = {text!r} is invalid; its values "
+                             f"must be numbers, not {value!r}") from None
+        numbers.append(int(number) if number.is_integer() and "." not in value else number)
+    return key.strip(), numbers
+
+
+def refine_command(args) -> int:
+    """``granframe refine``: the family of a description refined together, run as a sweep,
+    and each quantity's observed order, Richardson estimate and grid convergence index
+    (:mod:`granframe.run.refinement`); exit 3 when a member did not finish."""
+    import tomllib
+
+    from granframe.run.description import RunDescription
+    from granframe.run.refinement import Refinement, run_refinement
+    from granframe.validators import existing_file
+
+    path = pathlib.Path(args.description)
+    existing_file("refine", "description", path, "a .toml run description")
+    try:
+        base = tomllib.loads(read_text(path, "refine", "description"))
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"refine: the TOML text of '{path}' is invalid: {exc}") from None
+    RunDescription.from_dict(base)
+    vary = dict(_vary(text) for text in args.vary)
+    refinement = Refinement(base, vary, args.quantity)
+    try:
+        result = run_refinement(refinement, args.out, workers=args.workers,
+                                formal_order=args.formal_order, progress=args.progress,
+                                overwrite=args.overwrite)
+    except KeyboardInterrupt:
+        print(f"\ngranframe: interrupted; '{args.out}/family.zarr' keeps every ended run: run "
+              "the same command again to continue", file=sys.stderr)
+        return 130
+    out = pathlib.Path(args.out)
+    print((out / "refinement.md").read_text(), end="")
+    print(f"figure: {out / 'refinement.png'}; stores: {result.store}")
+    finished = len(result.rows[0]["values"]) if result.rows else 0
+    return 3 if finished < len(result.spacings) else 0
+
+
 def processes():
     """(size, rank) of the processes a launcher started (:func:`granframe.parallel.launched`,
     read from the environment: nothing is imported)."""
