@@ -196,3 +196,40 @@ def test_the_report_takes_one_device_to_host_copy_and_uploads_nothing():
     assert set(resolution["cells"]) == {"spectral_tail", "pairs_beyond_support",
                                         "negative_mass_fraction", "heat_flux_shell",
                                         "fields_shell"}
+
+
+def test_an_edge_share_of_an_under_resolved_f_asks_for_modes_first():
+    """The edge shares of an f whose fields warn on N come from its oscillations: the
+    accuracy warning names grid.n_modes first (a wider support makes them larger, the
+    quick Sod runs' case), and grid.support_radius where f is resolved."""
+    from granframe.run.monitors import CellEdgeMonitors
+
+    for warnings, remedy in ((["velocity resolution: ... raise grid.n_modes (N = 24)"],
+                              "raise grid.n_modes first (now N = 24): f is under-resolved"),
+                             ([], "raise grid.support_radius (now S = 3.5)")):
+        monitors = CellEdgeMonitors(_description())
+        values = monitors.shape(numpy.array([[1e-4, 5e-3]]),
+                                {"tail_error": 0.01, "fields_shell": 2e-3,
+                                 "warnings": warnings})
+        monitors.update(values, 1, 0.01)
+        (warning,) = monitors.warnings()
+        assert warning.startswith("accuracy: share of the energy") and remedy in warning
+
+
+def test_a_run_ends_with_its_verdict(tmp_path, capsys):
+    """One line either way: resolved (a gas between walls at its temperature on N = 32),
+    or not, naming what warned (the cold Riemann problem on N = 24)."""
+    import tomli_w
+
+    from granframe.tools.cli import main
+
+    for description, expected in ((_description(n_modes=32, support=4.0, hot=1.0, cold=1.0),
+                                   "verdict: resolved at t = 0.02: no resolution or accuracy "
+                                   "indicator above its tolerance"),
+                                  (_description(), "verdict: not resolved at t = 0.02: ")):
+        path = tmp_path / "d.toml"
+        path.write_text(tomli_w.dumps(description.to_dict()))
+        assert main(["run", str(path), "--out", str(tmp_path / "r.zarr"), "--overwrite"]) == 0
+        out = capsys.readouterr().out.strip().splitlines()
+        assert out[-1].startswith(expected), out
+    assert "(velocity resolution" in out[-1] and "granframe refine" in out[-1]

@@ -244,6 +244,7 @@ class AccuracyMonitors:
         self.largest = dict(state.get("largest", {}))
         self.flagged = state.get("flagged")
         self._tail_warned = False
+        self._under_resolved = False
 
     # -- measuring --------------------------------------------------------------------
     def drifts(self, record: dict, t: float) -> dict:
@@ -274,6 +275,7 @@ class AccuracyMonitors:
             values["spectral_tail"] = float(resolution["tail_error"])
             # the resolution report warned of it already (health.resolution_tolerance)
             self._tail_warned = values["spectral_tail"] > self.resolution_tolerance
+            self._under_resolved = _names_modes(resolution)
         return values
 
     def update(self, values: dict, step: int, t: float) -> str | None:
@@ -305,8 +307,14 @@ class AccuracyMonitors:
         measure = MEANINGS[name].format(radius=self.radius)
         if name == "temperature":
             measure += f" against {self.law.name}"
+        remedy = self._remedy[REMEDIES[name]]
+        if name.startswith("edge_") and self._under_resolved:
+            remedy = (f"raise grid.n_modes first (now N = {self.grid.n_modes}): f is "
+                      "under-resolved and its oscillations reach the edge radius, which a "
+                      "wider support (a coarser h) makes worse; then grid.support_radius if "
+                      "it remains")
         return (f"accuracy: {measure} = {shown} > health.accuracy_tolerance = {limit}; "
-                f"{self._remedy[REMEDIES[name]]}")
+                f"{remedy}")
 
     def warnings(self) -> list[str]:
         """The warnings of the latest values (the tail only when the resolution report did
@@ -344,6 +352,12 @@ def describe(entry: dict, time: float) -> list[str]:
                      f"at step {flagged['step']}, t = {flagged['time']:g}")
     lines.extend(f"  warning: {warning}" for warning in entry.get("warnings", ()))
     return lines
+
+
+def _names_modes(resolution: dict) -> bool:
+    """Whether a resolution report warns that N does not resolve f (a warning that says to
+    raise grid.n_modes)."""
+    return any("raise grid.n_modes" in w for w in resolution.get("warnings", ()))
 
 
 #: The per-cell indicators of :meth:`granframe.velocity.moments.FieldMoments.resolution`, in
@@ -435,4 +449,5 @@ class CellEdgeMonitors(AccuracyMonitors):
         if resolution is not None:
             values["fields_shell"] = float(resolution["fields_shell"])
             self._tail_warned = values["fields_shell"] > self.resolution_tolerance
+            self._under_resolved = _names_modes(resolution)
         return values

@@ -179,7 +179,22 @@ def _run_one(description, out, args) -> int:
               file=sys.stderr)
     for warning in result.accuracy_warnings:
         print(f"granframe: warning: at t = {result.time:g}: {warning}", file=sys.stderr)
+    print(verdict(result))
     return 0
+
+
+def verdict(result) -> str:
+    """The one line that ends a run: whether its last output point passed every resolution
+    and accuracy check, or which of them warned (the warnings above say what to raise)."""
+    warned = [w.split(":")[0] for w in (*result.warnings, *result.accuracy_warnings)]
+    if not warned:
+        return (f"verdict: resolved at t = {result.time:g}: no resolution or accuracy "
+                "indicator above its tolerance (docs/runner.md, \"Health checks\")")
+    topics = ", ".join(dict.fromkeys(warned))
+    return (f"verdict: not resolved at t = {result.time:g}: {len(warned)} warning"
+            f"{'s' if len(warned) > 1 else ''} ({topics}); numbers from this run carry the "
+            "errors they estimate: follow the warnings, or measure the error bars with "
+            "granframe refine")
 
 
 @contextlib.contextmanager
