@@ -29,7 +29,8 @@ import numpy
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import HealthError, Simulation
-from granframe.tools.studykit import (finish, json_text, number, output_folder, save_figure,
+from granframe.tools.studykit import (draw, finish, json_text, number, output_folder,
+                                      parse_study, print_table, run_study, save_figure,
                                       study_arguments)
 
 DT = 0.05
@@ -108,11 +109,13 @@ def figure(stores, path) -> None:
 
 
 def main(argv=None):
-    parser = study_arguments(__doc__, n_modes=32, cells=32, final=30.0)
+    parser = study_arguments(__doc__, n_modes=32, cells=32, final=30.0,
+                             quick={"n_modes": 24, "cells": 16, "final": 2.0})
     parser.set_defaults(restitution=0.8, support=4.0)
-    parser.add_argument("--length", type=number(0.0), default=40.0)
-    parser.add_argument("--amplitude", type=number(0.0, low_open=False), default=0.3)
-    args = parser.parse_args(argv)
+    parser.add_argument("--length", type=number(0.0), default=40.0, help="the box length")
+    parser.add_argument("--amplitude", type=number(0.0, low_open=False), default=0.3,
+                        help="the initial shear amplitude")
+    args = parse_study(parser, argv)
     out = output_folder(args, figure, "clusters.png")
     if out is None:
         return
@@ -121,7 +124,7 @@ def main(argv=None):
                                  args.support, args.final, args.amplitude))
     store = out / f"clusters_e{args.restitution:g}_c{args.cells}_n{args.n_modes}.zarr"
     try:
-        result = run.run(store, progress=False, overwrite=True)
+        result = run_study(run, store, args, overwrite=True)
         warnings = [str(w) for w in result.warnings + result.accuracy_warnings]
     except HealthError as stop:              # the store keeps every step up to the stop
         warnings = [f"stopped: {stop}"]
@@ -129,8 +132,10 @@ def main(argv=None):
     row = {"e": args.restitution, "length": args.length, "cells": args.cells,
            "N": args.n_modes, "S": args.support, "seconds": time.perf_counter() - began,
            **monitors(ds), "warnings": warnings}
-    print(json_text(row))
+    print_table([row], {key: ".5g" for key, value in row.items() if isinstance(value, float)})
     store.with_suffix(".json").write_text(json_text(row, indent=1))
+    print(f"table: {store.with_suffix('.json')}")
+    draw(figure, [store], out / "clusters.png")
 
 
 if __name__ == "__main__":

@@ -33,7 +33,8 @@ from granframe.run.runner import Simulation
 from granframe.theory.modes import (density_response, heat_critical_wavenumber, heat_mode,
                                     heat_mode_index, longitudinal_matrix, shear_mode)
 from granframe.theory.sonine import reference_frequency
-from granframe.tools.studykit import (finish, json_text, number, numbers, output_folder,
+from granframe.tools.studykit import (draw, finish, json_text, number, numbers,
+                                      output_folder, parse_study, print_table, run_study,
                                       save_figure, study_arguments)
 
 
@@ -318,8 +319,11 @@ def figure(stores, path) -> None:
 
 
 def main(argv=None):
-    parser = study_arguments(__doc__, n_modes=24, cells=12, final=6.0)
-    parser.add_argument("--skip", type=number(0.0, low_open=False), default=1.0)
+    parser = study_arguments(__doc__, n_modes=24, cells=12, final=6.0,
+                             quick={"n_modes": 16, "cells": 8, "final": 1.5,
+                                    "skip": 0.5})
+    parser.add_argument("--skip", type=number(0.0, low_open=False), default=1.0,
+                        help="the rescaled time s left out of the fits (the relaxation)")
     parser.add_argument("--k-over-kc", type=numbers(0.0), default=[0.5, 1.0, 1.5],
                         help="wavenumbers over the shear mode's k_c, comma-separated")
     parser.add_argument("--k-over-kh", type=numbers(0.0), default=None,
@@ -327,7 +331,7 @@ def main(argv=None):
     parser.add_argument("--field", choices=("velocity", "density", "heat"),
                         default="velocity", help="the shear mode (velocity, u_2), the "
                         "density mode or the heat mode (its Navier-Stokes eigenvector)")
-    args = parser.parse_args(argv)
+    args = parse_study(parser, argv)
     out = output_folder(args, figure, "modes.png")
     if out is None:
         return
@@ -338,7 +342,7 @@ def main(argv=None):
     else:
         unit, ratio_name, scale = "k", "k/k_c", shear_mode(e, 1.0, 1.0, 1.0, 1.0)["k_c"]
     name = {"velocity": "shear"}.get(args.field, args.field)
-    rows = []
+    rows, stores = [], []
     for ratio in args.k_over_kh or args.k_over_kc:
         k = ratio * scale
         length = 2 * math.pi / k
@@ -347,7 +351,7 @@ def main(argv=None):
                                      args.final, field=args.field,
                                      quadrature=args.quadrature))
         store = out / f"{name}_e{e:g}_{unit}{ratio:g}.zarr"
-        result = run.run(store, progress=False, overwrite=True)
+        result = run_study(run, store, args, overwrite=True)
         ds = granframe.open_run(store, time_axis="steps")
         seconds = time.perf_counter() - began
         temperature = float(ds.temperature.values[-1].mean())
@@ -370,8 +374,15 @@ def main(argv=None):
                "seconds": seconds,
                "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
         rows.append(row)
-        print(json_text(row))
+        stores.append(store)
+    print_table(rows, {"e": "g", ratio_name: "g", "k": ".4g", "N": "d", "cells": "d",
+                       "zeta/2 Sonine": ".5g", "zeta_g/2": ".5g", "seconds": ".0f",
+                       **{key: ".5g" for key in rows[0] if key.startswith(("measured rate",
+                                                                           "Navier-Stokes rate",
+                                                                           "rate"))}})
     (out / f"{name}_e{e:g}.json").write_text(json_text(rows, indent=1))
+    print(f"table: {out / f'{name}_e{e:g}.json'}")
+    draw(figure, stores, out / "modes.png")
     rates = [row["measured rate"] for row in rows] if args.field == "heat" else []
     if len(rates) == 2 and rates[0] * rates[1] < 0:
         sonine_k = heat_critical_wavenumber(e) * reference_frequency(1.0, 1.0, 1.0)

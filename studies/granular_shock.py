@@ -31,7 +31,8 @@ import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.theory.euler import granular_euler_piston, piston_speed, rankine_hugoniot
-from granframe.tools.studykit import (cfl_time_step, finish, json_text, number, output_folder,
+from granframe.tools.studykit import (cfl_time_step, draw, finish, json_text, number,
+                                      output_folder, parse_study, print_table, run_study,
                                       save_figure, study_arguments)
 
 DIMENSION = 2
@@ -189,13 +190,14 @@ def figure(stores, path) -> None:
 
 
 def main(argv=None):
-    parser = study_arguments(__doc__, n_modes=48, cells=100, final=0.2)
+    parser = study_arguments(__doc__, n_modes=48, cells=100, final=0.2,
+                             quick={"n_modes": 24, "cells": 40, "final": 0.1})
     parser.set_defaults(restitution=1.0, support=4.5)
-    parser.add_argument("--knudsen", type=number(0.0), default=1e-3)
+    parser.add_argument("--knudsen", type=number(0.0), default=1e-3, help="the Knudsen number")
     parser.add_argument("--mach", type=number(1.0), default=1.5,
                         help="the elastic shock's Mach number, which fixes U")
-    parser.add_argument("--length", type=number(0.0), default=1.0)
-    args = parser.parse_args(argv)
+    parser.add_argument("--length", type=number(0.0), default=1.0, help="the tube length")
+    args = parse_study(parser, argv)
     out = output_folder(args, figure, "shock.png")
     if out is None:
         return
@@ -208,13 +210,17 @@ def main(argv=None):
                                  time_step))
     store = out / (f"shock_e{args.restitution:g}_eps{args.knudsen:g}_c{args.cells}"
                    f"_n{args.n_modes}.zarr")
-    result = run.run(store, progress=False, overwrite=True)
+    result = run_study(run, store, args, overwrite=True)
     seconds = time.perf_counter() - began
     row = {**compare(store, speed, args.restitution, args.knudsen, args.length),
            "seconds": seconds, "dt": time_step,
            "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
-    print(json_text(row))
+    print_table([row], {key: ".5g" for key in ("U", "eps", "shock speed", "RH shock speed",
+                                               "rho_2", "RH rho_2", "T_2", "RH T_2",
+                                               "L1 rho", "L1 T", "mass drift")})
     store.with_suffix(".json").write_text(json_text(row, indent=1))
+    print(f"table: {store.with_suffix('.json')}")
+    draw(figure, [store], out / "shock.png")
 
 
 if __name__ == "__main__":

@@ -49,8 +49,9 @@ from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.space import exact
 from granframe.theory.cooling import maxwellian_cooling_rate
-from granframe.tools.studykit import (cfl_time_step, finish, json_text, number, numbers,
-                                      output_folder, save_figure, study_arguments)
+from granframe.tools.studykit import (cfl_time_step, draw, finish, json_text, number,
+                                      numbers, output_folder, parse_study, print_table,
+                                      run_study, save_figure, study_arguments)
 
 DIMENSION = 2
 #: snapshots of f over a run
@@ -146,11 +147,13 @@ def figure(stores, path) -> None:
 
 
 def main(argv=None):
-    parser = study_arguments(__doc__, n_modes=32, cells=16, final=40.0)
-    parser.add_argument("--knudsen", type=number(0.0), default=0.5)
+    parser = study_arguments(__doc__, n_modes=32, cells=16, final=40.0,
+                             quick={"n_modes": 24, "cells": 8, "final": 2.0,
+                                    "restitutions": [0.9]})
+    parser.add_argument("--knudsen", type=number(0.0), default=0.5, help="the Knudsen number eps")
     parser.add_argument("--restitutions", type=numbers(0.0), default=[0.99, 0.95, 0.9, 0.8],
                         help="e values, comma-separated (the default: 0.99,0.95,0.9,0.8)")
-    args = parser.parse_args(argv)
+    args = parse_study(parser, argv)
     for e in args.restitutions:
         if e >= 1.0:
             parser.error(f"argument --restitutions: {e:g} is not allowed: each e must be below "
@@ -167,7 +170,7 @@ def main(argv=None):
         run = Simulation(description(e, args.knudsen, speed, args.cells, args.n_modes,
                                      args.support, args.final, dt))
         store = out / f"vibrated_e{e:g}_k{args.knudsen:g}_c{args.cells}_n{args.n_modes}.zarr"
-        result = run.run(store, progress=False, overwrite=True)
+        result = run_study(run, store, args, overwrite=True)
         seconds = time.perf_counter() - began
         ds = granframe.open_run(store, time_axis="steps")
         end = balance(ds, run.problem.operator, args.knudsen)
@@ -185,10 +188,14 @@ def main(argv=None):
                "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
         rows.append(row)
         stores.append(store)
-        print(json_text({k: v for k, v in row.items() if "profile" not in k}))
-    (out / f"vibrated_k{args.knudsen:g}_c{args.cells}_n{args.n_modes}.json").write_text(
-        json_text(rows, indent=1))
-    figure(stores, out / "vibrated.png")
+    print_table(rows, {"e": "g", "V": ".4g", "N": "d", "cells": "d", "seconds": ".0f",
+                       "mean T / T uniform": ".4f", "T(0) / T uniform": ".4f",
+                       "T(1) / T uniform": ".4f", "rho max / rho min": ".4f",
+                       "power in": ".5g", "dissipation": ".5g", "residual": ".2g"})
+    table = out / f"vibrated_k{args.knudsen:g}_c{args.cells}_n{args.n_modes}.json"
+    table.write_text(json_text(rows, indent=1))
+    print(f"table: {table}")
+    draw(figure, stores, out / "vibrated.png")
 
 
 if __name__ == "__main__":

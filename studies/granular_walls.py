@@ -33,13 +33,15 @@ import numpy
 import scipy.optimize
 
 import granframe
+from granframe.backends import NumpyBackend
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.theory.walls import heated_walls_profile
 from granframe.tools.analysis import energy_balance
-from granframe.tools.studykit import (cfl_time_step, finish, json_text, number, output_folder,
+from granframe.tools.studykit import (cfl_time_step, draw, finish, json_text, number,
+                                      output_folder, parse_study, print_table, run_study,
                                       save_figure, study_arguments)
-from granframe.velocity.estimators import TAIL_ERROR_FACTOR, spectral_tail
+from granframe.velocity.moments import FieldMoments
 
 
 def description(e: float, knudsen: float, cells: int, n_modes: int, support: float,
@@ -97,16 +99,17 @@ def steady_estimate(times, values) -> dict:
 def kinetic(ds, operator, knudsen: float) -> dict:
     """T_min/T_b, rho_max/rho_b (and their :func:`steady_estimate` from their history:
     the runs end before the gas is steady), the jump T_w - T_b and the energy budget of a
-    run, and ``tail error by cell``: the velocity-resolution indicator of every cell's
-    final f (``TAIL_ERROR_FACTOR`` x :func:`~granframe.velocity.estimators.spectral_tail`),
-    of which the run's report names only the largest."""
+    run, and ``fields error by cell``: the velocity-resolution indicator of every cell's
+    final f (the change of its fields without the outermost shell of modes,
+    :meth:`~granframe.velocity.moments.FieldMoments.resolution`), of which the run's report
+    names only the largest."""
     cells = ds.sizes["x"]
     t_b = at_walls(ds.temperature.values[-1], cells)
     rho_b = at_walls(ds.density.values[-1], cells)
     budget = energy_balance(ds, operator, math.sqrt(2.0) * knudsen)
-    f = ds.f.values[-1]
-    tails = [float(f"{TAIL_ERROR_FACTOR * spectral_tail(operator.grid, cell):.3g}")
-             for cell in f]
+    fields = FieldMoments(operator.grid, 1.0 / cells).resolution(ds.f.values[-1],
+                                                                 NumpyBackend())[:, 4]
+    errors = [float(f"{value:.3g}") for value in fields]
     ratios = {}
     for name, profiles, extreme in (("T_min/T_b", ds.temperature.values, numpy.min),
                                     ("rho_max/rho_b", ds.density.values, numpy.max)):
@@ -117,7 +120,7 @@ def kinetic(ds, operator, knudsen: float) -> dict:
     return {"T_b": t_b, "rho_b": rho_b, **ratios, "jump": 1.0 - t_b,
             "heat": budget["heat"], "dissipation": budget["dissipation"],
             "unsteadiness": budget["unsteadiness"], "residual": budget["residual"],
-            "tail error by cell": tails}
+            "fields error by cell": errors}
 
 
 def figure(stores, path) -> None:
@@ -156,8 +159,9 @@ def figure(stores, path) -> None:
 
 
 def main(argv=None):
-    parser = study_arguments(__doc__, n_modes=24, cells=12, final=3.0)
-    parser.add_argument("--knudsen", type=number(0.0), default=0.2)
+    parser = study_arguments(__doc__, n_modes=24, cells=12, final=3.0,
+                             quick={"cells": 6, "final": 0.3})
+    parser.add_argument("--knudsen", type=number(0.0), default=0.2, help="the Knudsen number")
     parser.add_argument("--steps", type=number(1, kind=int, low_open=False), default=None,
                         help="steps to the final time (default: the transport's CFL limit)")
     parser.add_argument("--snapshot-every", type=number(1, kind=int, low_open=False),
@@ -167,7 +171,7 @@ def main(argv=None):
     parser.add_argument("--resume", action="store_true",
                         help="continue the run in OUT's store where it stopped (a new one "
                              "if there is none) instead of starting it again")
-    args = parser.parse_args(argv)
+    args = parse_study(parser, argv)
     out = output_folder(args, figure, "walls.png")
     if out is None:
         return
@@ -179,10 +183,8 @@ def main(argv=None):
     run = Simulation(description(e, kn, args.cells, args.n_modes, args.support, args.final,
                                  time_step, args.quadrature, interval))
     store = out / f"walls_e{e:g}_kn{kn:g}_c{args.cells}_n{args.n_modes}.zarr"
-    if args.resume:
-        result = run.run(store, progress=False, resume=True)
-    else:
-        result = run.run(store, progress=False, overwrite=True)
+    result = run_study(run, store, args, **({"resume": True} if args.resume
+                                            else {"overwrite": True}))
     seconds = result.wall_seconds
     ds = granframe.open_run(store, time_axis="steps")
     measured = kinetic(ds, run.problem.operator, kn)
@@ -194,8 +196,13 @@ def main(argv=None):
            "NS rho_b": theory["rho_b"], "NS T_min/T_b": theory["T_min/T_b"],
            "NS rho_max/rho_b": theory["rho_max/rho_b"],
            "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
-    print(json_text(row))
+    print_table([row], {"e": "g", "Kn": "g", "N": "d", "cells": "d", "seconds": ".0f",
+                        "T_b": ".5g", "rho_b": ".5g", "T_min/T_b": ".5g",
+                        "NS T_min/T_b": ".5g", "rho_max/rho_b": ".5g",
+                        "NS rho_max/rho_b": ".5g"})
     (store.with_suffix(".json")).write_text(json_text(row, indent=1))
+    print(f"table: {store.with_suffix('.json')}")
+    draw(figure, [store], out / "walls.png")
 
 
 if __name__ == "__main__":

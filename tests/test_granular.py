@@ -127,20 +127,24 @@ def test_a_quick_heated_gas_balances_its_energy_and_resumes_to_the_same_row(tmp_
     the middle; a second call with --resume finds the run finished and gives the same
     row, its warnings read back from the store."""
     argv = ["--out", str(tmp_path), "--n-modes", "16", "--cells", "6", "--final", "0.3",
-            "--snapshot-every", "3", "--resume"]
+            "--snapshot-every", "3", "--resume", "--no-progress"]
     rows = []
     for _ in range(2):
         WALLS.main(argv)
-        rows.append(json.loads(capsys.readouterr().out.strip().splitlines()[-1]))
+        out = capsys.readouterr().out
+        assert "estimated cost: 13 steps" in out and "verdict: " in out
+        assert "figure: " in out and (tmp_path / "walls.png").exists()
+        rows.append(json.loads((tmp_path / "walls_e0.9_kn0.2_c6_n16.json").read_text()))
     first, again = rows
     assert first == again and first["steps"] == 13 and first["warnings"]
     assert abs(first["residual"]) < 0.05 and first["heat"] > 0 > first["dissipation"]
     assert 0 < first["jump"] < 0.2 and first["rho_max/rho_b"] > 1 > first["T_min/T_b"]
-    # every cell's tail error; the run's report names the largest
-    tails = first["tail error by cell"]
-    reported = next(re.search(r"estimated error ([0-9.e-]+) ", w) for w in first["warnings"]
-                    if w.startswith("velocity resolution"))
-    assert len(tails) == 6 and max(tails) == pytest.approx(float(reported.group(1)), rel=2e-3)
+    # every cell's fields error; the run's report names the largest
+    errors = first["fields error by cell"]
+    reported = next(re.search(r"changes the fields by ([0-9.e-]+) ", w)
+                    for w in first["warnings"] if w.startswith("velocity resolution"))
+    assert len(errors) == 6 and max(errors) == pytest.approx(float(reported.group(1)),
+                                                             rel=2e-3)
     assert json.loads((tmp_path / "walls_e0.9_kn0.2_c6_n16.json").read_text(),
                       parse_constant=_refuse_constant) == first
     ds = granframe.open_run(tmp_path / "walls_e0.9_kn0.2_c6_n16.zarr", time_axis="steps")

@@ -60,25 +60,91 @@ def name_list(allowed):
     return parse
 
 
-def study_arguments(doc: str, n_modes: int, cells: int, final: float | None):
+def study_arguments(doc: str, n_modes: int, cells: int, final: float | None,
+                    quick: dict | None = None):
     """The options the granular studies share (``--final`` only where ``final`` is not
-    None); a value outside what the study can run is refused by argparse, by name."""
-    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0].replace("\n", " "))
-    parser.add_argument("--out", required=True)
-    parser.add_argument("--restitution", type=number(0.0, 1.0), default=0.9)
+    None), each with its default in ``--help``; a value outside what the study can run is
+    refused by argparse, by name. ``quick``: option -> value of the study's ``--quick``
+    run (a small version to try it; an option given explicitly still wins, see
+    :func:`parse_study`). ``--progress`` shows a progress bar (default: on a terminal)."""
+    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0].replace("\n", " "),
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser.add_argument("--out", required=True, help="folder for the stores, tables, figure")
+    parser.add_argument("--restitution", type=number(0.0, 1.0), default=0.9,
+                        help="the restitution coefficient e")
     parser.add_argument("--n-modes", type=number(4, kind=int, low_open=False),
-                        default=n_modes)
-    parser.add_argument("--support", type=number(0.0), default=3.5)
-    parser.add_argument("--cells", type=number(1, kind=int, low_open=False), default=cells)
+                        default=n_modes, help="velocity grid modes N per axis")
+    parser.add_argument("--support", type=number(0.0), default=3.5,
+                        help="velocity grid support radius S")
+    parser.add_argument("--cells", type=number(1, kind=int, low_open=False), default=cells,
+                        help="space cells")
     if final is not None:
-        parser.add_argument("--final", type=number(0.0), default=final)
+        parser.add_argument("--final", type=number(0.0), default=final, help="final time")
     parser.add_argument("--quadrature", choices=("auto", "review"), default="auto",
                         help="the fast operator's rules (review: a quarter of the cost at "
                              "N = 24 in 3D, but Q differs from the default rules' by 3.7 %% "
                              "of max |Q| there)")
     parser.add_argument("--figure", nargs="+", metavar="STORE",
                         help="draw these runs into a figure in OUT and stop")
+    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                        help="a progress bar per run (default: on a terminal only)")
+    quick = dict(quick or {})
+    shown = ", ".join(f"--{key.replace('_', '-')} {value}" for key, value in quick.items())
+    parser.add_argument("--quick", action="store_true",
+                        help=f"a small version to try the study ({shown or 'as given'}); "
+                             "options given explicitly still win")
+    parser.set_defaults(quick_settings=quick)
     return parser
+
+
+def parse_study(parser, argv=None):
+    """Parse a study's command line; with ``--quick`` the quick settings replace the
+    defaults (not the options given explicitly)."""
+    args = parser.parse_args(argv)
+    if args.quick and args.quick_settings:
+        parser.set_defaults(**args.quick_settings)
+        args = parser.parse_args(argv)
+    return args
+
+
+def run_study(simulation, store, args, **mode):
+    """Run one of a study's runs as ``granframe run`` does: its title and estimated cost
+    first, a progress bar (``args.progress``), then the line saying where it finished,
+    its warnings and its one-line verdict. Returns the :class:`RunResult`; a run stopped by
+    a health check raises :class:`~granframe.run.runner.HealthError` as ``run`` does."""
+    from granframe.run.problems import run_cost
+    from granframe.tools.cli_run import verdict
+
+    print(f"[{pathlib.Path(store).name}] {simulation.description.title}", flush=True)
+    print(run_cost(simulation.problem).text(), flush=True)
+    result = simulation.run(store, progress=args.progress, **mode)
+    print(f"{store}: finished, {result.steps} steps to t = {result.time:g} in "
+          f"{result.wall_seconds:.1f} s")
+    for warning in (*result.warnings, *result.accuracy_warnings):
+        print(f"warning: {warning}", file=sys.stderr)
+    print(verdict(result), flush=True)
+    return result
+
+
+def print_table(rows: list[dict], columns: dict) -> None:
+    """The rows as an aligned text table of ``columns`` (key -> format spec, e.g. ".4g");
+    the full rows go to the study's JSON file."""
+    head = list(columns)
+    cells = [[format(row.get(key, float("nan")), spec) if isinstance(row.get(key), (int, float))
+              else str(row.get(key, "")) for key, spec in columns.items()] for row in rows]
+    widths = [max([len(h)] + [len(c[k]) for c in cells]) for k, h in enumerate(head)]
+    print("  ".join(h.rjust(w) for h, w in zip(head, widths)))
+    for c in cells:
+        print("  ".join(v.rjust(w) for v, w in zip(c, widths)))
+
+
+def draw(figure: Callable, stores, path) -> None:
+    """Draw the study's figure of ``stores`` into ``path`` and say where, and in how long."""
+    import time
+
+    began = time.perf_counter()
+    figure(stores, path)
+    print(f"figure: {path} ({time.perf_counter() - began:.1f} s)")
 
 
 def output_folder(args, draw, name: str):
