@@ -143,7 +143,7 @@ def report(stores: dict, out) -> dict:
     sod = sorted((name for name in stores if name.startswith("sod_")),
                  key=lambda n: -float(n[len("sod_eps"):]))
     if sod:
-        fig, axes = plt.subplots(1, 3, figsize=(16, 4.8), constrained_layout=True)
+        fig, axes = plt.subplots(1, 3, figsize=(16, 5.2), layout="constrained")
         x = numpy.linspace(0.0, 1.0, 2001)
         for name in sod:
             ds = xarray.open_zarr(stores[name])
@@ -174,7 +174,9 @@ def report(stores: dict, out) -> dict:
                       label="its cell averages (the L1 errors' reference)")
             axis.set(xlabel="position x (dimensionless)", ylabel=f"{label} (dimensionless)",
                      title=f"{label} at t = {t:g}")
-            axis.legend(fontsize=8)
+        # one legend below the panels: inside, it covered the velocity plateau
+        fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center",
+                   ncol=5, fontsize=8)
         fig.suptitle(f"Sod tube, 2D Maxwell molecules, elastic, {cells} cells, MUSCL + SSP "
                      f"RK3, penalised ARS(2,2,2), N = {grid['n_modes']}, "
                      f"S = {grid['support_radius']:g}", fontsize=9)

@@ -315,3 +315,30 @@ def test_without_a_hierarchy_no_levels_are_drawn(hierarchy_store, ds):
     with pytest.raises(ValueError, match="indicator_map: parameter 'indicator' = 'kappa' .* "
                                          "realizability, distance"):
         plotting.indicator_map(levels, "kappa", ax=_axes())
+
+
+def test_a_figure_says_its_warnings_in_one_line(tmp_path):
+    """The figures' caption names each warning's topic, cell and remedy in one line (the
+    full warnings took a quarter of the level map); granframe info keeps them in full."""
+    import granframe as gf
+    from granframe.run.description import RunDescription
+    from granframe.run.runner import Simulation
+
+    description = RunDescription(
+        title="short caption", grid={"dimension": 2, "n_modes": 24, "support_radius": 3.5},
+        kernel="maxwell", restitution={"name": "constant", "value": 1.0},
+        initial={"name": "riemann", "left": {"density": 1.0, "temperature": 1.0},
+                 "right": {"density": 1.0, "temperature": 0.6}},
+        time_step=0.01, final_time=0.02, output={"snapshot_interval": 0.01}, knudsen=0.1,
+        space={"cells": 6, "left": {"name": "diffuse", "temperature": 1.0},
+               "right": {"name": "diffuse", "temperature": 0.6}})
+    result = Simulation(description).run(tmp_path / "r.zarr", progress=False)
+    assert result.warnings
+    ds = gf.open_run(tmp_path / "r.zarr")
+    full, short = plotting.caption(ds), plotting.caption(ds, short=True)
+    assert f"UNDER-RESOLVED: {result.warnings[0]}" in full.splitlines()
+    last = short.splitlines()[-1]
+    assert last.startswith("UNDER-RESOLVED velocity resolution (in cell ")
+    assert "raise grid.n_modes" in last and last.endswith("the warnings in full)")
+    assert len(short.splitlines()) == len(full.splitlines()) - len(result.warnings) \
+        - len(result.accuracy_warnings) + 1

@@ -6,6 +6,7 @@ every figure carries (:func:`caption`), and the small helpers the figures share.
 from __future__ import annotations
 
 import pathlib
+import re
 import textwrap
 
 import numpy
@@ -251,13 +252,26 @@ def wrapped(text: str, width: int = 110) -> str:
                      for line in text.splitlines())
 
 
-def caption(ds) -> str:
+def _short(warning: str) -> str:
+    """A warning in a few words for a figure: its topic, where (the cell) and what to
+    raise, e.g. ``velocity resolution (in cell 47, x = 0.95): raise grid.n_modes``."""
+    topic = warning.split(":")[0]
+    cell = re.search(r"\(in cell [^)]*\)", warning)
+    remedy = re.search(r"raise [a-z_.]+( first)?", warning)
+    return (topic + (f" {cell.group(0)}" if cell else "")
+            + (f": {remedy.group(0)}" if remedy else ""))
+
+
+def caption(ds, short: bool = False) -> str:
     """The caption of every figure of a run, from its stored description.
 
     Parameters
     ----------
     ds : xarray.Dataset
         The Dataset of a run store.
+    short : bool
+        The warnings in one line, each as its topic, cell and what to raise (the
+        figures' caption: ``granframe info`` and the run's output say them in full).
 
     Returns
     -------
@@ -294,8 +308,17 @@ def caption(ds) -> str:
         f"restitution e: {_component(d.restitution)}; kernel {_component(d.kernel)}, "
         f"exponent λ = {exponent:g}" + (f", energy exponent γ = {energy:g}" if energy else "")
         + "; all quantities dimensionless"]
-        + [f"UNDER-RESOLVED: {warning}" for warning in run.warnings]
-        + [f"INACCURATE: {warning}" for warning in run.accuracy_warnings])
+        + _warning_lines(run, short))
+
+
+def _warning_lines(run, short: bool) -> list[str]:
+    """The caption's lines on the run's warnings: one each, or one in all (``short``)."""
+    if not short:
+        return ([f"UNDER-RESOLVED: {warning}" for warning in run.warnings]
+                + [f"INACCURATE: {warning}" for warning in run.accuracy_warnings])
+    parts = ([f"UNDER-RESOLVED {_short(w)}" for w in run.warnings]
+             + [f"INACCURATE {_short(w)}" for w in run.accuracy_warnings])
+    return ["; ".join(parts) + " (granframe info STORE: the warnings in full)"] if parts else []
 
 
 def _space_line(space) -> str:
@@ -314,7 +337,7 @@ def axes_for(ax, run):
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7, 4.8), layout="constrained")
-    fig.suptitle(wrapped(caption(run)), fontsize=8)
+    fig.suptitle(wrapped(caption(run, short=True)), fontsize=8)
     return ax
 
 

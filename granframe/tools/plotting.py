@@ -121,7 +121,7 @@ def figures(ds) -> dict:
                   "moments": (mass_drift, kurtosis, positivity)}
         if run.count >= 3:
             panels["entropy"] = (entropy,)
-    text = wrapped(caption(run))
+    text = wrapped(caption(run, short=True))
     drawn = {}
     for name, draws in panels.items():
         layout, size = _LAYOUTS[name]
