@@ -429,3 +429,25 @@ def test_a_quick_cluster_run_reports_its_monitors(tmp_path):
     assert row["status"] == "finished"
     assert row["negative mass share"] < 1e-3
     _assert_drawn(CLUSTERS, [store], tmp_path / "clusters.png")
+
+
+def test_the_heat_mode_is_below_the_shear_mode_only_for_moderate_inelasticity():
+    """First-Sonine theory: k_h < k_c for e above 0.3747 only (docs/granular.md), and
+    kappa* - mu* changes sign at e = 0.1878, below which k_h does not exist."""
+    from scipy.optimize import brentq
+
+    from granframe.theory.modes import heat_critical_wavenumber, shear_mode
+    from granframe.theory.sonine import reference_frequency, transport_coefficients
+
+    def ratio(e):
+        return (heat_critical_wavenumber(e) * reference_frequency(1.0, 1.0, 1.0)
+                / shear_mode(e, 1.0, 1.0, 1.0, 1.0)["k_c"])
+
+    assert brentq(lambda e: ratio(e) - 1.0, 0.2, 0.7) == pytest.approx(0.3747, abs=1e-4)
+    assert ratio(0.4) < 1.0 < ratio(0.35)
+    conduction = [transport_coefficients(e)["kappa*"] - transport_coefficients(e)["mu*"]
+                  for e in (0.15, 0.2)]
+    assert conduction[0] < 0 < conduction[1]
+    with pytest.raises(ValueError, match=r"^heat_critical_wavenumber: parameter 'restitution' "
+                                         r"= 0\.15 is invalid; must be above 0\.1878"):
+        heat_critical_wavenumber(0.15)

@@ -23,6 +23,7 @@ import math
 
 import numpy
 
+from granframe import validators as check
 from granframe.theory.sonine import (elastic_viscosity, hard_sphere_cooling_rate,
                                      reference_frequency, transport_coefficients)
 
@@ -99,9 +100,16 @@ def heat_critical_wavenumber(restitution: float) -> float:
         k*_h = sqrt(zeta* / (5 (kappa* - mu*))),
 
     and a longitudinal perturbation of k* < k*_h has a growing mode (the clustering
-    instability; Brey, Dufty, Kim & Santos 1998, in the units k* = k sqrt(T)/nu_0)."""
+    instability; Brey, Dufty, Kim & Santos 1998, in the units k* = k sqrt(T)/nu_0).
+    Below e = 0.1878 the first-Sonine kappa* - mu* is not positive and there is no such
+    threshold: refused by name."""
     c = transport_coefficients(restitution)
-    return math.sqrt(c["zeta*"] / (5.0 * (c["kappa*"] - c["mu*"])))
+    conduction = c["kappa*"] - c["mu*"]
+    if not conduction > 0.0:
+        check.reject("heat_critical_wavenumber", "restitution", restitution,
+                     f"must be above 0.1878: kappa* - mu* = {conduction:.4g} <= 0 there in "
+                     "first-Sonine theory, which then has no heat-mode threshold")
+    return math.sqrt(c["zeta*"] / (5.0 * conduction))
 
 
 def heat_mode_index(values, k_star: float) -> int:
