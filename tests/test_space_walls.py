@@ -141,6 +141,15 @@ def test_the_specular_wall_gives_every_fast_node_its_closed_form(d, n):
     fast = (rows[:, 0] >= 1.5) & (rows[:, 0] < grid.half_width - 1.0)
     assert fast.sum() >= 5
     assert numpy.allclose(rows[fast, 1], 2 * 0.5 ** 2, rtol=1e-13, atol=0), rows[fast]
+    # every node but -L (whose faster escapes have no node above) leaves with the energy
+    # of its escapes, the slow ones too (what leaves below the slowest node h is put on h
+    # and the energy it gains there taken back in its column)
+    below = rows[:, 0] < grid.half_width - 1e-9
+    exits, weight = vibration.Layer(0.5, 1.0).specular_escape(rows[below, 0])
+    layer = (0.5 * exits ** 2 * weight).sum(axis=0) / weight.sum(axis=0) \
+        - 0.5 * rows[below, 0] ** 2
+    assert numpy.allclose(rows[below, 1], layer, rtol=1e-12, atol=1e-14)
+    assert rows[below, 1].max() > 2 * 0.5 ** 2      # the slow nodes are caught, and gain more
     f = numpy.random.default_rng(4).uniform(0.1, 1.0, grid.shape)
     out = wall.emit(f, grid, numpy)
     positive, negative = upwind_speeds(grid)
@@ -190,12 +199,12 @@ def heating_rows(sizes=(16, 32, 64), reflection="diffuse", gas_temperature=1.0):
 def test_the_grid_heating_converges_to_the_layer_at_second_order(reflection):
     """Gas at rest at T = T_w = 1, V = 0.4, the box S = 3.5: relative errors (measured) at
     N = 64, 128, 256, diffuse -9.3e-3, -8.6e-4, -2.2e-4 (orders 3.44, 1.99), specular
-    5.0e-3, 1.4e-3, 3.5e-4 (1.84, 1.98): second order once h < V (docs/space.md)."""
+    4.0e-3, 1.3e-3, 3.5e-4 (1.60, 1.93): second order once h < V (docs/space.md)."""
     rows, _ = heating_rows((64, 128, 256), reflection=reflection)
     errors = [abs(row["error"]) for row in rows]
     orders = [math.log2(a / b) for a, b in zip(errors[:-1], errors[1:])]
     assert errors[-1] < 5e-4, rows
-    assert all(p > 1.7 for p in orders), (errors, orders)
+    assert all(p > 1.5 for p in orders), (errors, orders)
     assert 1.8 < orders[-1] < 2.3, (errors, orders)
 
 

@@ -342,7 +342,11 @@ class Vibrating(contracts.Boundary):
         r"""The flux (len(nodes), arriving) each leaving node receives when the escape speeds
         ``exits`` (phases, arriving) with ``weight`` are shared between the two nodes
         b_i <= b < b_{i+1} around each, t b_i^2 + (1 - t) b_{i+1}^2 = b^2 (flux and energy
-        flux kept); below the slowest node or above the fastest all goes to that node."""
+        flux kept). An escape slower than the slowest leaving node h (or faster than the
+        fastest) has no such pair: it goes to that node, and the energy it gains there
+        (h^2 - b^2)/2 is taken back within its arriving node's column by moving flux from
+        the next nodes up down to h (:meth:`_keep_energy`), so that every arriving node
+        leaves with the energy of its escapes, to round-off."""
         order = numpy.argsort(nodes)
         sorted_nodes = nodes[order]
         squares = sorted_nodes ** 2
@@ -355,7 +359,37 @@ class Vibrating(contracts.Boundary):
         shares = numpy.zeros((nodes.size, exits.shape[1]))
         numpy.add.at(shares, (order[i], column), w * t)
         numpy.add.at(shares, (order[i + 1], column), w * (1.0 - t))
+        energy = (0.5 * exits * exits * weight).sum(axis=0)
+        for k in range(exits.shape[1]):
+            shares[order, k] = Vibrating._keep_energy(shares[order, k], 0.5 * squares,
+                                                      energy[k])
         return shares
+
+    @staticmethod
+    def _keep_energy(flux, energies, target):
+        """``flux`` over nodes of increasing energy ``energies`` with its total kept and its
+        energy sum(flux energies) brought to ``target``: an excess moved down to the first
+        node from the nodes above it in turn, a deficit up to the last from the nodes below
+        it; the flux stays non-negative (the target lies between the first and the last
+        node's energy times the total)."""
+        flux = flux.copy()
+        excess = float(flux @ energies) - target
+        scale = abs(target) + float(flux.sum() * energies[-1])
+        if excess > 1e-15 * scale:
+            low, sources = 0, range(1, flux.size)
+        elif excess < -1e-15 * scale:
+            low, sources = flux.size - 1, range(flux.size - 2, -1, -1)
+        else:
+            return flux
+        for i in sources:
+            step = abs(energies[i] - energies[low])
+            moved = min(flux[i], abs(excess) / step)
+            flux[i] -= moved
+            flux[low] += moved
+            excess -= numpy.sign(excess) * moved * step
+            if abs(excess) <= 1e-15 * scale:
+                break
+        return flux
 
     def ghosts(self, inside, grid, xp, *, t=0.0, side="left"):
         """The linear extension through the wall of :func:`_emitting_ghosts`."""
