@@ -474,3 +474,39 @@ def test_an_error_in_one_process_ends_all_with_one_line(tmp_path, monkeypatch, m
     assert done.returncode == 2 and "store '" in done.stderr and "exists" in done.stderr
     assert done.stderr.count("granframe: error") == 1 and "Abort" not in done.stderr, (
         done.stderr)
+
+
+def test_a_sweep_runs_each_space_run_on_several_processes(tmp_path):
+    """granframe sweep --processes 2: each point a ``mpiexec -n 2 granframe run`` on the
+    worker that takes it, the same stores as one process each (every f and field equal
+    to round-off); without mpiexec the option is refused by name."""
+    import tomllib
+
+    import granframe
+    from granframe.run import sweep as sweeps
+
+    base = tomllib.loads(BASE)
+    sweep = sweeps.Sweep(base, product={"space.cells": [12, 24]})
+    stores = {}
+    for processes in (1, 2):
+        out = tmp_path / f"p{processes}.zarr"
+        result = sweeps.run_sweep(sweep, out, workers=1, progress=False, processes=processes)
+        assert (result.finished, result.failed) == (2, 0)
+        stores[processes] = out
+    for name in sweeps.read_table(stores[1])["name"]:
+        one, two = (granframe.open_run(stores[p] / "runs" / str(name)) for p in (1, 2))
+        assert numpy.allclose(one.f.values, two.f.values, rtol=0, atol=1e-14)
+        assert numpy.allclose(one.temperature.values, two.temperature.values, rtol=1e-13)
+
+
+def test_a_sweep_without_mpiexec_refuses_processes(tmp_path, monkeypatch):
+    import tomllib
+
+    from granframe.run import sweep as sweeps
+
+    monkeypatch.setattr(sweeps, "mpiexec", lambda: None)
+    sweep = sweeps.Sweep(tomllib.loads(BASE), product={"space.cells": [12]})
+    with pytest.raises(ValueError, match=r"^run_sweep: parameter 'processes' = 2 is invalid; "
+                                         r"needs mpiexec"):
+        sweeps.run_sweep(sweep, tmp_path / "s.zarr", workers=1, processes=2)
+    assert not (tmp_path / "s.zarr").exists()

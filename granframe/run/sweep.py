@@ -46,6 +46,7 @@ import os
 import pathlib
 import re
 import shutil
+import sys
 import time
 import uuid
 import warnings
@@ -231,8 +232,36 @@ def _failed(message: str) -> dict:
             "time": 0.0}
 
 
+def mpiexec() -> str | None:
+    """The ``mpiexec`` installed beside this Python (the mpich wheel's of the ``mpi`` extra),
+    else the one on PATH; None when there is none."""
+    beside = pathlib.Path(sys.executable).with_name("mpiexec")
+    return str(beside) if beside.is_file() else shutil.which("mpiexec")
+
+
+def _run_processes(description: dict, path: str, processes: int, mode: str) -> dict | None:
+    """Run one point as ``mpiexec -n processes granframe run`` (its description in a
+    temporary TOML file); None when it ran (the store says how), else a failed row with
+    the launcher's last words."""
+    import subprocess
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="granframe-sweep-") as folder:
+        toml = pathlib.Path(folder) / "point.toml"
+        toml.write_text(RunDescription.from_dict(description).to_toml())
+        done = subprocess.run([mpiexec(), "-n", str(processes), sys.executable, "-m",
+                               "granframe.tools.cli", "run", str(toml), "--out", path, mode],
+                              capture_output=True, text=True, check=False)
+    if done.returncode in (0, 3):           # finished, or stopped by a health check
+        return None
+    last = (done.stderr.strip().splitlines() or ["(nothing on stderr)"])[-1]
+    prefix = REFUSED if done.returncode == 2 else ""
+    return _failed(f"{prefix}mpiexec -n {processes} granframe run exited with status "
+                   f"{done.returncode}: {last}")
+
+
 def run_point(description: dict, path: str, poll: float = 1.0,
-              retry_failed: bool = False) -> dict:
+              retry_failed: bool = False, processes: int = 1) -> dict:
     """Run (or resume, or skip) one point into ``path``; the task a worker executes.
 
     Returns its table row. Parameters the description refuses (message ``refused: ...``),
@@ -254,6 +283,9 @@ def run_point(description: dict, path: str, poll: float = 1.0,
         Seconds between looks at a writer lock held by another process.
     retry_failed : bool
         Run a run stopped by a health check again, from the start.
+    processes : int
+        MPI processes of the run: above 1 it runs as ``mpiexec -n processes granframe run``
+        (:func:`mpiexec`), the task waiting for it.
 
     Returns
     -------
@@ -273,6 +305,10 @@ def run_point(description: dict, path: str, poll: float = 1.0,
         simulation = Simulation(RunDescription.from_dict(description))
     except (ValueError, TypeError) as exc:
         return _failed(f"{REFUSED}{exc}")
+    if processes > 1:
+        failed = _run_processes(description, path, processes,
+                                "--overwrite" if status == "failed" else "--resume")
+        return failed if failed is not None else _row(path)
     mode = {"overwrite": True} if status == "failed" else {"resume": True}
     while True:
         try:
@@ -351,7 +387,7 @@ class SweepResult:
 def run_sweep(sweep: Sweep, out, *, client=None, scheduler: str | None = None,
               workers: int | None = None, progress: bool | None = None,
               overwrite: bool = False, retry_failed: bool = False,
-              protect=()) -> SweepResult:
+              protect=(), processes: int = 1) -> SweepResult:
     """Run every point of ``sweep`` into the store ``out`` on Dask (see the module notes).
 
     Parameters
@@ -380,6 +416,10 @@ def run_sweep(sweep: Sweep, out, *, client=None, scheduler: str | None = None,
         health check (from the start); without it, both stay failed.
     protect : sequence of paths
         Paths ``out`` must not hold when it is replaced (the sweep's own file).
+    processes : int
+        MPI processes per run (``mpiexec -n processes granframe run`` on the worker that
+        takes it; a space run spreads its cells over them, docs/scaling.md); 1 runs each
+        in its worker's process.
 
     Returns
     -------
@@ -388,6 +428,13 @@ def run_sweep(sweep: Sweep, out, *, client=None, scheduler: str | None = None,
         the points refused before and not submitted again (refused).
     """
     _check_run_arguments(sweep, workers)
+    if isinstance(processes, bool) or not isinstance(processes, int) or processes < 1:
+        check.reject("run_sweep", "processes", processes, "must be a whole number >= 1 (MPI "
+                     "processes per run)")
+    if processes > 1 and mpiexec() is None:
+        check.reject("run_sweep", "processes", processes, "needs mpiexec, which is not "
+                     "installed here: pip install 'granframe[mpi]' (an MPI from the package "
+                     "index), or run with processes = 1")
     start = time.perf_counter()
     out = pathlib.Path(out)
     _check_out(out, overwrite, protect)
@@ -400,7 +447,7 @@ def run_sweep(sweep: Sweep, out, *, client=None, scheduler: str | None = None,
         if overwrite:
             _clear(out, protect)
         return _drive(sweep, out, points, names, client, scheduler, workers, progress,
-                      retry_failed, start)
+                      retry_failed, start, processes)
 
 
 def _check_run_arguments(sweep, workers) -> None:
@@ -484,7 +531,7 @@ def _sorted_points(sweep, names, points, paths, refused, retry_failed):
 
 
 def _drive(sweep, out, points, names, client, scheduler, workers, progress, retry_failed,
-           start):
+           start, processes=1):
     """run_sweep with the sweep store's writer lock held (one driver, one table writer)."""
     import distributed
 
@@ -513,7 +560,8 @@ def _drive(sweep, out, points, names, client, scheduler, workers, progress, retr
         print(f"sweep: {len(names)} runs, {skipped} already ended{kept_refused}, {len(todo)} "
               f"to run; Dask dashboard: {client.dashboard_link}")
         futures = {client.submit(run_point, description, paths[name], retry_failed=retry_failed,
-                                 key=f"granframe-{name}", pure=False): name
+                                 processes=processes, key=f"granframe-{name}",
+                                 pure=False): name
                    for name, description in todo}
         counts = {"finished": 0, "failed": 0}
         with tqdm.tqdm(total=len(todo), disable=None if progress is None else not progress,

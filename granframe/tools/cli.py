@@ -31,7 +31,7 @@ check STORE
     Read every committed chunk of a run (or sweep) store and list the missing or damaged
     ones; exit status 3 when there is any.
 sweep SWEEP.toml --out STORE [--scheduler ADDRESS] [--workers N] [--overwrite]
-      [--retry-failed] [--progress]
+      [--retry-failed] [--progress] [--processes P]
     Run every point of a parameter sweep on Dask into one zarr store (docs/scaling.md);
     running it again skips ended runs and resumes cut ones. Exit status 3 when a run failed.
 refine DESCRIPTION.toml --vary KEY=V1,V2,... [--vary ...] --quantity SPEC [...] --out DIR
@@ -336,6 +336,9 @@ def build_parser() -> argparse.ArgumentParser:
                             "stopped by a health check (default: keep them failed)")
     sweep.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                        help="progress bar (default: only on a terminal)")
+    sweep.add_argument("--processes", type=int, default=1,
+                       help="MPI processes per run: each runs as mpiexec -n P granframe run "
+                            "(default 1: in its worker's process)")
     sweep.set_defaults(handler=sweep_command)
     refine = commands.add_parser("refine", help="error bars from refinement: observed order, "
                                  "Richardson estimate, grid convergence index")

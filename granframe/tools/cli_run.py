@@ -267,7 +267,8 @@ def sweep_command(args) -> int:
         result = run_sweep(Sweep.from_toml(read_text(path, "sweep", "sweep")), args.out,
                            scheduler=args.scheduler, workers=args.workers,
                            progress=args.progress, overwrite=args.overwrite,
-                           retry_failed=args.retry_failed, protect=(path,))
+                           retry_failed=args.retry_failed, protect=(path,),
+                           processes=args.processes)
     except KeyboardInterrupt:
         print(f"\ngranframe: interrupted; the sweep store '{args.out}' keeps every ended run "
               "and every snapshot of the others: run the same sweep again to continue",
