@@ -46,12 +46,24 @@ import scipy.optimize
 
 import granframe
 from granframe.run.description import RunDescription
+from granframe.run.refinement import grid_convergence
 from granframe.run.runner import Simulation
 from granframe.space import exact
 from granframe.theory.cooling import maxwellian_cooling_rate
-from granframe.tools.studykit import (cfl_time_step, draw, finish, json_text, number,
-                                      numbers, output_folder, parse_study, print_table,
-                                      run_study, save_figure, study_arguments)
+from granframe.tools.studykit import (
+    cfl_time_step,
+    draw,
+    finish,
+    json_text,
+    number,
+    numbers,
+    output_folder,
+    parse_study,
+    print_table,
+    run_study,
+    save_figure,
+    study_arguments,
+)
 
 DIMENSION = 2
 #: snapshots of f over a run
@@ -146,6 +158,60 @@ def figure(stores, path) -> None:
     save_figure(fig, path, dpi=120)
 
 
+#: the numbers of a run that get error bars from a refinement (:func:`error_bars`)
+REFINED = ("mean T / T uniform", "T(0) / T uniform", "T(1) / T uniform",
+           "rho max / rho min")
+
+
+def run_member(args, out, n_modes: int, cells: int):
+    """The runs of every e at one resolution (N, cells; the time step at the CFL limit of
+    the cells): their table rows and stores."""
+    grid = {"n_modes": n_modes, "support_radius": args.support}
+    dt = cfl_time_step(cells, args.final / SNAPSHOTS, grid)
+    rows, stores = [], []
+    for e in args.restitutions:
+        began = time.perf_counter()
+        speed = wall_speed_ratio(e, args.knudsen)          # T uniform = 1
+        run = Simulation(description(e, args.knudsen, speed, cells, n_modes, args.support,
+                                     args.final, dt))
+        store = out / f"vibrated_e{e:g}_k{args.knudsen:g}_c{cells}_n{n_modes}.zarr"
+        result = run_study(run, store, args, overwrite=True)
+        seconds = time.perf_counter() - began
+        ds = granframe.open_run(store, time_axis="steps")
+        end = balance(ds, run.problem.operator, args.knudsen)
+        temperature, density = end.pop("temperature"), end.pop("density")
+        uniform = uniform_temperature(e, args.knudsen, speed)
+        rows.append({"e": e, "eps": args.knudsen, "V": speed, "cells": cells, "N": n_modes,
+                     "S": args.support, "dt": dt, "final": args.final, "seconds": seconds,
+                     "T uniform": uniform,
+                     "mean T / T uniform": float((temperature * density).mean() / uniform),
+                     "T(0) / T uniform": float(temperature[0] / uniform),
+                     "T(1) / T uniform": float(temperature[-1] / uniform),
+                     "rho max / rho min": float(density.max() / density.min()),
+                     "(1 - e^2) / eps^2": (1 - e * e) / args.knudsen ** 2,
+                     **end, "T profile": temperature.tolist(),
+                     "density profile": density.tolist(),
+                     "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]})
+        stores.append(store)
+    return rows, stores
+
+
+def error_bars(members: list, spacings: list) -> list[dict]:
+    """For each e, each of :data:`REFINED` over a refinement (``members``: the rows of each
+    resolution, coarse to fine, ``spacings`` their h): the finest value, the observed
+    order, the Richardson estimate and the grid convergence index
+    (:func:`granframe.run.refinement.grid_convergence`)."""
+    out = []
+    for k, row in enumerate(members[-1]):
+        entry = {"e": row["e"]}
+        for key in REFINED:
+            result = grid_convergence([m[k][key] for m in members], spacings)
+            entry[key] = {name: result[name] for name in ("value", "order", "convergence",
+                                                          "extrapolated", "error_bar")}
+        out.append(entry)
+    return out
+
+
 def main(argv=None):
     parser = study_arguments(__doc__, n_modes=32, cells=16, final=40.0,
                              quick={"n_modes": 24, "cells": 8, "final": 2.0,
@@ -153,6 +219,11 @@ def main(argv=None):
     parser.add_argument("--knudsen", type=number(0.0), default=0.5, help="the Knudsen number eps")
     parser.add_argument("--restitutions", type=numbers(0.0), default=[0.99, 0.95, 0.9, 0.8],
                         help="e values, comma-separated (the default: 0.99,0.95,0.9,0.8)")
+    parser.add_argument("--refine", choices=("n-modes", "cells"), default=None,
+                        help="run the study at three resolutions, the given one and two "
+                             "coarser (N x 2/3 and x 3/4 from N, or cells / 4 and / 2), and "
+                             "give its numbers error bars from them (observed order, "
+                             "Richardson, grid convergence index)")
     args = parse_study(parser, argv)
     for e in args.restitutions:
         if e >= 1.0:
@@ -161,33 +232,21 @@ def main(argv=None):
     out = output_folder(args, figure, "vibrated.png")
     if out is None:
         return
-    grid = {"n_modes": args.n_modes, "support_radius": args.support}
-    dt = cfl_time_step(args.cells, args.final / SNAPSHOTS, grid)
-    rows, stores = [], []
-    for e in args.restitutions:
-        began = time.perf_counter()
-        speed = wall_speed_ratio(e, args.knudsen)          # T uniform = 1
-        run = Simulation(description(e, args.knudsen, speed, args.cells, args.n_modes,
-                                     args.support, args.final, dt))
-        store = out / f"vibrated_e{e:g}_k{args.knudsen:g}_c{args.cells}_n{args.n_modes}.zarr"
-        result = run_study(run, store, args, overwrite=True)
-        seconds = time.perf_counter() - began
-        ds = granframe.open_run(store, time_axis="steps")
-        end = balance(ds, run.problem.operator, args.knudsen)
-        temperature, density = end.pop("temperature"), end.pop("density")
-        uniform = uniform_temperature(e, args.knudsen, speed)
-        row = {"e": e, "eps": args.knudsen, "V": speed, "cells": args.cells,
-               "N": args.n_modes, "S": args.support, "dt": dt, "final": args.final,
-               "seconds": seconds, "T uniform": uniform,
-               "mean T / T uniform": float((temperature * density).mean() / uniform),
-               "T(0) / T uniform": float(temperature[0] / uniform),
-               "T(1) / T uniform": float(temperature[-1] / uniform),
-               "rho max / rho min": float(density.max() / density.min()),
-               "(1 - e^2) / eps^2": (1 - e * e) / args.knudsen ** 2,
-               **end, "T profile": temperature.tolist(), "density profile": density.tolist(),
-               "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
-        rows.append(row)
-        stores.append(store)
+    if args.refine == "n-modes":
+        family = [(round(args.n_modes / 2), args.cells), (round(args.n_modes * 2 / 3),
+                                                          args.cells),
+                  (args.n_modes, args.cells)]
+        spacings = [1.0 / n for n, _ in family]
+    elif args.refine == "cells":
+        family = [(args.n_modes, args.cells // 4), (args.n_modes, args.cells // 2),
+                  (args.n_modes, args.cells)]
+        spacings = [1.0 / c for _, c in family]
+    else:
+        family, spacings = [(args.n_modes, args.cells)], None
+    members = []
+    for n_modes, cells in family:
+        rows, stores = run_member(args, out, n_modes, cells)
+        members.append(rows)
     print_table(rows, {"e": "g", "V": ".4g", "N": "d", "cells": "d", "seconds": ".0f",
                        "mean T / T uniform": ".4f", "T(0) / T uniform": ".4f",
                        "T(1) / T uniform": ".4f", "rho max / rho min": ".4f",
@@ -195,6 +254,16 @@ def main(argv=None):
     table = out / f"vibrated_k{args.knudsen:g}_c{args.cells}_n{args.n_modes}.json"
     table.write_text(json_text(rows, indent=1))
     print(f"table: {table}")
+    if spacings is not None:
+        bars = error_bars(members, spacings)
+        for entry in bars:
+            print(f"e = {entry['e']:g}: " + "; ".join(
+                f"{key} {v['value']:.4f} ± {v['error_bar']:.2g} (order {v['order']:.3g}, "
+                f"{v['convergence']})" if v["order"] is not None else
+                f"{key} {v['value']:.4f} ({v['convergence']})" for key, v in entry.items()
+                if key != "e"))
+        (out / f"vibrated_refine_{args.refine}.json").write_text(
+            json_text({"family": family, "spacings": spacings, "error bars": bars}, indent=1))
     draw(figure, stores, out / "vibrated.png")
 
 

@@ -451,3 +451,18 @@ def test_the_heat_mode_is_below_the_shear_mode_only_for_moderate_inelasticity():
     with pytest.raises(ValueError, match=r"^heat_critical_wavenumber: parameter 'restitution' "
                                          r"= 0\.15 is invalid; must be above 0\.1878"):
         heat_critical_wavenumber(0.15)
+
+
+def test_the_vibrated_study_gives_its_numbers_error_bars_from_a_refinement():
+    """Rows at three resolutions whose numbers follow a + b h^2: each gets its order 2, its
+    limit a and the grid convergence index of the finest (error bar 1.25 |e_21| / 3)."""
+    spacings = [1 / 8, 1 / 16, 1 / 32]
+    members = [[{"e": 0.9, **{key: 1.0 + k + 3.0 * h * h for k, key in
+                              enumerate(VIBRATED.REFINED)}}] for h in spacings]
+    (entry,) = VIBRATED.error_bars(members, spacings)
+    for k, key in enumerate(VIBRATED.REFINED):
+        bar = entry[key]
+        assert bar["order"] == pytest.approx(2.0, abs=1e-9)
+        assert bar["extrapolated"] == pytest.approx(1.0 + k, abs=1e-12)
+        assert bar["error_bar"] == pytest.approx(1.25 * 3.0 * (1 / 16 ** 2 - 1 / 32 ** 2) / 3,
+                                                 rel=1e-9)
