@@ -199,13 +199,15 @@ def test_the_report_takes_one_device_to_host_copy_and_uploads_nothing():
 
 
 def test_an_edge_share_of_an_under_resolved_f_asks_for_modes_first():
-    """The edge shares of an f whose fields warn on N come from its oscillations: the
-    accuracy warning names grid.n_modes first (a wider support makes them larger, the
-    quick Sod runs' case), and grid.support_radius where f is resolved."""
+    """The edge shares of an f whose fields warn on N may come from its oscillations (the
+    quick Sod runs', which a wider support at the same N makes larger) or from a box too
+    narrow (a Sod tube on S = 3.2): the accuracy warning names grid.support_radius and,
+    where f is under-resolved, grid.n_modes with it."""
     from granframe.run.monitors import CellEdgeMonitors
 
     for warnings, remedy in ((["velocity resolution: ... raise grid.n_modes (N = 24)"],
-                              "raise grid.n_modes first (now N = 24): f is under-resolved"),
+                              "raise grid.support_radius (now S = 3.5), and grid.n_modes "
+                              "with it (now N = 24): f is under-resolved too"),
                              ([], "raise grid.support_radius (now S = 3.5)")):
         monitors = CellEdgeMonitors(_description())
         values = monitors.shape(numpy.array([[1e-4, 5e-3]]),

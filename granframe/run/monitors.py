@@ -309,10 +309,9 @@ class AccuracyMonitors:
             measure += f" against {self.law.name}"
         remedy = self._remedy[REMEDIES[name]]
         if name.startswith("edge_") and self._under_resolved:
-            remedy = (f"raise grid.n_modes first (now N = {self.grid.n_modes}): f is "
-                      "under-resolved and its oscillations reach the edge radius, which a "
-                      "wider support (a coarser h) makes worse; then grid.support_radius if "
-                      "it remains")
+            remedy += (f", and grid.n_modes with it (now N = {self.grid.n_modes}): f is "
+                       "under-resolved too, and at a fixed N a wider support coarsens h, "
+                       "which can carry its oscillations further out")
         return (f"accuracy: {measure} = {shown} > health.accuracy_tolerance = {limit}; "
                 f"{remedy}")
 
