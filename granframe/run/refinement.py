@@ -21,8 +21,9 @@ e_32 = phi_3 - phi_2, s = sign(e_32 / e_21),
 
 p solved by fixed-point iteration (q = 0 for a constant ratio). With two members the
 order is not observed: p is the scheme's formal order, given, and F_s = 3. The error bar of
-the finest value is GCI_fine |phi_1|. s < 0 (oscillatory convergence) and differences at
-round-off are reported as such; the index is then not an error bar.
+the finest value is GCI_fine |phi_1|. s < 0 (oscillatory convergence), |e_32| <= |e_21|
+(divergent: the members are not in the asymptotic range) and differences at round-off are
+reported as such; the index is then not an error bar.
 
 The quantities are read from each member's store (:func:`granframe.open_run`, every
 step) by :func:`quantity`: ``NAME[.v1[.v2]][@t=T][,x=X|x=mean][,wall=left|right]``, e.g.
@@ -237,7 +238,8 @@ def grid_convergence(values, spacings, formal_order: float | None = None) -> dic
         ``value`` (the finest), ``differences`` (phi_{k+1} - phi_k), ``order`` (observed or
         formal), ``observed`` (bool), ``extrapolated``, ``gci`` (relative),
         ``error_bar`` (GCI |phi_1|), ``convergence`` ('monotone', 'oscillatory',
-        'round-off', 'two members').
+        'divergent' (the finest refinement moved the value no less than the one before:
+        not in the asymptotic range, no error bar), 'round-off', 'two members').
     """
     owner = "grid_convergence"
     phi = [float(v) for v in values]
@@ -269,6 +271,9 @@ def grid_convergence(values, spacings, formal_order: float | None = None) -> dic
         elif e32 / e21 < 0:
             convergence = "oscillatory"
             order, safety = formal_order, SAFETY[3]
+        elif abs(e32) <= abs(e21):
+            convergence = "divergent"            # the last refinement moved it the most
+            order, safety = None, SAFETY[3]
         else:
             convergence, safety = "monotone", SAFETY[3]
             ratio = abs(e32 / e21)
