@@ -41,18 +41,13 @@ from granframe.parallel import LAUNCHER_VARIABLES
 from granframe.run.description import RunDescription
 from granframe.run.problems.space import WALL_RECORDS
 from granframe.run.storage import RunStore, WriterLock
+from granframe.run.sweep import mpiexec
 from granframe.tools.cli import main
 
 from conftest import mutated
 
 
-def _mpiexec():
-    """The mpiexec installed beside this Python (the mpich wheel's), else the one on PATH."""
-    beside = pathlib.Path(sys.executable).with_name("mpiexec")
-    return str(beside) if beside.is_file() else shutil.which("mpiexec")
-
-
-MPIEXEC = _mpiexec()
+MPIEXEC = mpiexec()       # beside this Python (the mpich wheel's), else the one on PATH
 
 
 def _environment(**extra) -> dict:

@@ -73,6 +73,12 @@ def phases(count: int = PHASES):
     return (numpy.arange(count) + 0.5) * (2.0 * math.pi / count)
 
 
+def _search_points():
+    """u on (0, :data:`HORIZON` periods], :data:`SEARCH` points a period: where the chord
+    slopes are searched."""
+    return numpy.linspace(0.0, 2.0 * math.pi * HORIZON, int(SEARCH * HORIZON) + 1)[1:]
+
+
 def _chord_slopes(theta, u):
     """(sin(theta + u) - sin(theta)) / u, theta (..., 1), u (n,), by the difference
     formula 2 cos(theta + u/2) sin(u/2) / u (no cancellation at small u)."""
@@ -91,7 +97,7 @@ def escape_slope(theta):
     """
     theta = numpy.asarray(theta, dtype=float)
     flat = theta.reshape(-1, 1)
-    u = numpy.linspace(0.0, 2.0 * math.pi * HORIZON, int(SEARCH * HORIZON) + 1)[1:]
+    u = _search_points()
     slopes = _chord_slopes(flat, u)
     best = slopes.argmax(axis=1)
     s = u[best]
@@ -121,7 +127,7 @@ def _first_crossing(theta, c):
     """The smallest u in (0, HORIZON periods] with chord slope (sin(theta + u) - sin theta)
     / u >= c, for c in (cos theta, S(theta)): found on the search points, then bisected
     to round-off (the slope at the point before is below c)."""
-    u = numpy.linspace(0.0, 2.0 * math.pi * HORIZON, int(SEARCH * HORIZON) + 1)[1:]
+    u = _search_points()
     theta, c = numpy.asarray(theta, dtype=float), numpy.asarray(c, dtype=float)
     above = _chord_slopes(theta[:, None], u) >= c[:, None]
     k = numpy.argmax(above, axis=1)
@@ -170,7 +176,7 @@ class Layer:
         two phases next to theta_k + u_n (mod 2 pi).
         """
         n, step = self.count, 2.0 * math.pi / self.count
-        u = numpy.linspace(0.0, 2.0 * math.pi * HORIZON, int(SEARCH * HORIZON) + 1)[1:]
+        u = _search_points()
         q = numpy.zeros((n, n))
         for k, th in enumerate(self.theta):
             running = numpy.maximum.accumulate(

@@ -20,6 +20,17 @@ def read_text(path: pathlib.Path, command: str, parameter: str) -> str:
                          "expected") from None
 
 
+def read_toml(path: pathlib.Path, command: str, parameter: str) -> dict:
+    """The TOML table of the file ``path`` (:func:`read_text`); invalid TOML refused naming
+    the file."""
+    import tomllib
+
+    try:
+        return tomllib.loads(read_text(path, command, parameter))
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{command}: the TOML text of '{path}' is invalid: {exc}") from None
+
+
 def load_study(source, quick: bool):
     """:func:`~granframe.run.runner.load_study`, a source that is not text and a study
     that exits (``sys.exit`` while it is imported or makes its runs) refused naming it."""

@@ -11,7 +11,7 @@ import pathlib
 import sys
 
 from granframe import __version__
-from granframe.tools.cli_inputs import load_study, read_text, with_settings
+from granframe.tools.cli_inputs import load_study, read_toml, with_settings
 
 
 def bench_command(args) -> int:
@@ -55,17 +55,12 @@ def _limit_runs(args) -> tuple[dict, bool]:
     ``health.step_limit = false``, so that one whose step is above the transport's CFL
     limit is built and reported rather than refused; and whether ``granframe run`` would
     check the step limits (the ``health.step_limit`` the description asks for)."""
-    import tomllib
-
     from granframe.run.description import RunDescription
 
     path = pathlib.Path(args.source)
     unchecked = ["health.step_limit=false"]
     if path.suffix == ".toml" and path.is_file() and not args.quick:
-        try:
-            table = tomllib.loads(read_text(path, "limits", "source"))
-        except tomllib.TOMLDecodeError as exc:
-            raise ValueError(f"limits: the TOML text of '{path}' is invalid: {exc}") from None
+        table = read_toml(path, "limits", "source")
         health = table.get("health")
         checked = health.get("step_limit", True) if isinstance(health, dict) else True
         table["health"] = {**(health if isinstance(health, dict) else {}), "step_limit": False}
@@ -196,18 +191,13 @@ def advise_command(args) -> int:
     :func:`~granframe.tools.advise.advise`; a run description with a ``[space]`` table (it
     has a ``grid``) is priced as it is, all-kinetic and with a hierarchy of collision models
     (:func:`~granframe.tools.advise.price_hierarchy`)."""
-    import tomllib
-
     from granframe.run.description import RunDescription
     from granframe.tools.advise import Scene, advise, price_hierarchy
     from granframe.validators import existing_file
 
     path = pathlib.Path(args.scene)
     existing_file("advise", "scene", path, "a .toml scene or description")
-    try:
-        data = tomllib.loads(read_text(path, "advise", "scene"))
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"advise: the TOML text of '{path}' is invalid: {exc}") from None
+    data = read_toml(path, "advise", "scene")
     if "grid" in data:
         if args.out:
             raise ValueError(f"advise: parameter '--out' = '{args.out}' is invalid; it writes "

@@ -12,7 +12,7 @@ import sys
 
 import attrs
 
-from granframe.tools.cli_inputs import load_study, read_text, with_settings
+from granframe.tools.cli_inputs import load_study, read_text, read_toml, with_settings
 
 
 def run_command(args) -> int:
@@ -303,18 +303,13 @@ def refine_command(args) -> int:
     """``granframe refine``: the family of a description refined together, run as a sweep,
     and each quantity's observed order, Richardson estimate and grid convergence index
     (:mod:`granframe.run.refinement`); exit 3 when a member did not finish."""
-    import tomllib
-
     from granframe.run.description import RunDescription
     from granframe.run.refinement import Refinement, run_refinement
     from granframe.validators import existing_file
 
     path = pathlib.Path(args.description)
     existing_file("refine", "description", path, "a .toml run description")
-    try:
-        base = tomllib.loads(read_text(path, "refine", "description"))
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"refine: the TOML text of '{path}' is invalid: {exc}") from None
+    base = read_toml(path, "refine", "description")
     RunDescription.from_dict(base)
     vary = dict(_vary(text) for text in args.vary)
     refinement = Refinement(base, vary, args.quantity)
