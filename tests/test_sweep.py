@@ -563,3 +563,24 @@ def test_info_counts_a_failed_run_as_failed_and_names_inaccurate_runs(tmp_path, 
     assert "under-resolved" not in text
     assert "accuracy    1 of the finished runs end inaccurate" in text
     assert "|T/T_law - 1| = 0.3" in text
+
+
+def test_a_sweep_without_dask_is_refused_in_a_sentence(tmp_path, monkeypatch, capsys):
+    """granframe sweep and granframe refine need Dask (the sweep extra): without it they
+    say so before any store is made, not with an ImportError's traceback."""
+    import importlib.util
+
+    from granframe.tools.cli import main
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "distributed" else real(name, *a))
+    with pytest.raises(ValueError, match=r"^run_sweep: Dask \(distributed\) is not installed "
+                                         r".*pip install 'granframe\[sweep\]'"):
+        run_sweep(Sweep(BASE, product={"kernel": ["maxwell"]}), tmp_path / "s.zarr")
+    (tmp_path / "d.toml").write_text(RunDescription.from_dict(BASE).to_toml())
+    assert main(["refine", str(tmp_path / "d.toml"), "--vary", "time_step=0.02,0.01,0.005",
+                 "--quantity", "temperature@t=2", "--out", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "pip install 'granframe[sweep]'" in err
+    assert not (tmp_path / "s.zarr").exists() and not (tmp_path / "r" / "family.zarr").exists()

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import contextlib
 import copy
+import importlib.util
 import itertools
 import json
 import math
@@ -428,6 +429,10 @@ def run_sweep(sweep: Sweep, out, *, client=None, scheduler: str | None = None,
         the points refused before and not submitted again (refused).
     """
     _check_run_arguments(sweep, workers)
+    if importlib.util.find_spec("distributed") is None:
+        raise ValueError("run_sweep: Dask (distributed) is not installed here, and the runs of "
+                         "a sweep (granframe sweep, granframe refine) are Dask tasks: "
+                         "pip install 'granframe[sweep]'")
     if isinstance(processes, bool) or not isinstance(processes, int) or processes < 1:
         check.reject("run_sweep", "processes", processes, "must be a whole number >= 1 (MPI "
                      "processes per run)")
