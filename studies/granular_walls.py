@@ -27,6 +27,7 @@ killed with ``--resume`` (bitwise the run that was not killed).
 
 from __future__ import annotations
 
+import argparse
 import math
 
 import numpy
@@ -36,7 +37,8 @@ import granframe
 from granframe.backends import NumpyBackend
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
-from granframe.theory.walls import heated_walls_profile
+from granframe.run.refinement import grid_convergence
+from granframe.theory.walls import heated_walls_jump, heated_walls_profile
 from granframe.tools.analysis import energy_balance
 from granframe.tools.studykit import (cfl_time_step, draw, finish, json_text, number,
                                       output_folder, parse_study, print_table, run_study,
@@ -46,15 +48,23 @@ from granframe.velocity.moments import FieldMoments
 
 def description(e: float, knudsen: float, cells: int, n_modes: int, support: float,
                 final: float, time_step: float, quadrature: str = "auto",
-                snapshot_interval: float | None = None) -> RunDescription:
-    """3D hard spheres between diffuse walls at T_w = 1, from the Maxwellian of T = 1; f is
-    stored every ``snapshot_interval`` (None: at the end only), the points a run can be
-    resumed from."""
+                snapshot_interval: float | None = None,
+                start: str = "maxwellian") -> RunDescription:
+    """3D hard spheres between diffuse walls at T_w = 1, from the Maxwellian of T = 1
+    (``start = "maxwellian"``) or from the local Maxwellian of the Navier-Stokes profile
+    with the temperature jump (``"navier-stokes"``,
+    :func:`~granframe.theory.walls.heated_walls_maxwellian`: the run then relaxes in a few
+    mean free times, not in the heat-conduction time); f is stored every
+    ``snapshot_interval`` (None: at the end only), the points a run can be resumed from."""
+    initial = ({"name": "maxwellian"} if start == "maxwellian" else
+               {"name": "space_function",
+                "function": "granframe.theory.walls:heated_walls_maxwellian",
+                "params": {"restitution": e, "knudsen": knudsen}})
     return RunDescription(
         title=f"heated walls, e = {e:g}, Kn = {knudsen:g}, {cells} cells, N = {n_modes}",
         grid={"dimension": 3, "n_modes": n_modes, "support_radius": support},
         kernel="hard_spheres", restitution={"name": "constant", "value": e},
-        initial={"name": "maxwellian"}, integrator="ssp_rk2", conservative=True,
+        initial=initial, integrator="ssp_rk2", conservative=True,
         operator={"name": "fast_spectral", "quadrature": quadrature},
         knudsen=math.sqrt(2.0) * knudsen, time_step=time_step, final_time=final,
         output={"snapshot_interval": snapshot_interval or final},
@@ -123,45 +133,149 @@ def kinetic(ds, operator, knudsen: float) -> dict:
             "fields error by cell": errors}
 
 
+def against_jump(ds, e: float, knudsen: float) -> dict:
+    """The run's last profile against Navier-Stokes with the temperature jump
+    (:func:`~granframe.theory.walls.heated_walls_jump`), which has no free parameter: the
+    middle (x = 1/2, linear between the cell centres), the wall cells (mean of both), and
+    ``bulk T`` / ``bulk rho``: the largest |kinetic / Navier-Stokes - 1| over the cells whose
+    centres are at least 2 lambda_b from both walls (NaN where no cell is: the Knudsen
+    layers fill the gap)."""
+    theory = heated_walls_jump(e, knudsen)
+    cells = ds.sizes["x"]
+    x = ds.x.values
+    distance = numpy.abs(x - 0.5)
+    t_ns = numpy.interp(distance, theory["distance"], theory["temperature"])
+    rho_ns = theory["pressure"] / t_ns
+    temperature, density = ds.temperature.values[-1], ds.density.values[-1]
+
+    def middle(values):
+        return float(numpy.interp(0.5, x, values))
+
+    def wall(values):
+        return float(0.5 * (values[0] + values[-1]))
+
+    bulk = numpy.minimum(x, 1.0 - x) >= 2.0 * theory["lambda_b"]
+    worst = {}
+    for name, kinetic_values, ns in (("T", temperature, t_ns), ("rho", density, rho_ns)):
+        worst[f"bulk {name}"] = (float(numpy.max(numpy.abs(kinetic_values[bulk] / ns[bulk]
+                                                           - 1.0)))
+                                 if bulk.any() else math.nan)
+    return {"T(1/2)": middle(temperature), "NS T(1/2)": float(theory["temperature"][0]),
+            "rho(1/2)": middle(density), "NS rho(1/2)": float(theory["density"][0]),
+            "T wall cell": wall(temperature), "NS T wall cell": wall(t_ns),
+            "rho wall cell": wall(density), "NS rho wall cell": wall(rho_ns),
+            "NS T_b": theory["T_b"], "lambda_b": theory["lambda_b"],
+            "bulk cells": int(bulk.sum()), "cells": cells, **worst}
+
+
+#: the numbers of a run against Navier-Stokes with the jump that get error bars from a
+#: refinement (:func:`error_bars`)
+REFINED = ("T(1/2)", "rho(1/2)", "T wall cell", "rho wall cell")
+
+
+def error_bars(rows: list[dict], spacings: list) -> dict:
+    """Each of :data:`REFINED` over a refinement (``rows`` coarse to fine, ``spacings``
+    their h): the finest value, the observed order, the Richardson estimate and the grid
+    convergence index (:func:`granframe.run.refinement.grid_convergence`), and the
+    Navier-Stokes value beside it."""
+    out = {}
+    for key in REFINED:
+        result = grid_convergence([row[key] for row in rows], spacings)
+        out[key] = {name: result[name] for name in ("value", "order", "convergence",
+                                                    "extrapolated", "error_bar")}
+        out[key]["navier-stokes"] = rows[-1][f"NS {key}"]
+    return out
+
+
 def figure(stores, path) -> None:
-    """T/T_b and rho/rho_b of each run (cell averages, markers) against the Navier-Stokes
-    profile of its e and Kn (lines)."""
+    """T and rho of each run (cell averages, markers) against Navier-Stokes with the
+    temperature jump of its e and Kn (lines, :func:`against_jump`)."""
     import matplotlib.pyplot as plt  # the Agg backend: studykit chose it on import
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), layout="tight")
+    drawn = set()
     for store in stores:
         ds = granframe.open_run(store, time_axis="steps")
         description = RunDescription.from_toml(ds.attrs["description_toml"])
         e = description.restitution.params["value"]
         knudsen = description.knudsen / math.sqrt(2.0)
-        cells = ds.sizes["x"]
-        temperature, density = ds.temperature.values[-1], ds.density.values[-1]
-        t_b, rho_b = at_walls(temperature, cells), at_walls(density, cells)
-        theory = heated_walls_profile(e, knudsen)
+        label = (f"e = {e:g}, Kn = {knudsen:g}, N = {description.grid.n_modes}, "
+                 f"{ds.sizes['x']} cells")
+        line, = axes[0].plot(ds.x.values, ds.temperature.values[-1], "o", ms=4, label=label)
+        axes[1].plot(ds.x.values, ds.density.values[-1], "o", ms=4, color=line.get_color())
+        if (e, knudsen) in drawn:
+            continue
+        drawn.add((e, knudsen))
+        theory = heated_walls_jump(e, knudsen)
         y = theory["distance"]
         x = numpy.concatenate([0.5 - y[::-1], 0.5 + y[1:]])
-        profile = numpy.concatenate([theory["T/T_b"][::-1], theory["T/T_b"][1:]])
-        label = f"e = {e:g}, Kn = {knudsen:g}, N = {description.grid.n_modes}, {cells} cells"
-        line, = axes[0].plot(ds.x.values, temperature / t_b, "o", ms=4, label=label)
-        axes[0].plot(x, profile, "-", color=line.get_color(), lw=1)
-        axes[1].plot(ds.x.values, density / rho_b, "o", ms=4, color=line.get_color())
-        axes[1].plot(x, 1.0 / profile, "-", color=line.get_color(), lw=1)
-    axes[0].set_ylabel("T / T_b")
-    axes[1].set_ylabel("rho / rho_b")
+        for ax, key in zip(axes, ("temperature", "density")):
+            ax.plot(x, numpy.concatenate([theory[key][::-1], theory[key][1:]]), "-",
+                    color=line.get_color(), lw=1)
+    axes[0].set_ylabel("T")
+    axes[1].set_ylabel("rho")
     for ax in axes:
         ax.set_xlabel("x")
     low, high = axes[1].get_ylim()          # room above the profiles for the legend
     axes[1].set_ylim(low, high + 0.35 * (high - low))
     axes[1].legend(*axes[0].get_legend_handles_labels(), fontsize=7, loc="upper right")
-    fig.suptitle("heated walls, 3D hard spheres: granframe (markers), granular "
-                 "Navier-Stokes (lines); T_b, rho_b at the walls", fontsize=9)
+    fig.suptitle("heated walls (T_w = 1), 3D hard spheres: granframe (markers), granular "
+                 "Navier-Stokes with the temperature jump (lines)", fontsize=9)
     save_figure(fig, path, dpi=120)
+
+
+def run_member(args, out, n_modes: int, cells: int, time_step: float):
+    """One run of the study at (N, cells, dt): its table row and store."""
+    e, kn = args.restitution, args.knudsen
+    interval = None if args.snapshot_every is None else args.snapshot_every * time_step
+    run = Simulation(description(e, kn, cells, n_modes, args.support, args.final,
+                                 time_step, args.quadrature, interval, args.start))
+    store = out / f"walls_e{e:g}_kn{kn:g}_c{cells}_n{n_modes}.zarr"
+    result = run_study(run, store, args, **({"resume": True} if args.resume
+                                            else {"overwrite": True}))
+    ds = granframe.open_run(store, time_axis="steps")
+    theory = heated_walls_profile(e, kn)
+    row = {"e": e, "Kn": kn, "cells": cells, "N": n_modes, "S": args.support,
+           "quadrature": args.quadrature, "start": args.start, "dt": time_step,
+           "final": args.final, "seconds": result.wall_seconds,
+           "steps": int(ds.sizes["time"]) - 1, **kinetic(ds, run.problem.operator, kn),
+           "NS rho_b": theory["rho_b"], "NS T_min/T_b": theory["T_min/T_b"],
+           "NS rho_max/rho_b": theory["rho_max/rho_b"], **against_jump(ds, e, kn),
+           "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
+    (store.with_suffix(".json")).write_text(json_text(row, indent=1))
+    return row, store
+
+
+def refinement(text: str) -> tuple[str, list[int]]:
+    """An argparse type: ``n-modes=N1,N2,...`` or ``cells=C1,C2,...``, three or more
+    increasing integers (the family of :func:`error_bars`)."""
+    name, _, values = text.partition("=")
+    try:
+        members = [int(v) for v in values.split(",")]
+    except ValueError:
+        members = []
+    if (name not in ("n-modes", "cells") or len(members) < 3
+            or any(b <= a for a, b in zip(members[:-1], members[1:])) or members[0] < 1):
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not allowed: must be n-modes=N1,N2,N3 or cells=C1,C2,C3, three or "
+            "more increasing integers, coarse to fine")
+    return name, members
 
 
 def main(argv=None):
     parser = study_arguments(__doc__, n_modes=24, cells=12, final=3.0,
                              quick={"cells": 6, "final": 0.3})
     parser.add_argument("--knudsen", type=number(0.0), default=0.2, help="the Knudsen number")
+    parser.add_argument("--start", choices=("navier-stokes", "maxwellian"),
+                        default="navier-stokes",
+                        help="the initial data: the local Maxwellian of Navier-Stokes with "
+                             "the temperature jump (steady in a few mean free times), or the "
+                             "Maxwellian at rest with T = 1 (the heat-conduction time)")
+    parser.add_argument("--refine", type=refinement, default=None,
+                        metavar="n-modes=N1,N2,N3 | cells=C1,C2,C3",
+                        help="run the study at three or more resolutions, coarse to fine, "
+                             "all at the finest member's time step, and give its numbers "
+                             "error bars (observed order, Richardson, grid convergence index)")
     parser.add_argument("--steps", type=number(1, kind=int, low_open=False), default=None,
                         help="steps to the final time (default: the transport's CFL limit)")
     parser.add_argument("--snapshot-every", type=number(1, kind=int, low_open=False),
@@ -175,34 +289,36 @@ def main(argv=None):
     out = output_folder(args, figure, "walls.png")
     if out is None:
         return
-    e, kn = args.restitution, args.knudsen
-    grid = {"n_modes": args.n_modes, "support_radius": args.support}
-    time_step = (args.final / args.steps if args.steps
-                 else cfl_time_step(args.cells, args.final, grid))
-    interval = None if args.snapshot_every is None else args.snapshot_every * time_step
-    run = Simulation(description(e, kn, args.cells, args.n_modes, args.support, args.final,
-                                 time_step, args.quadrature, interval))
-    store = out / f"walls_e{e:g}_kn{kn:g}_c{args.cells}_n{args.n_modes}.zarr"
-    result = run_study(run, store, args, **({"resume": True} if args.resume
-                                            else {"overwrite": True}))
-    seconds = result.wall_seconds
-    ds = granframe.open_run(store, time_axis="steps")
-    measured = kinetic(ds, run.problem.operator, kn)
-    theory = heated_walls_profile(e, kn)
-    row = {"e": e, "Kn": kn, "cells": args.cells, "N": args.n_modes, "S": args.support,
-           "quadrature": args.quadrature, "dt": time_step, "final": args.final,
-           "seconds": seconds,
-           "steps": int(ds.sizes["time"]) - 1, **measured,
-           "NS rho_b": theory["rho_b"], "NS T_min/T_b": theory["T_min/T_b"],
-           "NS rho_max/rho_b": theory["rho_max/rho_b"],
-           "warnings": [str(w) for w in result.warnings + result.accuracy_warnings]}
-    print_table([row], {"e": "g", "Kn": "g", "N": "d", "cells": "d", "seconds": ".0f",
-                        "T_b": ".5g", "rho_b": ".5g", "T_min/T_b": ".5g",
-                        "NS T_min/T_b": ".5g", "rho_max/rho_b": ".5g",
-                        "NS rho_max/rho_b": ".5g"})
-    (store.with_suffix(".json")).write_text(json_text(row, indent=1))
-    print(f"table: {store.with_suffix('.json')}")
-    draw(figure, [store], out / "walls.png")
+    if args.refine is None:
+        family, spacings = [(args.n_modes, args.cells)], None
+    else:
+        name, values = args.refine
+        family = [(v, args.cells) if name == "n-modes" else (args.n_modes, v) for v in values]
+        spacings = [1.0 / v for v in values]
+    time_step = (args.final / args.steps if args.steps else min(
+        cfl_time_step(cells, args.final, {"n_modes": n, "support_radius": args.support})
+        for n, cells in family))
+    rows, stores = [], []
+    for n_modes, cells in family:
+        row, store = run_member(args, out, n_modes, cells, time_step)
+        rows.append(row)
+        stores.append(store)
+    print_table(rows, {"e": "g", "Kn": "g", "N": "d", "cells": "d", "seconds": ".0f",
+                       "T(1/2)": ".5f", "NS T(1/2)": ".5f", "rho(1/2)": ".5f",
+                       "NS rho(1/2)": ".5f", "T wall cell": ".5f", "NS T wall cell": ".5f",
+                       "bulk T": ".2g", "bulk rho": ".2g", "unsteadiness": ".2g",
+                       "residual": ".2g"})
+    if spacings is not None:
+        bars = error_bars(rows, spacings)
+        for key, v in bars.items():
+            shown = (f"{v['value']:.5f} ± {v['error_bar']:.2g} (order {v['order']:.3g})"
+                     if math.isfinite(v["error_bar"]) else f"{v['value']:.5f}")
+            print(f"{key}: {shown}, {v['convergence']}; Navier-Stokes {v['navier-stokes']:.5f}")
+        name = f"walls_e{args.restitution:g}_kn{args.knudsen:g}_refine_{args.refine}.json"
+        (out / name).write_text(json_text({"family": family, "spacings": spacings,
+                                           "rows": rows, "error bars": bars}, indent=1))
+        print(f"table: {out / name}")
+    draw(figure, stores, out / "walls.png")
 
 
 if __name__ == "__main__":

@@ -127,7 +127,7 @@ def test_a_quick_heated_gas_balances_its_energy_and_resumes_to_the_same_row(tmp_
     the middle; a second call with --resume finds the run finished and gives the same
     row, its warnings read back from the store."""
     argv = ["--out", str(tmp_path), "--n-modes", "16", "--cells", "6", "--final", "0.3",
-            "--snapshot-every", "3", "--resume", "--no-progress"]
+            "--start", "maxwellian", "--snapshot-every", "3", "--resume", "--no-progress"]
     rows = []
     for _ in range(2):
         WALLS.main(argv)
@@ -155,6 +155,42 @@ def test_a_quick_heated_gas_balances_its_energy_and_resumes_to_the_same_row(tmp_
         WALLS.main(argv[:-1] + ["--snapshot-every", "0"])
     assert ("argument --snapshot-every: '0' is not allowed: must be an integer in [1, inf]"
             in capsys.readouterr().err)
+
+
+def test_a_heated_gas_started_on_navier_stokes_with_the_jump_is_compared_with_it(tmp_path):
+    """From the local Maxwellian of Navier-Stokes with Sone's jump (Kn = 0.5, 6 cells,
+    N = 20, three steps): the middle and the wall cells are the theory's (the start) to
+    the few steps' change, the comparison names the theory's values, and at Kn = 0.5 no
+    cell is 2 mean free paths from both walls (no bulk)."""
+    from granframe.theory.walls import heated_walls_jump
+
+    d = WALLS.description(0.9, 0.5, 6, 20, 3.5, 0.03, 0.01, start="navier-stokes")
+    store = tmp_path / "ns.zarr"
+    Simulation(d).run(store, progress=False)
+    row = WALLS.against_jump(granframe.open_run(store, time_axis="steps"), 0.9, 0.5)
+    theory = heated_walls_jump(0.9, 0.5)
+    assert row["NS T(1/2)"] == theory["temperature"][0]
+    assert row["NS T_b"] == theory["T_b"] and row["lambda_b"] == 0.5 / theory["rho_b"]
+    for key in ("T(1/2)", "rho(1/2)", "T wall cell", "rho wall cell"):
+        assert row[key] == pytest.approx(row[f"NS {key}"], rel=0.02), key
+    assert row["bulk cells"] == 0 and math.isnan(row["bulk T"])
+
+
+def test_the_walls_study_gives_error_bars_and_refuses_a_bad_refinement(capsys):
+    """Rows that follow a + b h^2 get order 2, the limit a and the GCI of the finest, with
+    the Navier-Stokes value beside them; --refine needs three increasing members."""
+    spacings = [1 / 24, 1 / 28, 1 / 32]
+    rows = [{**{key: 1.0 + k + 3.0 * h * h for k, key in enumerate(WALLS.REFINED)},
+             **{f"NS {key}": 0.5 for key in WALLS.REFINED}} for h in spacings]
+    bars = WALLS.error_bars(rows, spacings)
+    for k, key in enumerate(WALLS.REFINED):
+        assert bars[key]["order"] == pytest.approx(2.0, abs=1e-9)
+        assert bars[key]["extrapolated"] == pytest.approx(1.0 + k, abs=1e-12)
+        assert bars[key]["navier-stokes"] == 0.5
+    for bad in ("n-modes=24,28", "cells=12,10,8", "modes=1,2,3", "cells=a,b,c"):
+        with pytest.raises(SystemExit):
+            WALLS.main(["--out", "unused", "--refine", bad])
+        assert f"argument --refine: '{bad}' is not allowed" in capsys.readouterr().err
 
 
 def _refuse_constant(name):

@@ -30,6 +30,7 @@ import numpy
 import scipy.integrate
 import scipy.optimize
 
+from granframe import validators as check
 from granframe.theory.sonine import transport_coefficients
 
 
@@ -51,8 +52,9 @@ def heated_walls_profile(restitution: float, knudsen: float) -> dict:
     Returns
     -------
     dict
-        ``rho_b``, ``Lambda``, ``T_min/T_b``, ``rho_max/rho_b``, and ``T/T_b`` at the 101
-        ``distance`` values from the centre (0 to 1/2).
+        ``rho_b``, ``Lambda``, ``T_min/T_b``, ``rho_max/rho_b``, ``T/T_b`` at the 101
+        ``distance`` values from the centre (0 to 1/2), and ``wall slope``, dW/dx at
+        x = 0 (into the gas: negative, the gas is colder inside).
     """
     coefficients = transport_coefficients(restitution)
     eps = math.sqrt(2.0) * knudsen
@@ -61,7 +63,7 @@ def heated_walls_profile(restitution: float, knudsen: float) -> dict:
     x = numpy.linspace(0.0, 0.5, 101)
     if c == 0.0:                                   # elastic: no sink, a uniform gas
         return {"rho_b": 1.0, "Lambda": 0.0, "T_min/T_b": 1.0, "rho_max/rho_b": 1.0,
-                "distance": x, "T/T_b": numpy.ones_like(x)}
+                "distance": x, "T/T_b": numpy.ones_like(x), "wall slope": 0.0}
 
     def shoot(beta):
         """From the centre: V = W/W_c with V(0) = 1, V'(0) = 0, V'' = beta V^(-1/3)
@@ -72,15 +74,76 @@ def heated_walls_profile(restitution: float, knudsen: float) -> dict:
         v = solution.y[0]
         w = v / v[-1]                              # W = V / V(1/2): W = 1 at the wall
         rho_b = 1.0 / (2.0 * scipy.integrate.simpson(w ** (-2.0 / 3.0), x=x))
-        return w, rho_b, beta * v[-1] ** (-4.0 / 3.0)    # Lambda = beta W_c^(4/3)
+        slope = -solution.y[1][-1] / v[-1]         # dW/dx at x = 0, into the gas
+        return w, rho_b, beta * v[-1] ** (-4.0 / 3.0), slope  # Lambda = beta W_c^(4/3)
 
     def mismatch(log_beta):
-        _, rho_b, lam = shoot(math.exp(log_beta))
+        _, rho_b, lam, _ = shoot(math.exp(log_beta))
         return math.log(lam / (c * rho_b * rho_b))
 
     log_beta = scipy.optimize.brentq(mismatch, math.log(1e-8), math.log(1e8), xtol=1e-13)
-    w, rho_b, lam = shoot(math.exp(log_beta))
+    w, rho_b, lam, slope = shoot(math.exp(log_beta))
     temperature = w ** (2.0 / 3.0)
     return {"rho_b": rho_b, "Lambda": lam, "T_min/T_b": float(temperature[0]),
             "rho_max/rho_b": float(1.0 / temperature[0]), "distance": x,
-            "T/T_b": temperature}
+            "T/T_b": temperature, "wall slope": float(slope)}
+
+
+#: The temperature-jump coefficient of hard spheres under diffuse reflection,
+#: T - T_w = c lambda dT/dn at the wall (n into the gas, lambda = 1/(sqrt 2 n pi sigma^2)
+#: the hard-sphere mean free path): Sone's d_1 = 2.4001 in his unit k = (sqrt(pi)/2)
+#: lambda/L (Y. Sone, T. Ohwada & K. Aoki, Phys. Fluids A 1 (1989) 363; Y. Sone,
+#: *Molecular Gas Dynamics*, Birkhauser 2007, table 3.1), so c = 2.4001 sqrt(pi)/2.
+HARD_SPHERE_JUMP = 2.4001 * math.sqrt(math.pi) / 2.0
+
+
+def heated_walls_jump(restitution: float, knudsen: float,
+                      jump: float = HARD_SPHERE_JUMP) -> dict:
+    r"""The steady Navier-Stokes profile between the walls with a temperature jump at them:
+    the gas next to a wall at T_w = 1 is at
+
+        T_b = 1 + c lambda_b dT/dx|_{x=0},   lambda_b = eps/(sqrt 2 rho_b) = Kn/rho_b,
+
+    c = ``jump`` (:data:`HARD_SPHERE_JUMP`, Sone's first-order jump of the elastic
+    hard-sphere gas; its change with e is of order 1 - e and is not included). The shape
+    W = (T/T_b)^{3/2} and rho_b do not depend on T_b (:func:`heated_walls_profile`), and
+    T = T_b W^{2/3} gives dT/dx|_0 = (2/3) T_b W'(0), so the jump fixes T_b in closed form,
+
+        T_b = 1 / (1 - (2/3) c (Kn/rho_b) W'(0)),
+
+    and with it the absolute profiles T(x) = T_b W^{2/3}, rho(x) = rho_b T_b / T(x)
+    (p = rho_b T_b uniform). Valid outside the walls' Knudsen layers (a few lambda_b),
+    where Sone's asymptotic theory adds a layer correction that decays exponentially.
+
+    Returns
+    -------
+    dict
+        The entries of :func:`heated_walls_profile` and ``T_b``, ``pressure``, ``lambda_b``,
+        and ``temperature``, ``density`` at the ``distance`` values from the centre.
+    """
+    if not (math.isfinite(jump) and jump >= 0.0):
+        check.reject("heated_walls_jump", "jump", jump, "a finite number >= 0")
+    profile = heated_walls_profile(restitution, knudsen)
+    lambda_b = knudsen / profile["rho_b"]
+    t_b = 1.0 / (1.0 - (2.0 / 3.0) * jump * lambda_b * profile["wall slope"])
+    temperature = t_b * profile["T/T_b"]
+    return {**profile, "T_b": t_b, "pressure": profile["rho_b"] * t_b,
+            "lambda_b": lambda_b, "temperature": temperature,
+            "density": profile["rho_b"] * t_b / temperature}
+
+
+def heated_walls_maxwellian(x, v1, v2, v3, restitution: float, knudsen: float):
+    r"""The local Maxwellian at rest of :func:`heated_walls_jump`'s profile on [0, 1],
+
+        f = rho(x) (2 pi T(x))^{-3/2} exp(-|v|^2 / (2 T(x))),
+
+    the initial data of a run that starts at the Navier-Stokes state (``initial = {name =
+    "space_function", function = "granframe.theory.walls:heated_walls_maxwellian",
+    params = {restitution = E, knudsen = KN}}``): it relaxes to the kinetic steady state
+    in a few mean free times instead of the heat-conduction time from a uniform gas."""
+    result = heated_walls_jump(restitution, knudsen)
+    distance = numpy.abs(numpy.asarray(x, dtype=float) - 0.5)
+    temperature = numpy.interp(distance, result["distance"], result["temperature"])
+    density = result["pressure"] / temperature
+    return (density / (2.0 * math.pi * temperature) ** 1.5
+            * numpy.exp(-(v1 ** 2 + v2 ** 2 + v3 ** 2) / (2.0 * temperature)))
