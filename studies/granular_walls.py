@@ -40,19 +40,9 @@ from granframe.run.refinement import grid_convergence
 from granframe.run.runner import Simulation
 from granframe.theory.walls import heated_walls_jump, heated_walls_profile
 from granframe.tools.analysis import energy_balance
-from granframe.tools.studykit import (
-    cfl_time_step,
-    draw,
-    finish,
-    json_text,
-    number,
-    output_folder,
-    parse_study,
-    print_table,
-    run_study,
-    save_figure,
-    study_arguments,
-)
+from granframe.tools.studykit import (cfl_time_step, draw, finish, json_text, number,
+                                      output_folder, parse_study, print_table, run_study,
+                                      save_figure, study_arguments)
 from granframe.velocity.moments import FieldMoments
 
 
