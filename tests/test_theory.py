@@ -14,12 +14,13 @@ from granframe.theory.cooling import maxwellian_cooling_rate, relative_speed_ave
 from granframe.theory.euler import (euler_riemann, euler_riemann_cell_averages,
                                     euler_riemann_star, granular_euler_piston, piston_speed,
                                     rankine_hugoniot)
-from granframe.theory.modes import (density_response, heat_critical_wavenumber, heat_mode,
-                                    heat_mode_index, longitudinal_matrix,
-                                    longitudinal_maxwellian, shear_mode)
+from granframe.theory.modes import (cooling_rate_burnett, density_response,
+                                    heat_critical_wavenumber, heat_mode, heat_mode_index,
+                                    longitudinal_matrix, longitudinal_maxwellian, shear_mode)
 from granframe.theory.sonine import (elastic_viscosity, hard_sphere_cooling_rate,
                                      reference_frequency, transport_coefficients)
-from granframe.theory.walls import heated_walls_profile
+from granframe.theory.walls import (HARD_SPHERE_JUMP, heated_walls_jump,
+                                    heated_walls_maxwellian, heated_walls_profile)
 
 SOD = ((1.0, 0.0, 1.0), (0.125, 0.0, 0.1))
 
@@ -323,6 +324,67 @@ def test_the_reduced_wall_problem_is_the_granular_energy_balance(e, knudsen):
     assert minimum == pytest.approx(expected["T_min/T_b"], rel=1e-8)
 
 
+@pytest.mark.parametrize("e, knudsen", [(0.9, 0.2), (0.97, 0.1)])
+def test_the_temperature_jump_profile_solves_the_balance_with_the_jump_at_both_walls(
+        e, knudsen):
+    """heated_walls_jump against the energy balance solved as a boundary-value problem for
+    T, the flux and the mass with p unknown and Sone's jump at both walls, T - 1 =
+    c lambda dT/dn with lambda = Kn/rho = Kn T/p and n into the gas: T_b, p and the middle's
+    T and rho agree; without the jump (c = 0) the gas at the walls is at T_w."""
+    c = transport_coefficients(e)
+    eps = math.sqrt(2.0) * knudsen
+    jump = HARD_SPHERE_JUMP
+
+    def conductivity(temperature):
+        return 75 / 64 * eps * numpy.sqrt(math.pi * temperature) * (c["kappa*"] - c["mu*"])
+
+    def balance(x, y, p):
+        temperature, flux, _ = y
+        rho = p[0] / temperature
+        nu0 = 16 * rho * numpy.sqrt(temperature) / (5 * eps * math.sqrt(math.pi))
+        return numpy.vstack([flux / conductivity(temperature),
+                             1.5 * nu0 * c["zeta*"] * rho * temperature, rho])
+
+    def ends(left, right, p):
+        slope_left = left[1] / conductivity(left[0])
+        slope_right = right[1] / conductivity(right[0])
+        return numpy.array([
+            left[0] - 1.0 - jump * knudsen * left[0] / p[0] * slope_left,
+            right[0] - 1.0 + jump * knudsen * right[0] / p[0] * slope_right,
+            left[2], right[2] - 1.0])
+
+    x = numpy.linspace(0.0, 1.0, 201)
+    guess = numpy.vstack([0.8 * numpy.ones_like(x), numpy.zeros_like(x), x])
+    solution = scipy.integrate.solve_bvp(balance, ends, x, guess, p=[0.8], tol=1e-10)
+    assert solution.status == 0
+    expected = heated_walls_jump(e, knudsen)
+    assert solution.p[0] == pytest.approx(expected["pressure"], rel=1e-7)
+    assert solution.sol(0.0)[0] == pytest.approx(expected["T_b"], rel=1e-7)
+    assert solution.sol(0.5)[0] == pytest.approx(expected["temperature"][0], rel=1e-7)
+    assert expected["T_b"] < 0.9 and expected["lambda_b"] == knudsen / expected["rho_b"]
+    mass = 2 * scipy.integrate.simpson(expected["density"], x=expected["distance"])
+    assert mass == pytest.approx(1.0, abs=1e-9)
+    assert heated_walls_jump(e, knudsen, jump=0.0)["T_b"] == 1.0
+    with pytest.raises(ValueError, match="jump"):
+        heated_walls_jump(e, knudsen, jump=-1.0)
+
+
+def test_the_navier_stokes_start_of_the_heated_walls_is_its_local_maxwellian():
+    """heated_walls_maxwellian has the density and temperature of heated_walls_jump at x
+    (moments on a fine velocity grid) and no mean velocity."""
+    theory = heated_walls_jump(0.9, 0.2)
+    v = numpy.linspace(-8, 8, 81)
+    v1, v2, v3 = numpy.meshgrid(v, v, v, indexing="ij")
+    dv = (v[1] - v[0]) ** 3
+    for x, distance_index in ((0.5, 0), (0.0, -1)):
+        f = heated_walls_maxwellian(x, v1, v2, v3, 0.9, 0.2)
+        rho = f.sum() * dv
+        temperature = (f * (v1 ** 2 + v2 ** 2 + v3 ** 2)).sum() * dv / (3 * rho)
+        assert rho == pytest.approx(theory["density"][distance_index], rel=1e-9)
+        assert temperature == pytest.approx(theory["temperature"][distance_index], rel=1e-9)
+        assert abs((f * v1).sum() * dv) < 1e-12
+
+
 # -- Euler: the Riemann problem, Rankine-Hugoniot, the granular Euler equations -----------
 
 @pytest.mark.parametrize("left,right,p_star,u_star", [
@@ -473,3 +535,165 @@ def test_the_granular_euler_solver_conserves_mass_and_energy_between_reflecting_
               + run["density"] * run["temperature"]).sum(axis=1) * dx
     assert numpy.abs(mass / mass[0] - 1).max() < 1e-13
     assert numpy.abs(energy / energy[0] - 1).max() < 1e-13
+
+
+# -- The Burnett part of the cooling rate -------------------------------------------------------
+
+def test_the_burnett_cooling_terms_vanish_as_one_minus_e_squared_in_the_elastic_limit():
+    """zeta^(2) = (3/16) zeta_M c_2: at e = 1 the coefficients vanish, with the elastic
+    first-Sonine lambda* = 2/3 and xi_T = 2 kappa*/lambda* = 3, xi_n = 0, and near it they
+    go as (1 - e^2): zeta_T*/(1 - e^2) -> (3/16)(5/12) 3 = 15/64 (zeta_n* is smaller by
+    a factor O(1 - e): mu* and zeta* xi_T vanish with it); the matrix is then the
+    Navier-Stokes one."""
+    b = cooling_rate_burnett(1.0)
+    assert b["zeta_T*"] == 0.0 and b["zeta_n*"] == 0.0 and b["xi_n"] == 0.0
+    assert b["lambda*"] == pytest.approx(2 / 3, rel=1e-15)
+    assert b["xi_T"] == pytest.approx(3.0, rel=1e-15)
+    for e in (0.999, 0.9999):
+        b = cooling_rate_burnett(e)
+        assert b["zeta_T*"] / (1 - e * e) == pytest.approx(15 / 64, rel=5 * (1 - e))
+        assert abs(b["zeta_n*"]) < 3 * (1 - e) * b["zeta_T*"]
+    assert numpy.array_equal(longitudinal_matrix(1.0, 0.3, burnett="cooling"),
+                             longitudinal_matrix(1.0, 0.3))
+
+
+def test_the_burnett_option_off_is_the_navier_stokes_matrix_and_on_adds_its_terms():
+    """burnett=False is the Navier-Stokes matrix exactly (its closed form, with and without
+    zeta/conduction); "cooling" adds k*^2 zeta_n* to M[2, 0] and k*^2 zeta_T* to
+    M[2, 2] and nothing else; "stress" -gamma* k*^3 to M[1, 0] and -(gamma* - beta*) k*^3
+    to M[1, 2] (gamma*, beta* = (2/3) omega_{2,3} eta*^2, Chapman & Cowling's 2.028 and
+    2.418); True both; k*_h without them is the closed form; a name not among them is
+    refused by name."""
+    for e, k in ((0.9, 0.13), (0.5, 0.4)):
+        c = transport_coefficients(e)
+        closed = numpy.array([
+            [0.0, k, 0.0],
+            [-k, c["zeta*"] / 2 - 4 / 3 * c["eta*"] * k ** 2, -k],
+            [-(c["zeta*"] + 2.5 * c["mu*"] * k ** 2), 2 / 3 * k,
+             -(c["zeta*"] / 2 + 2.5 * c["kappa*"] * k ** 2)]])
+        assert numpy.array_equal(longitudinal_matrix(e, k), closed)
+        assert numpy.array_equal(longitudinal_matrix(e, k, burnett=False), closed)
+        assert numpy.array_equal(longitudinal_matrix(e, k, 0.1, 1.2, burnett=False),
+                                 longitudinal_matrix(e, k, 0.1, 1.2))
+        b = cooling_rate_burnett(e)
+        change = longitudinal_matrix(e, k, burnett="cooling") - closed
+        expected = numpy.zeros((3, 3))
+        expected[2, 0], expected[2, 2] = b["zeta_n*"] * k * k, b["zeta_T*"] * k * k
+        assert numpy.allclose(change, expected, rtol=1e-14, atol=1e-16)
+        gamma = 2 / 3 * 2.028 * c["eta*"] ** 2
+        beta = 2 / 3 * 2.418 * c["eta*"] ** 2
+        stress = numpy.zeros((3, 3))
+        stress[1, 0], stress[1, 2] = -gamma * k ** 3, -(gamma - beta) * k ** 3
+        assert numpy.allclose(longitudinal_matrix(e, k, burnett="stress") - closed, stress,
+                              rtol=1e-14, atol=1e-16)
+        assert numpy.allclose(longitudinal_matrix(e, k, burnett=True) - closed,
+                              expected + stress, rtol=1e-14, atol=1e-16)
+        assert heat_critical_wavenumber(e) == heat_critical_wavenumber(e, burnett=False)
+        assert heat_critical_wavenumber(e) == math.sqrt(c["zeta*"] / (5 * (c["kappa*"] - c["mu*"])))
+    with pytest.raises(ValueError, match=r"^longitudinal_matrix: parameter 'burnett' = "
+                                         r"'heat' is invalid; must be False, True or names"):
+        longitudinal_matrix(0.9, 0.1, burnett="heat")
+
+
+@pytest.mark.parametrize("parts, ratios", [
+    ("cooling", (1.0083, 1.0144, 1.0021)), ("stress", (0.9712, 0.9382, 0.7882)),
+    (True, (0.9789, 0.9505, 0.7973))])
+def test_the_burnett_heat_threshold_is_where_its_determinant_vanishes(parts, ratios):
+    """With the Burnett terms det M(k*_h) = 0, one growing mode just below and none just
+    above, the heat mode there has w = 0 and p + P_xx^(2) uniform (the second row's balance)
+    with rate 0; k*_h/k*_h(first Sonine) at e = 0.9, 0.8, 0.5 as docs/granular.md quotes;
+    refused below e = 0.1878 as without the terms."""
+    for e, ratio in zip((0.9, 0.8, 0.5), ratios):
+        k_h = heat_critical_wavenumber(e, burnett=parts)
+        assert k_h / heat_critical_wavenumber(e) == pytest.approx(ratio, abs=1e-4)
+        matrix = longitudinal_matrix(e, k_h, burnett=parts)
+        assert numpy.linalg.det(matrix) == pytest.approx(0.0, abs=1e-16)
+        below = numpy.linalg.eigvals(longitudinal_matrix(e, 0.99 * k_h, burnett=parts))
+        above = numpy.linalg.eigvals(longitudinal_matrix(e, 1.01 * k_h, burnett=parts))
+        assert sum(v.real > 0 for v in below) == 1
+        assert all(v.real < 0 for v in above)
+        rate, vector = heat_mode(e, k_h, burnett=parts)
+        assert rate == pytest.approx(0.0, abs=1e-14)
+        assert abs(vector[1]) < 1e-12 and abs(matrix[1] @ vector) < 1e-12
+    with pytest.raises(ValueError, match="0.1878"):
+        heat_critical_wavenumber(0.15, burnett=parts)
+
+
+def _collision_moment_response(e, weight):
+    """d/da at a = 0 of int weight(v) J[f, f] dv for f = f_M (1 + a S_2(v^2/2)) (n = T = 1,
+    sigma^2 = 1/pi, i.e. eps = 1), by product Gauss quadrature: v_1,2 = G +- g/2 with
+    G ~ N(0, 1/2) (Gauss-Hermite), u = g^2/4 (Gauss-Laguerre; by isotropy g along z) and
+    the hemisphere sigma.g > 0 (Gauss-Legendre in cos, uniform in the azimuth): exact for
+    these polynomial weights, independent of the closed forms."""
+    xh, wh = numpy.polynomial.hermite.hermgauss(5)
+    xl, wl = numpy.polynomial.laguerre.laggauss(6)
+    xc, wc = numpy.polynomial.legendre.leggauss(6)
+    cos, w_cos = (xc + 1) / 2, wc / 2
+    phi = 2 * math.pi * numpy.arange(8) / 8
+    big = numpy.stack(numpy.meshgrid(xh, xh, xh, indexing="ij"), -1).reshape(-1, 3)
+    w_big = numpy.einsum("i,j,k->ijk", wh, wh, wh).ravel() / math.pi ** 1.5
+    sin = numpy.sqrt(1 - cos ** 2)[:, None]
+    unit = numpy.stack([sin * numpy.cos(phi), sin * numpy.sin(phi),
+                        numpy.repeat(cos[:, None], 8, 1)], -1).reshape(-1, 3)
+    w_unit = (w_cos[:, None] * numpy.full(8, 2 * math.pi / 8)).ravel()
+
+    def sonine(x):
+        return x * x / 2 - 2.5 * x + 15 / 8
+
+    total = 0.0
+    for u, w_u in zip(xl, wl):
+        g = numpy.array([0.0, 0.0, 2 * math.sqrt(u)])
+        s = unit @ g
+        v1, v2 = big[:, None, :] + g / 2, big[:, None, :] - g / 2
+        kick = (1 + e) / 2 * s[None, :, None] * unit[None]
+        change = weight(v1 - kick) + weight(v2 + kick) - weight(v1) - weight(v2)
+        sonines = sonine((v1 ** 2).sum(-1) / 2) + sonine((v2 ** 2).sum(-1) / 2)
+        total += ((4 * math.pi) ** -1.5 * 4 * math.pi * 4 * math.sqrt(u) * w_u
+                  * numpy.einsum("i,j,ij->", w_big, s * w_unit / (2 * math.pi), change * sonines))
+    return total
+
+
+def test_the_burnett_collision_integrals_against_a_quadrature_of_the_collision_operator():
+    """The two collision integrals behind cooling_rate_burnett, by quadrature of the
+    inelastic hard-sphere collision operator: the fourth-moment element
+    lambda* = -int v^4 L... = (1 + e)(271 - 207 e + 30 e^2 - 30 e^3)/192 (per nu_0, per
+    15 n T^2) and the cooling rate's response (3/16) zeta_M* to the S_2 amplitude."""
+    nu0 = reference_frequency(1.0, 1.0, 1.0)
+    for e in (0.9, 0.8, 0.5):
+        fourth = _collision_moment_response(e, lambda v: ((v ** 2).sum(-1)) ** 2)
+        energy = _collision_moment_response(e, lambda v: (v ** 2).sum(-1) / 2)
+        assert -fourth / (15 * nu0) == pytest.approx(cooling_rate_burnett(e)["lambda*"],
+                                                     rel=1e-12)
+        assert -energy / (1.5 * nu0) == pytest.approx(3 / 16 * 5 / 12 * (1 - e * e), rel=1e-12)
+
+
+def test_the_burnett_matrix_is_the_small_k_limit_of_a_moment_model_of_the_kinetic_equation():
+    """An independent check of the Chapman-Enskog algebra (the d_t^(0) terms): the linear
+    moment equations of (rho', w, theta, q, c_2), taken from the raw moments int v_x v^2 f
+    and int v^4 f of the Boltzmann equation with f = f^(0)(n, u, T) + f_M (q-part + c_2 S_2),
+    the same first-Sonine elements (nu_kappa*, lambda*, a_2 in f^(0)) and no viscous stress.
+    Its three hydrodynamic eigenvalues multiply to det M(k*) of longitudinal_matrix: with
+    the Burnett cooling terms to O(k*^6) (relative error falling 16-fold when k* halves), without
+    them only to O(k*^4) (4-fold)."""
+    def moments(e, k):
+        c = transport_coefficients(e)
+        z, a2, zm = c["zeta*"], c["a2"], 5 / 12 * (1 - e * e)
+        nu_q = (1 + e) / 3 * (1 + 33 * (1 - e) / 16 + (19 - 3 * e) * a2 / 512)
+        lam = cooling_rate_burnett(e)["lambda*"]
+        return numpy.array([
+            [0, k, 0, 0, 0],
+            [-k, z / 2, -k, 0, 0],
+            [-z, 2 / 3 * k, -z / 2, 2 / 3 * k, -3 / 16 * zm],
+            [-2.5 * k * a2, 0, -2.5 * k * (1 + 2 * a2), 1.5 * z - nu_q, -2.5 * k],
+            [0, 0, 0, 8 / 15 * k, -(lam - 2 * z - 3 / 8 * zm)]])
+
+    for e in (0.9, 0.8):
+        errors = {}
+        for k in (0.02, 0.01):
+            values = numpy.linalg.eigvals(moments(e, k))
+            product = numpy.prod(values[numpy.argsort(-values.real)][:3]).real
+            errors[k] = [abs(product / numpy.linalg.det(longitudinal_matrix(e, k, burnett=b)) - 1)
+                         for b in ("cooling", False)]
+        assert errors[0.02][0] / errors[0.01][0] == pytest.approx(16, rel=0.1)
+        assert errors[0.02][1] / errors[0.01][1] == pytest.approx(4, rel=0.1)
+        assert errors[0.01][0] < 1e-6 < errors[0.01][1] / 50
