@@ -215,7 +215,9 @@ def heat_comparison(ds, e: float, length: float, skip: float, knudsen: float = 1
     late``: that of :func:`heat_projection`) against Navier-Stokes, lambda_h nu_0(T_g)
     (:func:`~granframe.theory.modes.heat_mode` at k* = k sqrt(T_g)/nu_0(T_g)), with the
     first Sonine zeta* and with the run's own zeta_g/nu_0(T_g) (:func:`cooling_rate`), T_g
-    the run's mean temperature at the end; and ``conduction``, the factor f on
+    the run's mean temperature at the end, and with the linear Burnett terms as well
+    (``Burnett rate with zeta_g``, :func:`~granframe.theory.modes.longitudinal_matrix`
+    with ``burnett=True``); and ``conduction``, the factor f on
     kappa* - mu* (both scaled) that makes the Navier-Stokes rate with zeta_g the measured
     one, whence the kinetic k_h / k_h(first Sonine) = 1/sqrt(f) (k_h^2 = zeta*/(5 f
     (kappa* - mu*)), :func:`~granframe.theory.modes.heat_critical_wavenumber`); f is NaN
@@ -245,6 +247,7 @@ def heat_comparison(ds, e: float, length: float, skip: float, knudsen: float = 1
             "sound/heat": fit["sound/heat"], "fit rms": fit["rms"],
             "Navier-Stokes rate": heat_mode(e, k_star)[0] * nu0,
             "Navier-Stokes rate with zeta_g": heat_mode(e, k_star, zeta_g)[0] * nu0,
+            "Burnett rate with zeta_g": heat_mode(e, k_star, zeta_g, burnett=True)[0] * nu0,
             "conduction": factor, "k_h/k_h Sonine": 1.0 / math.sqrt(factor)}
 
 
