@@ -139,7 +139,9 @@ def against_jump(ds, e: float, knudsen: float) -> dict:
     middle (x = 1/2, linear between the cell centres), the wall cells (mean of both), and
     ``bulk T`` / ``bulk rho``: the largest |kinetic / Navier-Stokes - 1| over the cells whose
     centres are at least 2 lambda_b from both walls (NaN where no cell is: the Knudsen
-    layers fill the gap)."""
+    layers fill the gap); ``T(1/2) swing``, ``rho(1/2) swing``: half the range of the
+    middle's value over the run's last third (the sound the start excites, which the run
+    has not damped: the time's share of the error)."""
     theory = heated_walls_jump(e, knudsen)
     cells = ds.sizes["x"]
     x = ds.x.values
@@ -154,6 +156,12 @@ def against_jump(ds, e: float, knudsen: float) -> dict:
     def wall(values):
         return float(0.5 * (values[0] + values[-1]))
 
+    times = ds.time.values
+    late = times >= times[-1] * 2.0 / 3.0
+    swings = {}
+    for name, history in (("T", ds.temperature.values), ("rho", ds.density.values)):
+        middles = numpy.array([numpy.interp(0.5, x, values) for values in history[late]])
+        swings[f"{name}(1/2) swing"] = float(0.5 * (middles.max() - middles.min()))
     bulk = numpy.minimum(x, 1.0 - x) >= 2.0 * theory["lambda_b"]
     worst = {}
     for name, kinetic_values, ns in (("T", temperature, t_ns), ("rho", density, rho_ns)):
@@ -165,7 +173,7 @@ def against_jump(ds, e: float, knudsen: float) -> dict:
             "T wall cell": wall(temperature), "NS T wall cell": wall(t_ns),
             "rho wall cell": wall(density), "NS rho wall cell": wall(rho_ns),
             "NS T_b": theory["T_b"], "lambda_b": theory["lambda_b"],
-            "bulk cells": int(bulk.sum()), "cells": cells, **worst}
+            "bulk cells": int(bulk.sum()), "cells": cells, **worst, **swings}
 
 
 #: the numbers of a run against Navier-Stokes with the jump that get error bars from a
