@@ -10,7 +10,9 @@ use nothing of granframe but NumPy, SciPy and its validators.
 - :mod:`granframe.theory.euler`: the exact Riemann solver of the Euler equations (Toro),
   the piston problem's Rankine-Hugoniot state, and a finite-volume solver of the granular
   Euler equations;
-- :mod:`granframe.theory.walls`: the granular Navier-Stokes profile between two heated walls;
+- :mod:`granframe.theory.walls`: the granular Navier-Stokes profile between two heated walls,
+  with Sone's temperature jump;
+- :mod:`granframe.theory.shock`: the Navier-Stokes profile of a normal shock of hard spheres;
 - :mod:`granframe.theory.cells`: cell averages of piecewise-smooth profiles.
 
 Temperature, pressure and heat flux follow granframe's conventions: T = int |v-u|^2 f dv
