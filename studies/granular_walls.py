@@ -322,7 +322,8 @@ def main(argv=None):
             shown = (f"{v['value']:.5f} ± {v['error_bar']:.2g} (order {v['order']:.3g})"
                      if math.isfinite(v["error_bar"]) else f"{v['value']:.5f}")
             print(f"{key}: {shown}, {v['convergence']}; Navier-Stokes {v['navier-stokes']:.5f}")
-        name = f"walls_e{args.restitution:g}_kn{args.knudsen:g}_refine_{args.refine}.json"
+        name = (f"walls_e{args.restitution:g}_kn{args.knudsen:g}_refine_{args.refine[0]}"
+                f"{'-'.join(map(str, args.refine[1]))}.json")
         (out / name).write_text(json_text({"family": family, "spacings": spacings,
                                            "rows": rows, "error bars": bars}, indent=1))
         print(f"table: {out / name}")
