@@ -159,12 +159,12 @@ def test_a_quick_heated_gas_balances_its_energy_and_resumes_to_the_same_row(tmp_
 
 def test_a_heated_gas_started_on_navier_stokes_with_the_jump_is_compared_with_it(tmp_path):
     """From the local Maxwellian of Navier-Stokes with Sone's jump (Kn = 0.5, 6 cells,
-    N = 20, three steps): the middle and the wall cells are the theory's (the start) to
-    the few steps' change, the comparison names the theory's values, and at Kn = 0.5 no
+    N = 20, one step): the middle and the wall cells are the theory's (the start) to the
+    step's change, the comparison names the theory's values, and at Kn = 0.5 no
     cell is 2 mean free paths from both walls (no bulk)."""
     from granframe.theory.walls import heated_walls_jump
 
-    d = WALLS.description(0.9, 0.5, 6, 20, 3.5, 0.03, 0.01, start="navier-stokes")
+    d = WALLS.description(0.9, 0.5, 6, 20, 3.5, 0.01, 0.01, start="navier-stokes")
     store = tmp_path / "ns.zarr"
     Simulation(d).run(store, progress=False)
     row = WALLS.against_jump(granframe.open_run(store, time_axis="steps"), 0.9, 0.5)
@@ -414,10 +414,10 @@ VIBRATED = _study("granular_vibrated")
 def test_the_wall_speed_of_the_uniform_balance_puts_in_what_the_gas_dissipates():
     """x = V / sqrt(T) of the uniform gas: sqrt(T / 2 pi) Delta e(V, T) = (d/2) zeta_1
     T^(3/2) / eps at T = 1 and (by the scaling of the specular layer) at T = 2, and x^2 is
-    the leading order's within its V^4 correction."""
+    the leading order's within its V^4 correction (e = 0.8, the largest V of the study)."""
     from granframe.space import exact
 
-    for e in (0.95, 0.8):
+    for e in (0.8,):
         x = VIBRATED.wall_speed_ratio(e, 0.5)
         zeta = VIBRATED.cooling_coefficient(e)
         assert VIBRATED.uniform_temperature(e, 0.5, x) == pytest.approx(1.0, rel=1e-12)
