@@ -48,15 +48,8 @@ from granframe.testing.dsmc import (
     run_shock,
 )
 from granframe.theory.shock import navier_stokes_shock
-from granframe.tools.studykit import (
-    finish,
-    json_text,
-    number,
-    numbers,
-    parse_study,
-    print_table,
-    save_figure,
-)
+from granframe.tools.studykit import (finish, json_text, number, numbers, parse_study,
+                                      print_table, quick_option, save_figure)
 
 #: published hard-sphere lambda_1/delta at these Mach numbers: none was found by the
 #: library search (Bird 1994 ch. 12, Ohwada 1993, Erwin et al. 1991 were not readable
@@ -93,14 +86,8 @@ def arguments():
                         help="batches of the sampling period (batch means)")
     parser.add_argument("--seed", type=number(0, kind=int, low_open=False), default=1,
                         help="random seed")
-    quick = {"particles_per_cell": 20.0, "sampling": 8.0, "transient": 2.0,
-             "refine_fraction": 0.25, "batches": 8}
-    shown = ", ".join(f"--{k.replace('_', '-')} {v:g}" for k, v in quick.items())
-    parser.add_argument("--quick", action="store_true",
-                        help=f"a small version to try the study ({shown}); options given "
-                             "explicitly still win")
-    parser.set_defaults(quick_settings=quick)
-    return parser
+    return quick_option(parser, {"particles_per_cell": 20.0, "sampling": 8.0,
+                                 "transient": 2.0, "refine_fraction": 0.25, "batches": 8})
 
 
 def result_row(result) -> dict:

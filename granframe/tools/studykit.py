@@ -88,8 +88,16 @@ def study_arguments(doc: str, n_modes: int, cells: int, final: float | None,
                         help="draw these runs into a figure in OUT and stop")
     parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                         help="a progress bar per run (default: on a terminal only)")
+    return quick_option(parser, quick)
+
+
+def quick_option(parser, quick: dict | None):
+    """Add ``--quick`` to ``parser``: option -> value of the study's small version, shown in
+    its help and applied by :func:`parse_study` where the option is not given explicitly."""
     quick = dict(quick or {})
-    shown = ", ".join(f"--{key.replace('_', '-')} {value}" for key, value in quick.items())
+    shown = ", ".join(f"--{key.replace('_', '-')} "
+                      f"{format(value, 'g') if isinstance(value, float) else value}"
+                      for key, value in quick.items())
     parser.add_argument("--quick", action="store_true",
                         help=f"a small version to try the study ({shown or 'as given'}); "
                              "options given explicitly still win")
