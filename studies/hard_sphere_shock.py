@@ -13,6 +13,15 @@ long; the change between the two against the combined error bars; the Navier-Sto
 (Gilbarg-Paolucci) lambda_1/delta with the first Chapman-Enskog mu and kappa
 (granframe.theory.shock).
 
+With ``--spectral N[,N...]``: granframe's own run of the shock (:func:`spectral_description`:
+the piston problem in the wall's frame, 3D hard spheres, e = 1, the default hierarchy of
+collision models, cells of ``--spectral-cells-per-path`` per lambda_1), its lambda_1/delta
+read off the cell averages by :func:`spline_inverse_thickness` at nine times over the
+second half of the run, its shock speed and plateau against Rankine-Hugoniot, and the
+velocity-resolution indicator in the shock; each run writes
+OUT/spectral_M<M>_N<N>_c<cells per lambda_1>.json, and the table and figure gather them.
+``--no-dsmc`` runs granframe's runs only.
+
 Each Mach number writes OUT/dsmc_M<M>.json (its rows and profiles); the table, OUT/
 hard_sphere_shock.json and the figure OUT/hard_sphere_shock.png gather every
 dsmc_M*.json in OUT, so the Mach numbers can be run one command at a time.
@@ -41,15 +50,34 @@ import time
 
 import numpy
 
+import granframe
+from granframe.backends import NumpyBackend
+from granframe.run.description import RunDescription
+from granframe.run.runner import Simulation
 from granframe.testing.dsmc import (
     ShockSettings,
     default_length,
     rankine_hugoniot,
     run_shock,
 )
+from granframe.theory.euler import piston_speed
 from granframe.theory.shock import navier_stokes_shock
-from granframe.tools.studykit import (finish, json_text, number, numbers, parse_study,
-                                      print_table, quick_option, save_figure)
+from granframe.tools.studykit import (
+    cfl_time_step,
+    finish,
+    json_text,
+    number,
+    numbers,
+    parse_study,
+    print_table,
+    quick_option,
+    run_study,
+    save_figure,
+)
+from granframe.velocity.grid import VelocityGrid
+from granframe.velocity.moments import FieldMoments
+
+GAMMA = 5.0 / 3.0
 
 #: published hard-sphere lambda_1/delta at these Mach numbers: none was found by the
 #: library search (Bird 1994 ch. 12, Ohwada 1993, Erwin et al. 1991 were not readable
@@ -86,6 +114,23 @@ def arguments():
                         help="batches of the sampling period (batch means)")
     parser.add_argument("--seed", type=number(0, kind=int, low_open=False), default=1,
                         help="random seed")
+    parser.add_argument("--dsmc", action=argparse.BooleanOptionalAction, default=True,
+                        help="run the DSMC at every --mach (--no-dsmc: only granframe's runs)")
+    parser.add_argument("--spectral", type=numbers(4, kind=int), default=[],
+                        help="granframe's own 3D runs at --spectral-mach on these velocity "
+                             "grids N, comma-separated (default: none)")
+    parser.add_argument("--spectral-mach", type=numbers(1.0), default=[1.5],
+                        help="the Mach numbers of granframe's runs")
+    parser.add_argument("--spectral-support", type=number(0.0), default=4.5,
+                        help="their velocity grid's support radius S")
+    parser.add_argument("--spectral-cells-per-path", type=number(0.0), default=1.0,
+                        help="their cells per upstream mean free path lambda_1")
+    parser.add_argument("--spectral-length", type=number(0.0), default=60.0,
+                        help="their tube length in lambda_1")
+    parser.add_argument("--spectral-final", type=number(0.0), default=14.0,
+                        help="their final time in lambda_1/sqrt(T_1)")
+    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=True,
+                        help="a progress bar for granframe's runs")
     return quick_option(parser, {"particles_per_cell": 20.0, "sampling": 8.0,
                                  "transient": 2.0, "refine_fraction": 0.25, "batches": 8})
 
@@ -161,20 +206,158 @@ def one_mach(mach: float, args, out: pathlib.Path) -> dict:
     return row
 
 
-def gathered(out: pathlib.Path) -> list[dict]:
-    """Every dsmc_M*.json in OUT: (row, profiles), by Mach number."""
+def spectral_description(mach: float, n_modes: int, support: float, cells_per_path: float,
+                         length: float, final: float) -> RunDescription:
+    r"""granframe's own hard-sphere shock: the piston problem in the wall's frame, with 3D
+    velocities. Gas at n_1 = T_1 = 1 moving at -U (U = 2 c_1 (M - 1/M)/(gamma + 1),
+    gamma = 5/3) fills [0, ``length``] between two specular walls; the shock leaves the wall
+    at x = 0 with the speed u_s = c_1 M - U into the gas, which is at rest behind it (a
+    rarefaction leaves the far wall at -(U + c_1)). eps = sqrt 2 makes
+    lambda_1 = eps/sqrt 2 = 1 the unit of length; hard spheres B = |g|/(4 pi), e = 1,
+    MUSCL, SSP-RK2 at half the transport's CFL limit, the conservative correction, and the
+    default hierarchy: the gas ahead of and behind the shock is at equilibrium and takes
+    the fluid level, the shock and its reach of two mean free paths the full operator."""
+    speed = piston_speed(mach, GAMMA)
+    cells = max(1, round(length * cells_per_path))
+    grid = {"dimension": 3, "n_modes": n_modes, "support_radius": support}
+    state = {"density": 1.0, "temperature": 1.0, "velocity": -speed}
+    return RunDescription(
+        title=f"hard-sphere shock, M = {mach:g}, {cells} cells over {length:g} lambda_1, "
+              f"N = {n_modes}, S = {support:g}",
+        grid=grid, kernel="hard_spheres", restitution={"name": "constant", "value": 1.0},
+        initial={"name": "riemann", "left": state, "right": state},
+        operator={"name": "fast_spectral"}, integrator="ssp_rk2", knudsen=math.sqrt(2.0),
+        conservative=True, final_time=final,
+        time_step=cfl_time_step(cells, final, grid, length=length),
+        output={"snapshot_interval": final},
+        space={"cells": cells, "length": length, "reconstruction": "muscl",
+               "left": "specular", "right": "specular", "hierarchy": {}})
+
+
+def spline_inverse_thickness(x, density, n1: float, n2: float) -> tuple[float, float]:
+    r"""lambda_1/delta of cell averages without noise, rising from n_1 at small x to n_2.
+
+    The cell averages r_j of the normalised profile r = (n - n_1)/(n_2 - n_1) on cells of
+    width h centred at ``x`` give its primitive exactly at the faces,
+    P(x_{j+1/2}) = h sum_{i <= j} r_i; a quintic interpolating spline of P over the faces
+    within three first-estimate thicknesses of the midpoint
+    (:func:`~granframe.testing.dsmc.estimated_thickness`) has P'' = dr/dx, maximised
+    within one thickness of the midpoint. Unlike a spline through the averages taken as
+    point values (whose slope is low by h^2/24 times the third derivative, 1 % at
+    h = lambda_1 for M = 1.5), it reads the Navier-Stokes profile of M = 1.5 to 6e-4 at
+    h = lambda_1 and 2e-7 at h = lambda_1/2. Returns the inverse thickness and the
+    midpoint (the 0.5 crossing of the averages)."""
+    import scipy.interpolate
+
+    from granframe.testing.dsmc import estimated_thickness
+
+    x = numpy.asarray(x, dtype=float)
+    r = (numpy.asarray(density, dtype=float) - n1) / (n2 - n1)
+    h = float(x[1] - x[0])
+    delta = estimated_thickness(x, r)
+    crossing = numpy.nonzero(r >= 0.5)[0]
+    if crossing.size == 0 or crossing[0] == 0:
+        raise ValueError("spline_inverse_thickness: the profile never crosses its midpoint")
+    i = int(crossing[0])
+    middle = x[i - 1] + (x[i] - x[i - 1]) * (0.5 - r[i - 1]) / (r[i] - r[i - 1])
+    window = numpy.nonzero(numpy.abs(x - middle) <= 3.0 * delta)[0]
+    faces = numpy.append(x[window] - 0.5 * h, x[window[-1]] + 0.5 * h)
+    primitive = numpy.concatenate(([0.0], numpy.cumsum(r[window]) * h))
+    spline = scipy.interpolate.make_interp_spline(faces, primitive, k=5)
+    fine = numpy.linspace(middle - delta, middle + delta, 2001)
+    return float(spline(fine, 2).max()), float(middle)
+
+
+def spectral_analysis(store, mach: float) -> dict:
+    """The shock of a :func:`spectral_description` store: lambda_1/delta at nine times
+    over the second half of the run (its change says whether the profile is steady), the
+    shock's position and speed (fitted over that half) against u_s, the plateau behind it
+    against Rankine-Hugoniot, the velocity-resolution indicator of the final f
+    (:meth:`~granframe.velocity.moments.FieldMoments.resolution`: the change of a cell's
+    fields without the outermost shell of modes) in the cells within two thicknesses of
+    the shock and, apart, in the others (the walls' layers and the far wall's
+    rarefaction), and the final profile seen from the shock's midpoint (upstream at
+    x < 0)."""
+    ds = granframe.open_run(store, time_axis="steps")
+    t, x = ds.time.values, ds.x.values
+    density, temperature = ds.density.values, ds.temperature.values
+    state = rankine_hugoniot(mach)
+    shock_speed = math.sqrt(GAMMA) * mach - piston_speed(mach, GAMMA)
+    xs = -x[::-1]  # seen from the shock: upstream (far from the wall) on the left
+    history = []
+    for fraction in numpy.linspace(0.5, 1.0, 9):
+        k = int(numpy.argmin(abs(t - fraction * t[-1])))
+        inverse, middle = spline_inverse_thickness(xs, density[k][::-1], 1.0, state["n2"])
+        history.append({"t": float(t[k]), "inverse_thickness": inverse,
+                        "position": float(-middle)})
+    times = numpy.array([h["t"] for h in history])
+    positions = numpy.array([h["position"] for h in history])
+    final = history[-1]
+    behind = (x > 0.3 * final["position"]) & (x < 0.6 * final["position"])
+    description = RunDescription.from_toml(ds.attrs["description_toml"])
+    grid = VelocityGrid(dimension=3, n_modes=description.grid.n_modes,
+                        support_radius=description.grid.support_radius)
+    fields = FieldMoments(grid, float(x[1] - x[0])).resolution(ds.f.values[-1],
+                                                              NumpyBackend())[:, 4]
+    inside = numpy.abs(x - final["position"]) <= 2.0 / final["inverse_thickness"]
+    change = final["inverse_thickness"] - history[len(history) // 2]["inverse_thickness"]
+    return {"M": mach, "N": int(ds.sizes["v1"]), "cells": len(x),
+            "dx": float(x[1] - x[0]), "final": float(t[-1]), "steps": int(len(t) - 1),
+            "granframe": final["inverse_thickness"], "change": change,
+            "shock speed": float(numpy.polyfit(times, positions, 1)[0]),
+            "RH shock speed": shock_speed,
+            "rho2": float(density[-1][behind].mean()) if behind.any() else math.nan,
+            "RH rho2": state["n2"],
+            "T2": float(temperature[-1][behind].mean()) if behind.any() else math.nan,
+            "RH T2": state["T2"],
+            "fields in the shock": float(fields[inside].max()),
+            "fields elsewhere": float(fields[~inside].max()),
+            "history": history,
+            "profile": {"x": (final["position"] - x).tolist(),
+                        "density": density[-1].tolist(),
+                        "temperature": temperature[-1].tolist()}}
+
+
+def one_spectral(mach: float, n_modes: int, args, out: pathlib.Path) -> dict:
+    """granframe's run at ``mach`` on N = ``n_modes``; writes OUT/spectral_M_N_c.json."""
+    name = f"spectral_M{mach:g}_N{n_modes}_c{args.spectral_cells_per_path:g}"
+    description = spectral_description(mach, n_modes, args.spectral_support,
+                                       args.spectral_cells_per_path, args.spectral_length,
+                                       args.spectral_final)
+    began = time.perf_counter()
+    result = run_study(Simulation(description), out / f"{name}.zarr", args, overwrite=True)
+    row = {**spectral_analysis(out / f"{name}.zarr", mach),
+           "S": args.spectral_support, "seconds": time.perf_counter() - began,
+           "warnings": [str(w) for w in (*result.warnings, *result.accuracy_warnings)]}
+    (out / f"{name}.json").write_text(json_text(row))
+    print(f"M = {mach:g}, N = {n_modes}, dx = {row['dx']:g} lambda_1: lambda_1/delta = "
+          f"{row['granframe']:.4f} (change over the last quarter {row['change']:+.4f}); "
+          f"shock speed {row['shock speed']:.4f} (Rankine-Hugoniot "
+          f"{row['RH shock speed']:.4f}); written: {out / (name + '.json')}", flush=True)
+    return row
+
+
+def gathered(out: pathlib.Path) -> tuple[list[dict], list[dict]]:
+    """Every dsmc_M*.json in OUT (row and profiles), by Mach number, and every
+    spectral_*.json (granframe's runs), by Mach number, cell width and N."""
     found = [json.loads(p.read_text()) for p in out.glob("dsmc_M*.json")]
-    return sorted(found, key=lambda entry: entry["row"]["M"])
+    spectral = [json.loads(p.read_text()) for p in out.glob("spectral_M*.json")]
+    return (sorted(found, key=lambda entry: entry["row"]["M"]),
+            sorted(spectral, key=lambda row: (row["M"], -row["dx"], row["N"])))
 
 
-def figure(entries, path) -> None:
-    """Normalised density and temperature against x/lambda_1: DSMC markers, NS lines."""
+def figure(entries, spectral, path) -> None:
+    """Normalised density and temperature against x/lambda_1: DSMC markers, Navier-Stokes
+    lines, granframe's runs dashed with squares (one colour per Mach number)."""
     import matplotlib.pyplot as plt  # the Agg backend: studykit chose it on import
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.6), layout="constrained")
-    for k, entry in enumerate(entries):
+    colours = {entry["row"]["M"]: f"C{k}" for k, entry in enumerate(entries)}
+    for row in spectral:
+        colours.setdefault(row["M"], f"C{len(colours)}")
+    for entry in entries:
         row, prof = entry["row"], entry["profiles"]
-        colour = f"C{k}"
+        colour = colours[row["M"]]
         n2, t2 = row["rho2/rho1"], row["T2/T1"]
         dsmc, ns = prof["dsmc"], prof["ns"]
         x = numpy.array(dsmc["x"])
@@ -185,6 +368,15 @@ def figure(entries, path) -> None:
             ax.plot(ns["x"], (numpy.array(ns[key]) - 1.0) / (jump - 1.0), "-", lw=1.2,
                     color=colour, label=f"M = {row['M']:g} Navier-Stokes: λ₁/δ = "
                                         f"{row['NS']:.3f}")
+    for k, row in enumerate(spectral):
+        prof = row["profile"]
+        for ax, key, jump in ((axes[0], "density", row["RH rho2"]),
+                              (axes[1], "temperature", row["RH T2"])):
+            values = (numpy.array(prof[key]) - 1.0) / (jump - 1.0)
+            ax.plot(prof["x"], values, "s--", ms=3, lw=0.8, color=colours[row["M"]],
+                    markerfacecolor="none" if k % 2 else colours[row["M"]],
+                    label=f"M = {row['M']:g} granframe N = {row['N']}, dx = {row['dx']:g} λ₁: "
+                          f"λ₁/δ = {row['granframe']:.3f}")
     axes[0].set(xlabel="x / λ₁ (from the density midpoint)",
                 ylabel="(ρ − ρ₁)/(ρ₂ − ρ₁)", xlim=(-12, 12))
     axes[1].set(xlabel="x / λ₁ (from the density midpoint)",
@@ -192,29 +384,44 @@ def figure(entries, path) -> None:
     for ax in axes:
         ax.grid(True, alpha=0.3)
     axes[0].legend(fontsize=7)
-    fig.suptitle("normal shock of elastic hard spheres: DSMC (markers) and Navier-Stokes with "
-                 "first Chapman-Enskog μ, κ (lines); λ₁ = 1/(√2 n₁ π σ²)", fontsize=9)
+    fig.suptitle("normal shock of elastic hard spheres: DSMC (markers), Navier-Stokes with "
+                 "first Chapman-Enskog μ, κ (lines), granframe (squares); "
+                 "λ₁ = 1/(√2 n₁ π σ²)", fontsize=9)
     save_figure(fig, path, dpi=120)
+
+
+SPECTRAL_COLUMNS = {"M": "g", "N": "d", "dx": "g", "steps": "d", "granframe": ".4f",
+                    "change": "+.4f", "shock speed": ".4f", "RH shock speed": ".4f",
+                    "rho2": ".4f", "RH rho2": ".4f", "fields in the shock": ".3g",
+                    "fields elsewhere": ".3g", "seconds": ".0f"}
 
 
 def main(argv=None):
     args = parse_study(arguments(), argv)
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    for mach in args.mach:
+    for mach in args.mach if args.dsmc else []:
         one_mach(mach, args, out)
-    entries = gathered(out)
+    for mach in args.spectral_mach if args.spectral else []:
+        for n_modes in args.spectral:
+            one_spectral(mach, n_modes, args, out)
+    entries, spectral = gathered(out)
     rows = [entry["row"] for entry in entries]
     print(f"\nhard-sphere shock, lambda_1/delta (every dsmc_M*.json in {out}):")
     print_table(rows, COLUMNS)
+    if spectral:
+        print(f"\ngranframe's runs (every spectral_M*.json in {out}; change: lambda_1/delta "
+              "at the end minus at three quarters of the run):")
+        print_table(spectral, SPECTRAL_COLUMNS)
     print("literature (hard spheres, lambda_1/delta at these M): none found by the library "
           "search; none quoted")
     summary = {"rows": rows, "literature": LITERATURE,
+               "spectral": [{key: row[key] for key in SPECTRAL_COLUMNS} for row in spectral],
                "note": "change: refined (dx/2, dt/2, 2x particles per cell) minus the first "
                        "run; +-: batch-means standard errors"}
     (out / "hard_sphere_shock.json").write_text(json_text(summary, indent=1))
     print(f"table: {out / 'hard_sphere_shock.json'}")
-    figure(entries, out / "hard_sphere_shock.png")
+    figure(entries, spectral, out / "hard_sphere_shock.png")
     print(f"figure: {out / 'hard_sphere_shock.png'}")
 
 

@@ -222,3 +222,60 @@ def test_a_short_run_at_the_study_resolution_finds_the_studys_thickness():
     assert result.inverse_thickness == pytest.approx(0.2551, abs=0.03)
     assert result.cell_over_local_path < 0.34 and result.dt_times_local_rate < 0.21
     assert max(abs(v) for k, v in result.checks.items() if k[0] in "nuT") < 0.01
+
+
+def _shock_study():
+    import importlib.util
+    import pathlib
+
+    path = pathlib.Path(__file__).parent.parent / "studies" / "hard_sphere_shock.py"
+    spec = importlib.util.spec_from_file_location("hard_sphere_shock_study", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.parametrize("cell", [1.0, 0.5])
+def test_the_spline_thickness_of_granframes_runs_on_cell_averages(cell):
+    """The Navier-Stokes profile of M = 1.5 (lambda_1/delta = 0.1752) averaged over cells
+    of lambda_1 and lambda_1/2, as granframe's cells hold it, read by the spline of the
+    primitive: within 1e-3 (a spline through the averages as point values is 1 % low at
+    lambda_1); and the exact cell averages of a tanh profile of the same thickness."""
+    study = _shock_study()
+    profile = shock.navier_stokes_shock(1.5, points=40001, span=40.0)
+    n2 = dsmc.rankine_hugoniot(1.5)["n2"]
+    edges = numpy.arange(-30.0, 30.0 + cell / 2, cell) + 0.37 * cell
+    primitive = numpy.concatenate(([0.0], numpy.cumsum(
+        0.5 * (profile["density"][1:] + profile["density"][:-1]) * numpy.diff(profile["x"]))))
+    averages = numpy.diff(numpy.interp(edges, profile["x"], primitive)) / cell
+    centres = 0.5 * (edges[:-1] + edges[1:])
+    found, middle = study.spline_inverse_thickness(centres, averages, 1.0, n2)
+    tolerance = 1e-3
+    assert found == pytest.approx(profile["inverse_thickness"], rel=tolerance)
+    assert abs(middle) < 0.5 * cell
+    delta = 1.0 / profile["inverse_thickness"]
+    # cell averages of the tanh profile, exactly: (delta/2) log cosh(2x/delta) is its primitive
+    primitive = 0.5 * edges + 0.25 * delta * numpy.log(numpy.cosh(2.0 * edges / delta))
+    tanh = 1.0 + (n2 - 1.0) * numpy.diff(primitive) / cell
+    assert study.spline_inverse_thickness(centres, tanh, 1.0, n2)[0] * delta == pytest.approx(
+        1.0, rel=tolerance)
+
+
+def test_granframes_shock_run_is_the_piston_problem_in_lambda_1():
+    """The description of granframe's own shock: 3D hard spheres, elastic, eps = sqrt 2
+    (lambda_1 = 1), the gas at -U of the Mach number, a whole number of steps at half the
+    CFL limit or below, cells of the mean free paths asked, the default hierarchy."""
+    from granframe.space.transport import step_limit
+    from granframe.velocity.grid import VelocityGrid
+
+    study = _shock_study()
+    d = study.spectral_description(2.0, 24, 4.5, 2.0, 30.0, 5.0)
+    assert d.grid.dimension == 3 and d.kernel.name == "hard_spheres"
+    assert d.knudsen == pytest.approx(math.sqrt(2.0))
+    assert d.space.cells == 60 and d.space.length == 30.0
+    assert d.initial.params["left"]["velocity"] == pytest.approx(-piston_speed(2.0, 5.0 / 3.0))
+    steps = d.final_time / d.time_step
+    assert steps == pytest.approx(round(steps), abs=1e-9)
+    grid = VelocityGrid(dimension=3, n_modes=24, support_radius=4.5)
+    assert d.time_step <= step_limit(grid, 0.5, 0.5) * (1 + 1e-12)
+    assert d.space.hierarchy is not None
