@@ -145,6 +145,10 @@ def granframe_register_boundaries(registry):
                              "(diffuse or specular)",
                  examples=[{"speed": 0.5}, {"speed": 0.3, "temperature": 0.5},
                            {"speed": 0.5, "reflection": "specular"}])
+    registry.add("reservoir", boundaries.Reservoir,
+                 description="open end: what arrives leaves, a reservoir's Maxwellian "
+                             "(density, velocity along the axis, temperature) enters",
+                 examples=[{}, {"density": 1.7, "velocity": -0.8, "temperature": 1.5}])
 
 
 @hookimpl

@@ -14,8 +14,9 @@ long; the change between the two against the combined error bars; the Navier-Sto
 (granframe.theory.shock).
 
 With ``--spectral N[,N...]``: granframe's own run of the shock (:func:`spectral_description`:
-the piston problem in the wall's frame, 3D hard spheres, e = 1, the default hierarchy of
-collision models, cells of ``--spectral-cells-per-path`` per lambda_1), its lambda_1/delta
+in the frame of the gas behind it, from the Navier-Stokes profile, the gas ahead entering
+from a reservoir; 3D hard spheres, e = 1, the default hierarchy of collision models,
+cells of ``--spectral-cells-per-path`` per lambda_1), its lambda_1/delta
 read off the cell averages by :func:`spline_inverse_thickness` at nine times over the
 second half of the run, its shock speed and plateau against Rankine-Hugoniot, and the
 velocity-resolution indicator in the shock; each run writes
@@ -125,9 +126,11 @@ def arguments():
                         help="their velocity grid's support radius S")
     parser.add_argument("--spectral-cells-per-path", type=number(0.0), default=1.0,
                         help="their cells per upstream mean free path lambda_1")
-    parser.add_argument("--spectral-length", type=number(0.0), default=60.0,
+    parser.add_argument("--spectral-length", type=number(0.0), default=44.0,
                         help="their tube length in lambda_1")
-    parser.add_argument("--spectral-final", type=number(0.0), default=14.0,
+    parser.add_argument("--spectral-position", type=number(0.0), default=15.0,
+                        help="where their Navier-Stokes shock starts, in lambda_1")
+    parser.add_argument("--spectral-final", type=number(0.0), default=12.0,
                         help="their final time in lambda_1/sqrt(T_1)")
     parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=True,
                         help="a progress bar for granframe's runs")
@@ -207,31 +210,37 @@ def one_mach(mach: float, args, out: pathlib.Path) -> dict:
 
 
 def spectral_description(mach: float, n_modes: int, support: float, cells_per_path: float,
-                         length: float, final: float) -> RunDescription:
-    r"""granframe's own hard-sphere shock: the piston problem in the wall's frame, with 3D
-    velocities. Gas at n_1 = T_1 = 1 moving at -U (U = 2 c_1 (M - 1/M)/(gamma + 1),
-    gamma = 5/3) fills [0, ``length``] between two specular walls; the shock leaves the wall
-    at x = 0 with the speed u_s = c_1 M - U into the gas, which is at rest behind it (a
-    rarefaction leaves the far wall at -(U + c_1)). eps = sqrt 2 makes
+                         length: float, final: float, position: float = 15.0) -> RunDescription:
+    r"""granframe's own hard-sphere shock, in the frame of the gas behind it, with 3D
+    velocities: a specular wall at x = 0, the gas at rest next to it, the Navier-Stokes
+    shock at x = ``position`` (:func:`granframe.theory.shock.navier_stokes_maxwellian`,
+    its local Maxwellians) moving with u_s = c_1 M - U into the gas ahead, which moves at
+    -U (U = 2 c_1 (M - 1/M)/(gamma + 1), gamma = 5/3) and enters at x = ``length`` from a
+    reservoir of the upstream state (:class:`granframe.space.boundaries.Reservoir`), so
+    that nothing but the shock's own structure changes as it runs. eps = sqrt 2 makes
     lambda_1 = eps/sqrt 2 = 1 the unit of length; hard spheres B = |g|/(4 pi), e = 1,
     MUSCL, SSP-RK2 at half the transport's CFL limit, the conservative correction, and the
-    default hierarchy: the gas ahead of and behind the shock is at equilibrium and takes
-    the fluid level, the shock and its reach of two mean free paths the full operator."""
+    default hierarchy: the uniform gas ahead of and behind the shock takes the fluid
+    level, the shock and its reach of two mean free paths the full operator."""
     speed = piston_speed(mach, GAMMA)
     cells = max(1, round(length * cells_per_path))
     grid = {"dimension": 3, "n_modes": n_modes, "support_radius": support}
-    state = {"density": 1.0, "temperature": 1.0, "velocity": -speed}
     return RunDescription(
         title=f"hard-sphere shock, M = {mach:g}, {cells} cells over {length:g} lambda_1, "
               f"N = {n_modes}, S = {support:g}",
         grid=grid, kernel="hard_spheres", restitution={"name": "constant", "value": 1.0},
-        initial={"name": "riemann", "left": state, "right": state},
+        initial={"name": "space_function",
+                 "function": "granframe.theory.shock:navier_stokes_maxwellian",
+                 "params": {"mach": mach, "position": position}},
         operator={"name": "fast_spectral"}, integrator="ssp_rk2", knudsen=math.sqrt(2.0),
         conservative=True, final_time=final,
         time_step=cfl_time_step(cells, final, grid, length=length),
         output={"snapshot_interval": final},
         space={"cells": cells, "length": length, "reconstruction": "muscl",
-               "left": "specular", "right": "specular", "hierarchy": {}})
+               "left": "specular",
+               "right": {"name": "reservoir", "density": 1.0, "velocity": -speed,
+                         "temperature": 1.0},
+               "hierarchy": {}})
 
 
 def spline_inverse_thickness(x, density, n1: float, n2: float) -> tuple[float, float]:
@@ -293,7 +302,7 @@ def spectral_analysis(store, mach: float) -> dict:
     times = numpy.array([h["t"] for h in history])
     positions = numpy.array([h["position"] for h in history])
     final = history[-1]
-    behind = (x > 0.3 * final["position"]) & (x < 0.6 * final["position"])
+    behind = (x > 0.15 * final["position"]) & (x < 0.45 * final["position"])
     description = RunDescription.from_toml(ds.attrs["description_toml"])
     grid = VelocityGrid(dimension=3, n_modes=description.grid.n_modes,
                         support_radius=description.grid.support_radius)
@@ -323,7 +332,7 @@ def one_spectral(mach: float, n_modes: int, args, out: pathlib.Path) -> dict:
     name = f"spectral_M{mach:g}_N{n_modes}_c{args.spectral_cells_per_path:g}"
     description = spectral_description(mach, n_modes, args.spectral_support,
                                        args.spectral_cells_per_path, args.spectral_length,
-                                       args.spectral_final)
+                                       args.spectral_final, args.spectral_position)
     began = time.perf_counter()
     result = run_study(Simulation(description), out / f"{name}.zarr", args, overwrite=True)
     row = {**spectral_analysis(out / f"{name}.zarr", mach),

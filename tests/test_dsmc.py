@@ -263,8 +263,10 @@ def test_the_spline_thickness_of_granframes_runs_on_cell_averages(cell):
 
 def test_granframes_shock_run_is_the_piston_problem_in_lambda_1():
     """The description of granframe's own shock: 3D hard spheres, elastic, eps = sqrt 2
-    (lambda_1 = 1), the gas at -U of the Mach number, a whole number of steps at half the
-    CFL limit or below, cells of the mean free paths asked, the default hierarchy."""
+    (lambda_1 = 1), the Navier-Stokes start, the upstream reservoir at -U of the Mach
+    number, a whole number of steps at half the CFL limit or below, cells of the mean free
+    paths asked, the default hierarchy; the start's moments are the Navier-Stokes
+    profile's in the frame of the gas behind the shock."""
     from granframe.space.transport import step_limit
     from granframe.velocity.grid import VelocityGrid
 
@@ -273,9 +275,27 @@ def test_granframes_shock_run_is_the_piston_problem_in_lambda_1():
     assert d.grid.dimension == 3 and d.kernel.name == "hard_spheres"
     assert d.knudsen == pytest.approx(math.sqrt(2.0))
     assert d.space.cells == 60 and d.space.length == 30.0
-    assert d.initial.params["left"]["velocity"] == pytest.approx(-piston_speed(2.0, 5.0 / 3.0))
+    assert d.initial.params["params"] == {"mach": 2.0, "position": 15.0}
+    right = d.space.right
+    assert right.name == "reservoir"
+    assert right.params["velocity"] == pytest.approx(-piston_speed(2.0, 5.0 / 3.0))
+    assert (right.params["density"], right.params["temperature"]) == (1.0, 1.0)
     steps = d.final_time / d.time_step
     assert steps == pytest.approx(round(steps), abs=1e-9)
     grid = VelocityGrid(dimension=3, n_modes=24, support_radius=4.5)
     assert d.time_step <= step_limit(grid, 0.5, 0.5) * (1 + 1e-12)
     assert d.space.hierarchy is not None
+    v = numpy.linspace(-9.0, 9.0, 91)
+    h = v[1] - v[0]
+    v1, v2, v3 = numpy.meshgrid(v, v, v, indexing="ij")
+    profile = shock.navier_stokes_shock(2.0, points=8001, span=40.0)
+    state = profile["state"]
+    assert abs(profile["density"][0] - 1.0) < 1e-6
+    assert abs(profile["density"][-1] - state["rho2"]) < 1e-6
+    for x, s in ((0.0, 100.0), (15.0, 0.0), (19.0, -4.0), (60.0, -100.0)):
+        f = shock.navier_stokes_maxwellian(x, v1, v2, v3, 2.0, 15.0)
+        n = f.sum() * h ** 3
+        rho = numpy.interp(s, profile["x"], profile["density"])
+        u = state["u2"] - numpy.interp(s, profile["x"], profile["velocity"])
+        assert n == pytest.approx(rho, rel=1e-9)
+        assert (v1 * f).sum() * h ** 3 / n == pytest.approx(u, abs=1e-9)

@@ -126,7 +126,7 @@ def test_an_unknown_space_key_and_a_missing_cells_are_refused(tmp_path):
 # -- boundaries -------------------------------------------------------------------------
 def test_a_boundary_that_does_not_exist_is_refused(tmp_path):
     refused(tmp_path, [("space.left", "mirror")], r"boundaries: name 'mirror' is not "
-                                                  r"registered; known: diffuse, periodic, specular")
+                                                  r"registered; known: diffuse, periodic, reservoir, specular, vibrating")
     refused(tmp_path, [("space.reconstruction", "weno3")],
             r"reconstructions: name 'weno3' is not registered; known: muscl, upwind, weno5")
 

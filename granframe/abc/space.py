@@ -199,6 +199,11 @@ class Boundary(abc.ABC):
     #: fills the ghost cells from the other end; :meth:`ghosts` and :meth:`emit` are unused
     periodic: ClassVar[bool] = False
 
+    #: an open end (a reservoir, :class:`granframe.space.boundaries.Reservoir`): mass,
+    #: momentum and energy cross it, so the conformance kit does not ask it for a zero net
+    #: mass flux or for an emission linear in what arrives
+    open: ClassVar[bool] = False
+
     #: the period in t of what the wall does (:meth:`ghosts`, :meth:`emit`), a finite
     #: float > 0 for a wall that acts periodically in time (a property of its parameters,
     #: or a class attribute); None for one that does not depend on t, or not periodically.

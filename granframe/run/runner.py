@@ -262,6 +262,9 @@ class RunState:
     f: object
     t: float
     step: int
+    #: the mass the run must hold: the initial mass plus what entered through the ends of
+    #: a space run (nothing but round-off through a wall; an open end's inflow and outflow,
+    #: :class:`~granframe.space.boundaries.Reservoir`), added after every step
     mass0: float
     #: the step size proposed next (an adaptive scheme's trial step; time_step otherwise)
     dt_next: float | None
@@ -421,6 +424,9 @@ class HealthObserver(Observer):
         self.health = health
 
     def after_step(self, state):
+        entered = state.record.get("wall_mass")
+        if entered is not None:      # what crossed the ends: an open end's (Reservoir) inflow
+            state.mass0 += float(numpy.sum(entered))
         problem = health_problem(state.record, state.mass0, self.health)
         if problem is not None:
             raise Stopped(f"health check failed at step {state.step}, t = {state.t:.6g}: "

@@ -1,4 +1,5 @@
-r"""The ends of the interval: periodic, specular and diffuse (Maxwell) walls.
+r"""The ends of the interval: periodic, specular and diffuse (Maxwell) walls, vibrating
+walls and open ends (:class:`Reservoir`).
 
 Every boundary sees its wall as the left one (x = 0, the domain at x > 0, velocities
 with v_1 > 0 leave the wall); :mod:`granframe.space.transport` maps the right wall onto it
@@ -33,11 +34,13 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import ClassVar
 
 import attrs
 import numpy
 
 from granframe import abc as contracts
+from granframe.abc import Side
 from granframe import validators as check
 from granframe.space import vibration
 from granframe.space.transport import reflect, upwind_speeds
@@ -230,6 +233,89 @@ class Diffuse(contracts.Boundary):
         if self.accommodation < 1.0:
             out = out + (1.0 - self.accommodation) * reflect(incoming, grid.dimension, xp)
         return xp.where(leaving, out, incoming)
+
+
+@attrs.frozen
+class Reservoir(contracts.Boundary):
+    r"""An open end: beyond it a reservoir of Maxwellian gas at density n_r, velocity u_r
+    along the end's axis (lab frame) and temperature T_r, as in the inflow boundaries of
+    DSMC (G. A. Bird, *Molecular Gas Dynamics and the Direct Simulation of Gas Flows*,
+    1994, section 12.2). What arrives at the end leaves the interval, and the reservoir
+    sends in its own Maxwellian,
+
+    .. math:: f_{out}(v) = M_r(v) = n_r (2\pi T_r)^{-d/2}
+              \exp\bigl(-|v - u_n e_1|^2 / (2 T_r)\bigr),\quad c^+(v) > 0,
+
+    in the end's own frame, u_n = u_r at the lower end and -u_r at the upper one
+    (:attr:`~granframe.abc.Side.normal_sign`), as the grid holds it: sampled on the nodes
+    and without its Nyquist modes (:meth:`VelocityGrid.project`, as an initial Maxwellian
+    is; it rings below zero at the level of the grid's Nyquist coefficient,
+    exp(-T_r (pi N / 2L)^2 / 2) relative, as f does inside). Mass, momentum and energy
+    cross the end:
+    the interval gains sum_v c^+ M_r dv and loses sum_v |c^-| f_in dv per unit time
+    (the wall records of a run, ``wall_mass`` ..., count them). A gas at the reservoir's
+    state next to the end is left exactly as it is: its face value is M_r on every node,
+    so the flux through the end equals that through every face inside.
+
+    Parameters
+    ----------
+    density : float
+        n_r > 0.
+    velocity : float
+        u_r, the reservoir's velocity along the axis of the end, in the lab frame
+        (positive towards increasing x); no tangential velocity.
+    temperature : float
+        T_r > 0.
+    """
+
+    open: ClassVar[bool] = True
+
+    density: float = attrs.field(default=1.0, converter=check.to_float,
+                                 validator=check.real(0.0, math.inf, lower_open=True))
+    velocity: float = attrs.field(default=0.0, converter=check.to_float,
+                                  validator=check.real(-math.inf, math.inf))
+    temperature: float = attrs.field(default=1.0, converter=check.to_float,
+                                     validator=check.real(0.0, math.inf, lower_open=True))
+
+    def check(self, grid) -> None:
+        """The reservoir's Maxwellian must fit the grid as a diffuse wall's must: inside the
+        box, below 1e-8 of its peak on its faces, and resolved by the nodes,
+        sqrt(T_r) >= h / 2."""
+        gap = grid.half_width - abs(self.velocity)
+        if gap <= 0:
+            check.reject("Reservoir", "velocity", self.velocity,
+                         f"must lie inside the velocity box: |u_r| < L = {grid.half_width:g}")
+        _check_resolved("Reservoir", self.temperature, grid)
+        if math.exp(-gap * gap / (2.0 * self.temperature)) > 1e-8:
+            check.reject("Reservoir", "temperature", self.temperature,
+                         f"with velocity {self.velocity:g} gives a reservoir Maxwellian that "
+                         f"does not fit the velocity box [-{grid.half_width:g}, "
+                         f"{grid.half_width:g}]^{grid.dimension} (above 1e-8 of its peak on "
+                         f"its faces): lower it below {gap * gap / (2 * math.log(1e8)):.4g} "
+                         "or widen the grid (support_radius)")
+
+    def _host_constants(self, grid):
+        """NumPy arrays: M_r seen from a lower end and from an upper one, and the mask
+        c^+ > 0 (see :func:`_constants`)."""
+        positive, _ = upwind_speeds(grid, numpy)
+        tangential = [0.0] * (grid.dimension - 1)
+        lower, upper = (grid.project(grid.maxwellian(
+            self.density, [sign * self.velocity, *tangential], self.temperature))
+            for sign in (1.0, -1.0))
+        return lower, upper, positive > 0
+
+    def ghosts(self, inside, grid, xp, *, t=0.0, side="left"):
+        """The linear extension through the end of :func:`_emitting_ghosts`: what leaves
+        extrapolated from inside, what enters the odd extension about M_r, non-negative
+        (with one ghost cell M_r itself, clipped where it rings)."""
+        ghosts = _emitting_ghosts(self, inside, grid, xp, t, side, _constants(self, grid, xp)[2])
+        return xp.maximum(ghosts, 0.0)
+
+    def emit(self, incoming, grid, xp, *, t=0.0, side="left"):
+        """M_r at the entering nodes (c^+ > 0), whatever arrives; the same at every t."""
+        lower, upper, leaving = _constants(self, grid, xp)
+        reservoir = lower if Side.named(side).normal_sign > 0 else upper
+        return xp.where(leaving, reservoir, incoming)
 
 
 #: what a vibrating wall does to a particle it hits

@@ -43,6 +43,7 @@ M = 1.01, 1 % at 1.02). Values: lambda_1/delta = 0.1752 (M = 1.5), 0.3325 (2), 0
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy
@@ -180,3 +181,31 @@ def navier_stokes_shock(mach: float, points: int = 2001, span: float | None = No
 def inverse_thickness(mach: float) -> float:
     """lambda_1/delta of the Navier-Stokes hard-sphere shock (:func:`navier_stokes_shock`)."""
     return navier_stokes_shock(mach, points=3)["inverse_thickness"]
+
+
+@functools.lru_cache(maxsize=8)
+def _profile(mach: float) -> dict:
+    return navier_stokes_shock(mach, points=8001, span=40.0)
+
+
+def navier_stokes_maxwellian(x, v1, v2, v3, mach: float, position: float):
+    r"""The local Maxwellian of the Navier-Stokes shock in the frame of the gas behind it,
+    the initial data of granframe's shock run (studies/hard_sphere_shock.py):
+
+        f = rho(s) (2 pi T(s))^{-3/2} exp(-((v_1 - u_2 + u(s))^2 + v_2^2 + v_3^2)
+            / (2 T(s))),   s = position - x,
+
+    with (rho, u, T)(s) of :func:`navier_stokes_shock` (s from the density midpoint,
+    upstream at s < 0, lengths in lambda_1; beyond |s| = 40 the Rankine-Hugoniot
+    states): the gas behind the shock (x < position) at rest, the gas ahead moving at
+    u_2 - u_1 = -U towards it, and the shock moving at u_2 towards larger x. For
+    ``initial = {name = "space_function", function =
+    "granframe.theory.shock:navier_stokes_maxwellian", params = {mach = M, position = X}}``
+    with x in lambda_1 (knudsen = sqrt 2)."""
+    profile = _profile(float(mach))
+    s = float(position) - numpy.asarray(x, dtype=float)
+    density = numpy.interp(s, profile["x"], profile["density"])
+    velocity = profile["state"]["u2"] - numpy.interp(s, profile["x"], profile["velocity"])
+    temperature = numpy.interp(s, profile["x"], profile["temperature"])
+    return (density / (2.0 * math.pi * temperature) ** 1.5
+            * numpy.exp(-((v1 - velocity) ** 2 + v2 ** 2 + v3 ** 2) / (2.0 * temperature)))
