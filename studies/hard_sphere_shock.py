@@ -277,16 +277,38 @@ def spline_inverse_thickness(x, density, n1: float, n2: float) -> tuple[float, f
     return float(spline(fine, 2).max()), float(middle)
 
 
+def steady_thickness(times, values) -> dict:
+    """The steady value of lambda_1/delta that still relaxes when the run ends:
+    a + b exp(-k t) fitted by least squares over the second half of the record and over
+    its last two thirds; ``steady`` = a of the first, ``spread`` = |a_1 - a_2| (the
+    extrapolation's uncertainty), ``rate`` = k of the first. NaN where a fit fails or
+    finds no decay (k outside (0.02, 20))."""
+    import scipy.optimize
+
+    fits = []
+    for start in (times[0], times[-1] - (times[-1] - times[0]) * 2.0 / 3.0):
+        keep = times >= start
+        tk, vk = times[keep], values[keep]
+        try:
+            (a, _, rate), _ = scipy.optimize.curve_fit(
+                lambda s, a, b, k: a + b * numpy.exp(-k * (s - tk[0])), tk, vk,
+                p0=(vk[-1], vk[0] - vk[-1], 0.3), bounds=([0, -1, 0.02], [1, 1, 20.0]))
+        except (RuntimeError, ValueError):
+            return {"steady": math.nan, "spread": math.nan, "rate": math.nan}
+        fits.append((float(a), float(rate)))
+    return {"steady": fits[0][0], "spread": abs(fits[0][0] - fits[1][0]), "rate": fits[0][1]}
+
+
 def spectral_analysis(store, mach: float) -> dict:
-    """The shock of a :func:`spectral_description` store: lambda_1/delta at nine times
-    over the second half of the run (its change says whether the profile is steady), the
-    shock's position and speed (fitted over that half) against u_s, the plateau behind it
-    against Rankine-Hugoniot, the velocity-resolution indicator of the final f
+    """The shock of a :func:`spectral_description` store: lambda_1/delta after every step
+    of the second half of the run, and its steady value by :func:`steady_thickness` (the
+    profile relaxes from the Navier-Stokes start over a few mean free times), the shock's
+    position and speed (fitted over that half) against u_s, the plateau behind it against
+    Rankine-Hugoniot, the velocity-resolution indicator of the final f
     (:meth:`~granframe.velocity.moments.FieldMoments.resolution`: the change of a cell's
     fields without the outermost shell of modes) in the cells within two thicknesses of
-    the shock and, apart, in the others (the walls' layers and the far wall's
-    rarefaction), and the final profile seen from the shock's midpoint (upstream at
-    x < 0)."""
+    the shock and, apart, in the others, and the final profile seen from the shock's
+    midpoint (upstream at x < 0)."""
     ds = granframe.open_run(store, time_axis="steps")
     t, x = ds.time.values, ds.x.values
     density, temperature = ds.density.values, ds.temperature.values
@@ -294,13 +316,13 @@ def spectral_analysis(store, mach: float) -> dict:
     shock_speed = math.sqrt(GAMMA) * mach - piston_speed(mach, GAMMA)
     xs = -x[::-1]  # seen from the shock: upstream (far from the wall) on the left
     history = []
-    for fraction in numpy.linspace(0.5, 1.0, 9):
-        k = int(numpy.argmin(abs(t - fraction * t[-1])))
+    for k in numpy.nonzero(t >= 0.5 * t[-1])[0]:
         inverse, middle = spline_inverse_thickness(xs, density[k][::-1], 1.0, state["n2"])
         history.append({"t": float(t[k]), "inverse_thickness": inverse,
                         "position": float(-middle)})
     times = numpy.array([h["t"] for h in history])
     positions = numpy.array([h["position"] for h in history])
+    steady = steady_thickness(times, numpy.array([h["inverse_thickness"] for h in history]))
     final = history[-1]
     behind = (x > 0.15 * final["position"]) & (x < 0.45 * final["position"])
     description = RunDescription.from_toml(ds.attrs["description_toml"])
@@ -309,10 +331,13 @@ def spectral_analysis(store, mach: float) -> dict:
     fields = FieldMoments(grid, float(x[1] - x[0])).resolution(ds.f.values[-1],
                                                               NumpyBackend())[:, 4]
     inside = numpy.abs(x - final["position"]) <= 2.0 / final["inverse_thickness"]
-    change = final["inverse_thickness"] - history[len(history) // 2]["inverse_thickness"]
+    quarter = int(numpy.argmin(abs(times - 0.75 * t[-1])))
+    change = final["inverse_thickness"] - history[quarter]["inverse_thickness"]
     return {"M": mach, "N": int(ds.sizes["v1"]), "cells": len(x),
             "dx": float(x[1] - x[0]), "final": float(t[-1]), "steps": int(len(t) - 1),
             "granframe": final["inverse_thickness"], "change": change,
+            "steady": steady["steady"], "steady spread": steady["spread"],
+            "relaxation rate": steady["rate"],
             "shock speed": float(numpy.polyfit(times, positions, 1)[0]),
             "RH shock speed": shock_speed,
             "rho2": float(density[-1][behind].mean()) if behind.any() else math.nan,
@@ -400,7 +425,7 @@ def figure(entries, spectral, path) -> None:
 
 
 SPECTRAL_COLUMNS = {"M": "g", "N": "d", "dx": "g", "steps": "d", "granframe": ".4f",
-                    "change": "+.4f", "shock speed": ".4f", "RH shock speed": ".4f",
+                    "change": "+.4f", "steady": ".4f", "steady spread": ".1e", "shock speed": ".4f", "RH shock speed": ".4f",
                     "rho2": ".4f", "RH rho2": ".4f", "fields in the shock": ".3g",
                     "fields elsewhere": ".3g", "seconds": ".0f"}
 
