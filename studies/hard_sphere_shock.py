@@ -455,7 +455,7 @@ def main(argv=None):
     print("literature (hard spheres, lambda_1/delta at these M): none found by the library "
           "search; none quoted")
     summary = {"rows": rows, "literature": LITERATURE,
-               "spectral": [{key: row[key] for key in SPECTRAL_COLUMNS} for row in spectral],
+               "spectral": [{key: row.get(key) for key in SPECTRAL_COLUMNS} for row in spectral],
                "note": "change: refined (dx/2, dt/2, 2x particles per cell) minus the first "
                        "run; +-: batch-means standard errors"}
     (out / "hard_sphere_shock.json").write_text(json_text(summary, indent=1))
