@@ -261,7 +261,7 @@ def test_the_spline_thickness_of_granframes_runs_on_cell_averages(cell):
         1.0, rel=tolerance)
 
 
-def test_granframes_shock_run_is_the_piston_problem_in_lambda_1():
+def test_granframes_shock_run_starts_from_navier_stokes_in_lambda_1():
     """The description of granframe's own shock: 3D hard spheres, elastic, eps = sqrt 2
     (lambda_1 = 1), the Navier-Stokes start, the upstream reservoir at -U of the Mach
     number, a whole number of steps at half the CFL limit or below, cells of the mean free

@@ -39,7 +39,7 @@ from granframe import validators as check
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.space import exact, vibration
-from granframe.space.boundaries import Diffuse, Specular, Vibrating
+from granframe.space.boundaries import Diffuse, Reservoir, Specular, Vibrating
 from granframe.space.transport import upwind_speeds
 from granframe.testing import conformance as kit
 from granframe.testing.piston import oscillating_piston
@@ -246,8 +246,10 @@ def test_a_piston_that_really_oscillates_heats_as_the_layer_says(reflection, gas
 
 @pytest.mark.parametrize("wall", [Specular(), Diffuse(temperature=1.5, velocity=0.3,
                                                       accommodation=0.5),
-                                  Vibrating(**WALL), Vibrating(**WALL, reflection="specular")],
-                         ids=["specular", "diffuse", "vibrating", "vibrating-specular"])
+                                  Vibrating(**WALL), Vibrating(**WALL, reflection="specular"),
+                                  Reservoir(density=1.2, velocity=-0.5, temperature=1.1)],
+                         ids=["specular", "diffuse", "vibrating", "vibrating-specular",
+                              "reservoir"])
 def test_walls_copy_nothing_between_host_and_device_after_their_first_call(wall):
     """On the counting backend (NumPy standing for a device): after one call of ``emit``
     and ``ghosts``, twelve more at other times and sides cross nothing."""
