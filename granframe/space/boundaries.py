@@ -112,6 +112,28 @@ def _check_resolved(owner: str, temperature: float, grid) -> None:
                      "is off by 46 % or more; refine the grid (n_modes) or warm the wall")
 
 
+def _check_fits(owner: str, velocity, speed: float, temperature: float, grid,
+                names: tuple) -> None:
+    """Refuse a Maxwellian of ``temperature`` drifting at ``speed`` (shown as ``velocity``)
+    that does not fit the grid: inside the box, below 1e-8 of its peak on its faces, and
+    resolved by the nodes (:func:`_check_resolved`). ``names``: the velocity's symbol, how
+    the message calls the velocity, and what the Maxwellian belongs to."""
+    symbol, called, kind = names
+    gap = grid.half_width - speed
+    if gap <= 0:
+        check.reject(owner, "velocity", velocity,
+                     f"must lie inside the velocity box: |{symbol}| < L = {grid.half_width:g}")
+    _check_resolved(owner, temperature, grid)
+    if math.exp(-gap * gap / (2.0 * temperature)) > 1e-8:
+        shown = format(velocity, "g") if isinstance(velocity, float) else velocity
+        check.reject(owner, "temperature", temperature,
+                     f"with {called} {shown} gives a {kind} Maxwellian that "
+                     f"does not fit the velocity box [-{grid.half_width:g}, "
+                     f"{grid.half_width:g}]^{grid.dimension} (above 1e-8 of its peak on its "
+                     f"faces): lower it below {gap * gap / (2 * math.log(1e8)):.4g} "
+                     "or widen the grid (support_radius)")
+
+
 def _emitting_ghosts(wall, inside, grid, xp, t, side, leaving):
     r"""The ghost cells of a wall that emits what arrives (:class:`Diffuse`,
     :class:`Vibrating`), from the g cells next to it: a linear extension of the data
@@ -187,19 +209,8 @@ class Diffuse(contracts.Boundary):
             check.reject("Diffuse", "velocity", list(self.velocity),
                          f"must have at most {d - 1} tangential component(s) (v2"
                          f"{', v3' if d == 3 else ''}) on a {d}D velocity grid")
-        speed = max(abs(u) for u in self.velocity)
-        gap = grid.half_width - speed
-        if gap <= 0:
-            check.reject("Diffuse", "velocity", list(self.velocity),
-                         f"must lie inside the velocity box: |u_w| < L = {grid.half_width:g}")
-        _check_resolved("Diffuse", self.temperature, grid)
-        if math.exp(-gap * gap / (2.0 * self.temperature)) > 1e-8:
-            check.reject("Diffuse", "temperature", self.temperature,
-                         f"with wall velocity {list(self.velocity)} gives a wall Maxwellian that "
-                         f"does not fit the velocity box [-{grid.half_width:g}, "
-                         f"{grid.half_width:g}]^{d} (above 1e-8 of its peak on its faces): "
-                         f"lower it below {gap * gap / (2 * math.log(1e8)):.4g} "
-                         "or widen the grid (support_radius)")
+        _check_fits("Diffuse", list(self.velocity), max(abs(u) for u in self.velocity),
+                    self.temperature, grid, ("u_w", "wall velocity", "wall"))
 
     def maxwellian(self, grid, xp=numpy):
         """exp(-|v - u_w|^2 / (2 T_w)) on the nodes (unnormalised)."""
@@ -281,18 +292,8 @@ class Reservoir(contracts.Boundary):
         """The reservoir's Maxwellian must fit the grid as a diffuse wall's must: inside the
         box, below 1e-8 of its peak on its faces, and resolved by the nodes,
         sqrt(T_r) >= h / 2."""
-        gap = grid.half_width - abs(self.velocity)
-        if gap <= 0:
-            check.reject("Reservoir", "velocity", self.velocity,
-                         f"must lie inside the velocity box: |u_r| < L = {grid.half_width:g}")
-        _check_resolved("Reservoir", self.temperature, grid)
-        if math.exp(-gap * gap / (2.0 * self.temperature)) > 1e-8:
-            check.reject("Reservoir", "temperature", self.temperature,
-                         f"with velocity {self.velocity:g} gives a reservoir Maxwellian that "
-                         f"does not fit the velocity box [-{grid.half_width:g}, "
-                         f"{grid.half_width:g}]^{grid.dimension} (above 1e-8 of its peak on "
-                         f"its faces): lower it below {gap * gap / (2 * math.log(1e8)):.4g} "
-                         "or widen the grid (support_radius)")
+        _check_fits("Reservoir", self.velocity, abs(self.velocity), self.temperature, grid,
+                    ("u_r", "velocity", "reservoir"))
 
     def _host_constants(self, grid):
         """NumPy arrays: M_r seen from a lower end and from an upper one, and the mask
