@@ -31,7 +31,6 @@ import argparse
 import math
 
 import numpy
-import scipy.optimize
 
 import granframe
 from granframe.backends import NumpyBackend
@@ -41,8 +40,8 @@ from granframe.run.runner import Simulation
 from granframe.theory.walls import heated_walls_jump, heated_walls_profile
 from granframe.tools.analysis import energy_balance
 from granframe.tools.studykit import (cfl_time_step, draw, finish, json_text, number,
-                                      output_folder, parse_study, print_table, run_study,
-                                      save_figure, study_arguments)
+                                      output_folder, parse_study, print_table, relaxation_fit,
+                                      run_study, save_figure, study_arguments)
 from granframe.velocity.moments import FieldMoments
 
 
@@ -89,21 +88,12 @@ def steady_estimate(times, values) -> dict:
     and over t >= t_f/3; ``spread`` = the two fits' difference in a, the estimate's
     uncertainty. A fitted rate k outside [0.2, 10] (per unit time) is no relaxation the
     run has followed (a ratio not yet levelling off, or noise): NaN, as for a failed fit."""
-    estimates = []
-    for start in (times[-1] / 2, times[-1] / 3):
-        keep = times >= start
-        t, v = times[keep], values[keep]
-        try:
-            (a, _, rate), _ = scipy.optimize.curve_fit(
-                lambda s, a, b, k: a + b * numpy.exp(-k * (s - t[0])), t, v,
-                p0=(v[-1], v[0] - v[-1], 1.0),
-                bounds=([-numpy.inf, -numpy.inf, 0.1], [numpy.inf, numpy.inf, 20.0]))
-        except (RuntimeError, ValueError):
-            return {"steady": math.nan, "spread": math.nan}
-        if not 0.2 <= rate <= 10.0:
-            return {"steady": math.nan, "spread": math.nan}
-        estimates.append(float(a))
-    return {"steady": estimates[0], "spread": abs(estimates[0] - estimates[1])}
+    fit = relaxation_fit(times, values, (times[-1] / 2, times[-1] / 3), 1.0,
+                         ([-numpy.inf, -numpy.inf, 0.1], [numpy.inf, numpy.inf, 20.0]),
+                         accepted=(0.2, 10.0))
+    if fit is None:
+        return {"steady": math.nan, "spread": math.nan}
+    return {"steady": fit["steady"], "spread": fit["spread"]}
 
 
 def kinetic(ds, operator, knudsen: float) -> dict:

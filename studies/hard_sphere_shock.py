@@ -81,6 +81,7 @@ from granframe.tools.studykit import (
     parse_study,
     print_table,
     quick_option,
+    relaxation_fit,
     run_study,
     save_figure,
 )
@@ -296,20 +297,10 @@ def steady_thickness(times, values) -> dict:
     its last two thirds; ``steady`` = a of the first, ``spread`` = |a_1 - a_2| (the
     extrapolation's uncertainty), ``rate`` = k of the first. NaN where a fit fails or
     finds no decay (k outside (0.02, 20))."""
-    import scipy.optimize
-
-    fits = []
-    for start in (times[0], times[-1] - (times[-1] - times[0]) * 2.0 / 3.0):
-        keep = times >= start
-        tk, vk = times[keep], values[keep]
-        try:
-            (a, _, rate), _ = scipy.optimize.curve_fit(
-                lambda s, a, b, k: a + b * numpy.exp(-k * (s - tk[0])), tk, vk,
-                p0=(vk[-1], vk[0] - vk[-1], 0.3), bounds=([0, -1, 0.02], [1, 1, 20.0]))
-        except (RuntimeError, ValueError):
-            return {"steady": math.nan, "spread": math.nan, "rate": math.nan}
-        fits.append((float(a), float(rate)))
-    return {"steady": fits[0][0], "spread": abs(fits[0][0] - fits[1][0]), "rate": fits[0][1]}
+    fit = relaxation_fit(times, values,
+                         (times[0], times[-1] - (times[-1] - times[0]) * 2.0 / 3.0), 0.3,
+                         ([0, -1, 0.02], [1, 1, 20.0]))
+    return fit or {"steady": math.nan, "spread": math.nan, "rate": math.nan}
 
 
 def spectral_analysis(store, mach: float) -> dict:

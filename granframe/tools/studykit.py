@@ -178,6 +178,34 @@ def cfl_time_step(cells: int, final: float, grid: dict, cfl: float = 0.5,
     return final / math.ceil(final / limit * (1 - 1e-12))
 
 
+def relaxation_fit(times, values, starts, rate_guess: float, bounds,
+                   accepted=(0.0, math.inf)) -> dict | None:
+    """The steady value of a quantity that still relaxes when a run ends: v(t) = a +
+    b exp(-k (t - t_0)) fitted by least squares (scipy.optimize.curve_fit, started at
+    (v_last, v_first - v_last, ``rate_guess``) within ``bounds`` on (a, b, k)) over the
+    values at t >= each of ``starts`` (t_0 the first time kept). Returns ``steady`` = a of
+    the first fit, ``spread`` = |a_1 - a_2| of the first two (the extrapolation's
+    uncertainty) and ``rate`` = k of the first; None where a fit fails or a fitted rate
+    lies outside ``accepted`` (no relaxation the run has followed)."""
+    import numpy
+    import scipy.optimize
+
+    fits = []
+    for start in starts:
+        keep = times >= start
+        t, v = times[keep], values[keep]
+        try:
+            (a, _, rate), _ = scipy.optimize.curve_fit(
+                lambda s, a, b, k: a + b * numpy.exp(-k * (s - t[0])), t, v,
+                p0=(v[-1], v[0] - v[-1], rate_guess), bounds=bounds)
+        except (RuntimeError, ValueError):
+            return None
+        if not accepted[0] <= rate <= accepted[1]:
+            return None
+        fits.append((float(a), float(rate)))
+    return {"steady": fits[0][0], "spread": abs(fits[0][0] - fits[1][0]), "rate": fits[0][1]}
+
+
 def write_csv(path, rows: list[dict], fields=None) -> None:
     """Rows of dicts as a CSV table with a header (``fields``: the columns and their order)."""
     with open(path, "w", newline="") as stream:
