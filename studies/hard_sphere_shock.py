@@ -387,10 +387,11 @@ def gathered(out: pathlib.Path) -> tuple[list[dict], list[dict]]:
 
 def figure(entries, spectral, path) -> None:
     """Normalised density and temperature against x/lambda_1: DSMC markers, Navier-Stokes
-    lines, granframe's runs dashed with squares (one colour per Mach number)."""
+    lines, granframe's runs dashed with open markers, one shape per run (one colour per Mach
+    number)."""
     import matplotlib.pyplot as plt  # the Agg backend: studykit chose it on import
 
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.6), layout="constrained")
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5.6), layout="constrained")
     colours = {entry["row"]["M"]: f"C{k}" for k, entry in enumerate(entries)}
     for row in spectral:
         colours.setdefault(row["M"], f"C{len(colours)}")
@@ -402,7 +403,7 @@ def figure(entries, spectral, path) -> None:
         x = numpy.array(dsmc["x"])
         for ax, key, jump in ((axes[0], "density", n2), (axes[1], "temperature", t2)):
             values = (numpy.array(dsmc[key]) - 1.0) / (jump - 1.0)
-            ax.plot(x, values, "o", ms=2.5, color=colour,
+            ax.plot(x, values, "o", ms=2.5, color=colour, zorder=3,
                     label=f"M = {row['M']:g} DSMC: λ₁/δ = {row['DSMC']:.3f} ± {row['+-']:.3f}")
             ax.plot(ns["x"], (numpy.array(ns[key]) - 1.0) / (jump - 1.0), "-", lw=1.2,
                     color=colour, label=f"M = {row['M']:g} Navier-Stokes: λ₁/δ = "
@@ -412,19 +413,21 @@ def figure(entries, spectral, path) -> None:
         for ax, key, jump in ((axes[0], "density", row["RH rho2"]),
                               (axes[1], "temperature", row["RH T2"])):
             values = (numpy.array(prof[key]) - 1.0) / (jump - 1.0)
-            ax.plot(prof["x"], values, "s--", ms=3, lw=0.8, color=colours[row["M"]],
-                    markerfacecolor="none" if k % 2 else colours[row["M"]],
+            ax.plot(prof["x"], values, "--", marker="s^Dvp"[k % 5], ms=3.5, lw=0.8,
+                    color=colours[row["M"]], markerfacecolor="none", alpha=0.8,
                     label=f"M = {row['M']:g} granframe N = {row['N']}, dx = {row['dx']:g} λ₁: "
-                          f"λ₁/δ = {row['granframe']:.3f}")
+                          f"λ₁/δ = {row['granframe']:.3f} at t = {row['final']:g}")
     axes[0].set(xlabel="x / λ₁ (from the density midpoint)",
                 ylabel="(ρ − ρ₁)/(ρ₂ − ρ₁)", xlim=(-12, 12))
     axes[1].set(xlabel="x / λ₁ (from the density midpoint)",
                 ylabel="(T − T₁)/(T₂ − T₁)", xlim=(-12, 12))
     for ax in axes:
         ax.grid(True, alpha=0.3)
-    axes[0].legend(fontsize=7)
+    # below the panels: inside, it covered a rise
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncol=3,
+               fontsize=7)
     fig.suptitle("normal shock of elastic hard spheres: DSMC (markers), Navier-Stokes with "
-                 "first Chapman-Enskog μ, κ (lines), granframe (squares); "
+                 "first Chapman-Enskog μ, κ (lines), granframe (open markers, dashed); "
                  "λ₁ = 1/(√2 n₁ π σ²)", fontsize=9)
     save_figure(fig, path, dpi=120)
 
