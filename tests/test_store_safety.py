@@ -383,6 +383,48 @@ def test_ctrl_c_during_start_up_exits_130_without_a_traceback(workdir):
         "status"] in ("interrupted", "finished")
 
 
+def test_ctrl_c_during_any_import_is_sent_again_after_it(tmp_path, monkeypatch):
+    """The command line's SIGINT handler, called as the signal would call it in a function
+    of a module being imported (as NumPy's compiled core imports ``datetime`` while it
+    initialises: a KeyboardInterrupt there became NumPy's ImportError and a traceback),
+    schedules the signal again instead of raising; outside an import it raises."""
+    from granframe.tools import cli
+
+    sent = []
+
+    class Timer:
+        def __init__(self, delay, function, args):
+            sent.append((delay, function, args))
+
+        def start(self):
+            pass
+
+    monkeypatch.setattr("threading.Timer", Timer)
+    (tmp_path / "being_imported.py").write_text(textwrap.dedent("""
+        import signal
+        import sys
+
+        from granframe.tools import cli
+
+
+        def deep():
+            cli._interrupt(signal.SIGINT, sys._getframe())
+
+
+        deep()
+        """))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delitem(sys.modules, "being_imported", raising=False)
+    try:
+        __import__("being_imported")
+    except KeyboardInterrupt:
+        pytest.fail("the handler raised KeyboardInterrupt inside an import")
+    assert [(delay, args) for delay, _, args in sent] == [(0.01, (os.getpid(), signal.SIGINT))]
+    with pytest.raises(KeyboardInterrupt):
+        cli._interrupt(signal.SIGINT, sys._getframe())
+    assert len(sent) == 1
+
+
 def test_ctrl_c_to_a_sweep_exits_130_and_leaves_its_runs_resumable(workdir):
     import tomli_w
 

@@ -431,11 +431,24 @@ def main(argv: list[str] | None = None) -> int:
         return 2
 
 
+def _importing(frame) -> bool:
+    """Whether ``frame`` runs inside an import begun since :func:`entry` (a frame of
+    importlib's bootstrap between it and ``entry``'s own frame)."""
+    while frame is not None and frame.f_code is not entry.__code__:
+        if frame.f_code.co_filename.startswith("<frozen importlib"):
+            return True
+        frame = frame.f_back
+    return False
+
+
 def _interrupt(signum, frame):
-    """Ctrl-C as KeyboardInterrupt, but never inside the import machinery: raised in one of
-    importlib's lock callbacks it would be printed as "Exception ignored" and lost (the run
-    would go on), so there it is sent again 10 ms later, once the import has returned."""
-    if frame is not None and frame.f_code.co_filename.startswith("<frozen importlib"):
+    """Ctrl-C as KeyboardInterrupt, but never during an import: raised in one of importlib's
+    lock callbacks it would be printed as "Exception ignored" and lost (the run would go
+    on), and raised in a module that a compiled extension imports while it initialises
+    (NumPy's import of ``datetime``) it becomes that extension's ImportError, printed with
+    a traceback. So while any import is under way it is sent again 10 ms later, once the
+    import has returned."""
+    if _importing(frame):
         import os
         import threading
 
