@@ -11,9 +11,9 @@ import scipy.linalg
 
 from granframe.theory.cells import gauss_cell_averages
 from granframe.theory.cooling import maxwellian_cooling_rate, relative_speed_average
-from granframe.theory.euler import (euler_riemann, euler_riemann_cell_averages,
-                                    euler_riemann_star, granular_euler_piston, piston_speed,
-                                    rankine_hugoniot)
+from granframe.theory.euler import (euler_finite_volumes, euler_riemann,
+                                    euler_riemann_cell_averages, euler_riemann_star,
+                                    granular_euler_piston, piston_speed, rankine_hugoniot)
 from granframe.theory.modes import (cooling_rate_burnett, density_response,
                                     heat_critical_wavenumber, heat_mode, heat_mode_index,
                                     longitudinal_matrix, longitudinal_maxwellian, shear_mode)
@@ -535,6 +535,135 @@ def test_the_granular_euler_solver_conserves_mass_and_energy_between_reflecting_
               + run["density"] * run["temperature"]).sum(axis=1) * dx
     assert numpy.abs(mass / mass[0] - 1).max() < 1e-13
     assert numpy.abs(energy / energy[0] - 1).max() < 1e-13
+
+
+# -- The Euler equations on a rectangle ----------------------------------------------------------
+
+def _sod_across(cells, axis, other=4):
+    """Sod's tube (gamma = 2) along ``axis`` of a (cells x other) or (other x cells) grid."""
+    x = (numpy.arange(cells) + 0.5) / cells
+    shape = [other, other]
+    shape[axis] = cells
+    line = [1, 1]
+    line[axis] = cells
+    rho = numpy.broadcast_to(numpy.where(x < 0.5, 1.0, 0.125).reshape(line), shape)
+    pressure = numpy.broadcast_to(numpy.where(x < 0.5, 1.0, 0.1).reshape(line), shape)
+    spacing = [1.0, 1.0]
+    spacing[axis] = 1.0 / cells
+    return euler_finite_volumes(rho, numpy.zeros((2, *shape)), pressure / rho, spacing, [0.2])
+
+
+def test_the_euler_solver_on_a_rectangle_meets_sod_along_either_axis():
+    """Sod along x and along y (transmissive ends): the two runs are each other's transposes
+    exactly, and the density's L1 distance from the exact cell averages falls with the cells
+    (measured 0.0100, 0.0056 on 100, 200 cells: the order of a scheme through a contact
+    and a shock, below 1)."""
+    errors = []
+    for cells in (100, 200):
+        along_x, along_y = _sod_across(cells, 0), _sod_across(cells, 1)
+        for key in ("density", "temperature"):
+            assert numpy.array_equal(along_x[key][-1], along_y[key][-1].T)
+        assert numpy.array_equal(along_x["velocity"][-1][0], along_y["velocity"][-1][1].T)
+        assert numpy.abs(along_x["velocity"][-1][1]).max() == 0.0
+        exact = euler_riemann_cell_averages(*SOD, 2.0, numpy.linspace(0, 1, cells + 1), 0.2)
+        errors.append(numpy.mean(abs(along_x["density"][-1][:, 0] - exact["rho"])))
+    assert errors[1] < 0.0065 and errors[0] / errors[1] > 1.6, errors
+
+
+def test_the_euler_solver_is_second_order_on_a_smooth_wave_along_the_diagonal():
+    """A density wave 1 + 0.2 sin 2 pi (x + y) at uniform pressure carried by u = (1, 1/2)
+    across a periodic square to t = 0.4 (its exact solution the shifted wave): the L1 error
+    falls at order 1.46 from 32 to 64 cells a side and 1.83 from 64 to 128, towards
+    MUSCL's 2 (the minmod limiter clips the extrema: the maximum error falls at order 1.2)."""
+    errors = []
+    for cells in (32, 64, 128):
+        x = (numpy.arange(cells) + 0.5) / cells
+        X, Y = numpy.meshgrid(x, x, indexing="ij")
+
+        def wave(a, b):
+            return 1.0 + 0.2 * numpy.sin(2 * math.pi * (a + b))
+
+        velocity = numpy.array([numpy.ones((cells, cells)), numpy.full((cells, cells), 0.5)])
+        run = euler_finite_volumes(wave(X, Y), velocity, 1.0 / wave(X, Y),
+                                   (1 / cells, 1 / cells), [0.4],
+                                   boundaries=[("periodic", "periodic")] * 2)
+        errors.append(numpy.mean(abs(run["density"][-1] - wave(X - 0.4, Y - 0.2))))
+    orders = numpy.log2(numpy.array(errors[:-1]) / numpy.array(errors[1:]))
+    assert orders[-1] > 1.75 and orders[-1] > orders[0], (errors, orders)
+
+
+@pytest.mark.parametrize("ends", ["periodic", "reflecting"])
+def test_the_euler_solver_conserves_what_its_ends_keep_in(ends):
+    """Random data on a 24 x 24 square to t = 0.3: mass and energy to round-off with periodic
+    ends and between reflecting walls (with 3D velocities, gamma = 5/3), and the momentum
+    too on the periodic square."""
+    rng = numpy.random.default_rng(1)
+    rho, temperature = 1 + 0.3 * rng.random((2, 24, 24))
+    velocity = 0.3 * rng.standard_normal((2, 24, 24))
+    run = euler_finite_volumes(rho, velocity, temperature, (1 / 24, 1 / 24), [0.0, 0.3],
+                               boundaries=[(ends, ends)] * 2, dimension=3)
+    assert run["steps"] > 10
+    mass = run["density"].sum(axis=(1, 2))
+    energy = (0.5 * run["density"] * (run["velocity"] ** 2).sum(axis=1)
+              + 1.5 * run["density"] * run["temperature"]).sum(axis=(1, 2))
+    assert abs(mass[1] / mass[0] - 1) < 1e-13 and abs(energy[1] / energy[0] - 1) < 1e-13
+    if ends == "periodic":
+        momentum = (run["density"][:, None] * run["velocity"]).sum(axis=(2, 3))
+        assert numpy.abs(momentum[1] - momentum[0]).max() < 1e-12
+
+
+def test_the_euler_solver_keeps_the_symmetry_of_data_about_the_diagonal():
+    """Data symmetric under x <-> y (with u_1 <-> u_2), reflecting low ends and transmissive
+    high ones: the solution stays symmetric to round-off."""
+    cells = 24
+    i = numpy.arange(cells)
+    rho = (numpy.where((i[:, None] < 12) & (i[None, :] < 12), 1.0, 0.2)
+           + 0.1 * numpy.add.outer(i, i) / cells)
+    run = euler_finite_volumes(rho, numpy.zeros((2, cells, cells)), numpy.ones((cells, cells)),
+                               (1 / cells, 1 / cells), [0.2],
+                               boundaries=[("reflecting", "transmissive")] * 2)
+    density, velocity = run["density"][-1], run["velocity"][-1]
+    assert numpy.abs(velocity).max() > 0.1
+    assert numpy.abs(density - density.T).max() < 1e-14
+    assert numpy.abs(velocity[0] - velocity[1].T).max() < 1e-14
+
+
+def test_the_granular_piston_solver_is_the_one_axis_case_of_the_euler_solver():
+    """The piston problem at e = 1 between reflecting walls: granular_euler_piston and
+    euler_finite_volumes on one axis give the same fields to round-off."""
+    speed = piston_speed(1.5, 2.0)
+    piston = granular_euler_piston(speed, 1.0, 1.0, 1.0, [0.1, 0.2], cells=100)
+    run = euler_finite_volumes(numpy.ones(100), numpy.full((1, 100), -speed), numpy.ones(100),
+                               [0.01], [0.1, 0.2], boundaries=[("reflecting", "reflecting")])
+    for key in ("density", "temperature"):
+        assert numpy.abs(run[key] - piston[key]).max() < 1e-13
+    assert numpy.abs(run["velocity"][:, 0] - piston["velocity"]).max() < 1e-13
+
+
+@pytest.mark.parametrize("change, parameter", [
+    ({"density": numpy.zeros((4, 4))}, "density"),
+    ({"density": numpy.ones((2, 4))}, "density"),
+    ({"velocity": numpy.zeros((1, 4, 4))}, "velocity"),
+    ({"temperature": numpy.full((4, 4), numpy.nan)}, "temperature"),
+    ({"spacing": [0.1]}, "spacing"),
+    ({"spacing": [0.1, -0.1]}, "spacing"),
+    ({"boundaries": [("periodic", "reflecting")] * 2}, "boundaries"),
+    ({"boundaries": [("open", "open")] * 2}, "boundaries"),
+    ({"dimension": 1}, "dimension"),
+    ({"cfl": 0.9}, "cfl"),
+    ({"times": [-1.0]}, "times"),
+    ({"times": []}, "times"),
+])
+def test_the_euler_solver_refuses_bad_input_by_name(change, parameter):
+    arguments = {"density": numpy.ones((4, 4)), "velocity": numpy.zeros((2, 4, 4)),
+                 "temperature": numpy.ones((4, 4)), "spacing": [0.25, 0.25], "times": [0.1]}
+    arguments.update(change)
+    keywords = {k: arguments.pop(k) for k in ("boundaries", "dimension", "cfl")
+                if k in arguments}
+    with pytest.raises(ValueError, match=f"'{parameter}'"):
+        euler_finite_volumes(arguments["density"], arguments["velocity"],
+                             arguments["temperature"], arguments["spacing"], arguments["times"],
+                             **keywords)
 
 
 # -- The Burnett part of the cooling rate -------------------------------------------------------

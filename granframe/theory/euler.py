@@ -1,6 +1,6 @@
 r"""The Euler equations of a gas, ordinary and granular: the exact Riemann solver, the
-piston problem's Rankine-Hugoniot state, and a finite-volume solver of the granular Euler
-equations.
+piston problem's Rankine-Hugoniot state, a finite-volume solver of the Euler equations on
+a line or a rectangle, and its granular piston problem.
 
 In granframe's variables gamma = (d+2)/d, p = rho T with T the temperature per velocity
 dimension, and E = rho u^2/2 + p/(gamma - 1) = int |v|^2/2 f dv, since 1/(gamma-1) = d/2:
@@ -325,27 +325,37 @@ def piston_speed(mach: float, gamma: float, temperature: float = 1.0) -> float:
 
 
 def _primitive(q, dimension):
+    """rho, the velocity components (one row per momentum row of q) and T of conserved
+    q = (rho, rho u_1, ..., E) with E = rho |u|^2/2 + d rho T/2."""
     rho = q[0]
-    u = q[1] / rho
-    temperature = (q[2] - 0.5 * rho * u * u) / (0.5 * dimension * rho)
+    u = q[1:-1] / rho
+    temperature = (q[-1] - 0.5 * rho * (u * u).sum(axis=0)) / (0.5 * dimension * rho)
     return rho, u, temperature
+
+
+def _conserved(rho, u, temperature, dimension):
+    return numpy.concatenate([rho[None], rho * u, (0.5 * rho * (u * u).sum(axis=0)
+                                                   + 0.5 * dimension * rho * temperature)[None]])
 
 
 def _minmod(a, b):
     return numpy.where(a * b > 0.0, numpy.sign(a) * numpy.minimum(abs(a), abs(b)), 0.0)
 
 
-def _hll(left, right, dimension):
-    """HLL flux (Harten, Lax & van Leer 1983) with Davis's wave speeds, from primitive
-    (rho, u, T) states either side of each face."""
+def _hll(left, right, normal, dimension):
+    """HLL flux (Harten, Lax & van Leer 1983) with Davis's wave speeds through faces of
+    normal e_normal, from primitive (rho, u, T) states either side of each face."""
     gamma = (dimension + 2) / dimension
     fluxes, states, speeds = [], [], []
     for rho, u, temperature in (left, right):
-        p = rho * temperature
-        energy = 0.5 * rho * u * u + 0.5 * dimension * p
-        states.append(numpy.array([rho, rho * u, energy]))
-        fluxes.append(numpy.array([rho * u, rho * u * u + p, u * (energy + p)]))
-        speeds.append((u, numpy.sqrt(gamma * temperature)))
+        state = _conserved(rho, u, temperature, dimension)
+        un, p = u[normal], rho * temperature
+        flux = state * un
+        flux[1 + normal] += p
+        flux[-1] += p * un
+        states.append(state)
+        fluxes.append(flux)
+        speeds.append((un, numpy.sqrt(gamma * temperature)))
     (ul, cl), (ur, cr) = speeds
     slow = numpy.minimum(ul - cl, ur - cr)
     fast = numpy.maximum(ul + cl, ur + cr)
@@ -353,36 +363,69 @@ def _hll(left, right, dimension):
     return (hi * fluxes[0] - lo * fluxes[1] + hi * lo * (states[1] - states[0])) / (hi - lo)
 
 
+def _ghosts(prim, axis, sides):
+    """prim (rows rho, u_1..u_k, T; then the space axes) with two ghost cells at each end
+    of space axis ``axis``: 'periodic', 'reflecting' (the mirror images of the first two
+    cells in mirror order, the normal velocity reversed) or 'transmissive' (the end cell
+    repeated)."""
+    ax = axis + 1
+    n = prim.shape[ax]
+    #: the cells each kind copies into the ghosts, in array order: (before the first
+    #: cell, after the last)
+    taken = {"periodic": ([n - 2, n - 1], [0, 1]), "transmissive": ([0, 0], [n - 1, n - 1]),
+             "reflecting": ([1, 0], [n - 1, n - 2])}
+    ends = []
+    for end, side in enumerate(sides):
+        block = numpy.take(prim, taken[side][end], axis=ax)
+        if side == "reflecting":
+            block[1 + axis] *= -1.0
+        ends.append(block)
+    return numpy.concatenate([ends[0], prim, ends[1]], axis=ax)
+
+
+def _axis_rate(prim, axis, dx, sides, dimension):
+    """-d_axis of the Euler fluxes: MUSCL with the minmod limiter on (rho, u, T), the HLL
+    flux at every face of that axis, two ghost cells at each end (:func:`_ghosts`)."""
+    ax = axis + 1
+
+    def part(array, start, stop):       # a view of array[start:stop] along the axis
+        return array[(slice(None),) * ax + (slice(start, stop),)]
+
+    padded = _ghosts(prim, axis, sides)
+    slope = _minmod(part(padded, 1, -1) - part(padded, 0, -2),
+                    part(padded, 2, None) - part(padded, 1, -1))
+    centre = part(padded, 1, -1)
+    left = part(centre + 0.5 * slope, None, -1)
+    right = part(centre - 0.5 * slope, 1, None)
+    flux = _hll((left[0], left[1:-1], left[-1]), (right[0], right[1:-1], right[-1]), axis,
+                dimension)
+    return -(part(flux, 1, None) - part(flux, None, -1)) / dx
+
+
+def _euler_rate(q, spacings, boundaries, dimension):
+    """-div of the Euler fluxes of q, the axes' parts added (unsplit, one stage)."""
+    rho, u, temperature = _primitive(q, dimension)
+    prim = numpy.concatenate([rho[None], u, temperature[None]])
+    return sum(_axis_rate(prim, axis, dx, sides, dimension)
+               for axis, (dx, sides) in enumerate(zip(spacings, boundaries)))
+
+
 def _cool(q, dt, c, dimension):
     """The cooling over dt by its exact solution at fixed rho: T <- T exp(-c rho dt)."""
     rho, u, temperature = _primitive(q, dimension)
-    temperature = temperature * numpy.exp(-c * rho * dt)
-    return numpy.array([rho, rho * u, 0.5 * rho * u * u + 0.5 * dimension * rho * temperature])
+    return _conserved(rho, u, temperature * numpy.exp(-c * rho * dt), dimension)
 
 
-def _transport_rate(q, dx, dimension):
-    """-d_x of the Euler fluxes of q: MUSCL with the minmod limiter on (rho, u, T), two
-    ghost cells at each wall, the mirror images of the first two cells (u reversed) in
-    mirror order (the image of the wall cell next to the wall), the HLL flux at every face:
-    a reflecting wall lets no mass or energy through (tests/test_theory.py)."""
-    prim = numpy.array(_primitive(q, dimension))
-    mirror = prim[:, [1, 0]] * numpy.array([[1.0], [-1.0], [1.0]])
-    far = prim[:, [-1, -2]] * numpy.array([[1.0], [-1.0], [1.0]])
-    padded = numpy.concatenate([mirror, prim, far], axis=1)
-    slope = _minmod(padded[:, 1:-1] - padded[:, :-2], padded[:, 2:] - padded[:, 1:-1])
-    centre = padded[:, 1:-1]
-    left = (centre + 0.5 * slope)[:, :-1]
-    right = (centre - 0.5 * slope)[:, 1:]
-    flux = _hll(tuple(left), tuple(right), dimension)
-    return -(flux[:, 1:] - flux[:, :-1]) / dx
+#: the piston problem's two reflecting ends
+WALLS = (("reflecting", "reflecting"),)
 
 
 def _piston_step(q, dt, c, dx, dimension):
     """One step dt of the granular Euler solver: half a step of cooling, the transport by
     SSP RK2, half a step of cooling (Strang splitting)."""
     q = _cool(q, 0.5 * dt, c, dimension)
-    stage = q + dt * _transport_rate(q, dx, dimension)
-    q = 0.5 * (q + stage + dt * _transport_rate(stage, dx, dimension))
+    stage = q + dt * _euler_rate(q, (dx,), WALLS, dimension)
+    q = 0.5 * (q + stage + dt * _euler_rate(stage, (dx,), WALLS, dimension))
     return _cool(q, 0.5 * dt, c, dimension)
 
 
@@ -392,7 +435,7 @@ def _piston_advance(q, t, target, c, dx, cfl, dimension):
     gamma = (dimension + 2) / dimension
     while t < target - 1e-14:
         rho, u, temperature = _primitive(q, dimension)
-        dt = min(cfl * dx / float(numpy.max(abs(u) + numpy.sqrt(gamma * temperature))),
+        dt = min(cfl * dx / float(numpy.max(abs(u[0]) + numpy.sqrt(gamma * temperature))),
                  target - t)
         q = _piston_step(q, dt, c, dx, dimension)
         t += dt
@@ -414,7 +457,8 @@ def granular_euler_piston(speed: float, restitution: float, knudsen: float, leng
     the limit eps -> 0 at fixed (1 - e^2)/eps of the Boltzmann equation with the Maxwell
     kernel B = 1/|S^{d-1}|, whose energy sink is exact in rho and T for any f
     (:func:`~granframe.theory.cooling.maxwellian_cooling_rate`: dT/dt = -c rho T,
-    c = (1 - e^2)/(4 eps)). The scheme: MUSCL with the minmod limiter on (rho, u, T)
+    c = (1 - e^2)/(4 eps)). The scheme (that of :func:`euler_finite_volumes` on one axis,
+    with the cooling): MUSCL with the minmod limiter on (rho, u, T)
     (van Leer, J. Comput. Phys. 32 (1979) 101; Toro, Riemann Solvers and Numerical Methods
     for Fluid Dynamics, 3rd ed., 2009, ch. 13-14), the HLL flux with Davis's wave speeds
     S_L = min(u_L - c_L, u_R - c_R), S_R = max(u_L + c_L, u_R + c_R) (Harten, Lax & van
@@ -449,13 +493,156 @@ def granular_euler_piston(speed: float, restitution: float, knudsen: float, leng
     dx = length / cells
     x = (numpy.arange(cells) + 0.5) * dx
     rho = numpy.ones(cells)
-    q = numpy.array([rho, -speed * rho, 0.5 * speed * speed * rho + 0.5 * dimension * rho])
+    q = _conserved(rho, numpy.full((1, cells), -speed), numpy.ones(cells), dimension)
     c = maxwellian_cooling_rate(restitution) / knudsen
     out, t = {"x": x, "time": [], "density": [], "velocity": [], "temperature": []}, 0.0
     for target in sorted(times):
         q, t = _piston_advance(q, t, target, c, dx, cfl, dimension)
         rho, u, temperature = _primitive(q, dimension)
-        for name, value in (("time", t), ("density", rho), ("velocity", u),
+        for name, value in (("time", t), ("density", rho), ("velocity", u[0]),
                             ("temperature", temperature)):
             out[name].append(value)
     return {k: numpy.asarray(v) for k, v in out.items()}
+
+
+# -- The Euler equations on a rectangle ------------------------------------------------------
+
+#: the ends of a space axis that :func:`euler_finite_volumes` knows
+ENDS = ("periodic", "reflecting", "transmissive")
+
+
+def _euler_fields(owner, density, velocity, temperature):
+    try:
+        rho = numpy.asarray(density, dtype=float)
+        u = numpy.asarray(velocity, dtype=float)
+        temperature = numpy.asarray(temperature, dtype=float)
+    except (TypeError, ValueError):
+        check.reject(owner, "density", density, "density, velocity and temperature must be "
+                     "arrays of real numbers")
+    if rho.ndim < 1 or min(rho.shape) < 3:
+        check.reject(owner, "density", f"an array of shape {rho.shape}",
+                     "must have one axis per space axis, each of at least 3 cells")
+    if u.shape != (rho.ndim,) + rho.shape:
+        check.reject(owner, "velocity", f"an array of shape {u.shape}",
+                     f"must have shape {(rho.ndim,) + rho.shape}: one component per space axis "
+                     "on the cells of density")
+    if temperature.shape != rho.shape:
+        check.reject(owner, "temperature", f"an array of shape {temperature.shape}",
+                     f"must have the shape of density, {rho.shape}")
+    for name, value in (("density", rho), ("temperature", temperature)):
+        if not numpy.all(numpy.isfinite(value) & (value > 0.0)):
+            check.reject(owner, name, f"an array with minimum {numpy.min(value)!r}",
+                         "must be finite and > 0 in every cell")
+    if not numpy.all(numpy.isfinite(u)):
+        check.reject(owner, "velocity", "an array with a non-finite value", "must be finite")
+    return rho, u, temperature
+
+
+def _euler_boundaries(owner, boundaries, axes):
+    try:
+        sides = tuple(tuple(str(end) for end in pair) for pair in boundaries)
+    except TypeError:
+        sides = ()
+    if len(sides) != axes or any(len(pair) != 2 for pair in sides):
+        check.reject(owner, "boundaries", boundaries,
+                     f"must give ({', '.join(ENDS)}) pairs, (low end, high end), one per space "
+                     f"axis ({axes})")
+    for pair in sides:
+        if any(end not in ENDS for end in pair) or (("periodic" in pair)
+                                                    and pair != ("periodic", "periodic")):
+            check.reject(owner, "boundaries", boundaries,
+                         f"each end must be one of {', '.join(ENDS)}, and periodic at both "
+                         "ends of an axis or at neither")
+    return sides
+
+
+def euler_finite_volumes(density, velocity, temperature, spacing, times, *,
+                         boundaries=None, dimension: int = 2, cfl: float = 0.4) -> dict:
+    r"""The Euler equations on a line or a rectangle of cells, by finite volumes: an
+    independent reference for the hydrodynamic limit of granframe's kinetic runs.
+
+    It solves, for the conserved q = (rho, rho u, E) on cells of sizes dx_a,
+
+        d_t q + sum_a d_{x_a} F_a(q) = 0,   F_a = (rho u_a, rho u_a u + p e_a, u_a (E + p)),
+        p = rho T,   E = rho |u|^2/2 + d rho T/2,   gamma = (d + 2)/d,
+
+    with d the velocity dimension (granframe's variables: T per velocity dimension), the
+    velocity having one component per space axis (a third velocity dimension enters only
+    gamma and E: at rest across the plane, it stays so). The scheme is the unsplit one of
+    the granular piston solver (:func:`granular_euler_piston`, its one-axis case): MUSCL
+    with the minmod limiter on (rho, u, T) along each axis, the HLL flux with Davis's wave
+    speeds at every face, the axes' flux differences added in each stage of SSP RK2 (van
+    Leer 1979; Harten, Lax & van Leer 1983; Shu & Osher 1988; Toro, *Riemann Solvers and
+    Numerical Methods for Fluid Dynamics*, 3rd ed., 2009, ch. 10, 13-14, 16), the step
+    ``cfl`` / max(sum_a (|u_a| + sqrt(gamma T)) / dx_a), shortened to land on each of
+    ``times``. Two ghost cells at each end: periodic, reflecting (mirror images, the normal
+    velocity reversed: no mass or energy through) or transmissive (the end cell repeated:
+    waves leave, to the scheme's accuracy).
+
+    Parameters
+    ----------
+    density, temperature : array_like
+        rho and T on the cells, shape (C_1[, C_2, ...]), each > 0.
+    velocity : array_like
+        u, shape (axes, C_1[, C_2, ...]).
+    spacing : sequence of float
+        dx_a, one per space axis.
+    times : sequence of float
+        The times at which the fields are returned (>= 0; sorted here).
+    boundaries : sequence of (str, str), optional
+        The (low, high) ends of each axis, from ``ENDS``; all transmissive by default.
+    dimension : int
+        d of the velocities (2 or 3): gamma = (d + 2)/d, 2 or 5/3.
+    cfl : float
+        Courant number, in (0, 0.5] (the positivity of MUSCL-HLL with SSP RK2 on two axes).
+
+    Returns
+    -------
+    dict
+        ``time`` (T,), ``density`` and ``temperature`` (T, C_1, ...), ``velocity``
+        (T, axes, C_1, ...), and ``steps``, the number of steps taken.
+    """
+    owner = "euler_finite_volumes"
+    rho, u, temperature = _euler_fields(owner, density, velocity, temperature)
+    axes = rho.ndim
+    try:
+        spacings = tuple(float(dx) for dx in spacing)
+    except (TypeError, ValueError):
+        spacings = ()
+    if len(spacings) != axes or not all(0.0 < dx < math.inf for dx in spacings):
+        check.reject(owner, "spacing", spacing, f"must give {axes} finite cell sizes > 0, one "
+                     "per space axis")
+    sides = _euler_boundaries(owner, (("transmissive",) * 2,) * axes if boundaries is None
+                              else boundaries, axes)
+    if dimension not in (2, 3) or isinstance(dimension, bool):
+        check.reject(owner, "dimension", dimension, "must be 2 or 3 (the velocity dimension)")
+    if dimension < axes:
+        check.reject(owner, "dimension", dimension, f"must be at least the number of space "
+                     f"axes ({axes})")
+    if not check.is_real(cfl) or not 0.0 < float(cfl) <= 0.5:
+        check.reject(owner, "cfl", cfl, "must be a real number in (0, 0.5]")
+    try:
+        targets = sorted(float(t) for t in times)
+    except (TypeError, ValueError):
+        targets = [math.nan]
+    if not targets or not all(0.0 <= t < math.inf for t in targets):
+        check.reject(owner, "times", times, "must be one or more finite times >= 0")
+    gamma = (dimension + 2) / dimension
+    q = _conserved(rho, u, temperature, dimension)
+    out = {"time": [], "density": [], "velocity": [], "temperature": []}
+    t, steps = 0.0, 0
+    for target in targets:
+        while t < target - 1e-14 * max(1.0, target):
+            rho, u, temperature = _primitive(q, dimension)
+            sound = numpy.sqrt(gamma * temperature)
+            rate = sum((abs(u[a]) + sound) / spacings[a] for a in range(axes))
+            dt = min(float(cfl) / float(numpy.max(rate)), target - t)
+            stage = q + dt * _euler_rate(q, spacings, sides, dimension)
+            q = 0.5 * (q + stage + dt * _euler_rate(stage, spacings, sides, dimension))
+            t += dt
+            steps += 1
+        rho, u, temperature = _primitive(q, dimension)
+        for name, value in (("time", t), ("density", rho), ("velocity", u),
+                            ("temperature", temperature)):
+            out[name].append(value)
+    return {**{k: numpy.asarray(v) for k, v in out.items()}, "steps": steps}
