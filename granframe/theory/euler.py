@@ -416,30 +416,33 @@ def _cool(q, dt, c, dimension):
     return _conserved(rho, u, temperature * numpy.exp(-c * rho * dt), dimension)
 
 
-#: the piston problem's two reflecting ends
-WALLS = (("reflecting", "reflecting"),)
-
-
-def _piston_step(q, dt, c, dx, dimension):
-    """One step dt of the granular Euler solver: half a step of cooling, the transport by
-    SSP RK2, half a step of cooling (Strang splitting)."""
-    q = _cool(q, 0.5 * dt, c, dimension)
-    stage = q + dt * _euler_rate(q, (dx,), WALLS, dimension)
-    q = 0.5 * (q + stage + dt * _euler_rate(stage, (dx,), WALLS, dimension))
-    return _cool(q, 0.5 * dt, c, dimension)
-
-
-def _piston_advance(q, t, target, c, dx, cfl, dimension):
-    """q and t of the granular Euler solver advanced from t to ``target`` by steps
-    cfl dx / max(|u| + sqrt(gamma T)), the last shortened to land on it."""
+def _integrate(q, times, spacings, sides, dimension, cfl, cooling=None) -> dict:
+    """q advanced by SSP RK2 steps cfl / max(sum_a (|u_a| + sqrt(gamma T)) / dx_a), the last
+    before each of ``times`` (sorted) shortened to land on it, with the cooling
+    T <- T exp(-c rho dt) of rate c = ``cooling`` Strang-split around each step where
+    given; the fields at each time and the number of steps."""
     gamma = (dimension + 2) / dimension
-    while t < target - 1e-14:
+    out = {"time": [], "density": [], "velocity": [], "temperature": []}
+    t, steps = 0.0, 0
+    for target in times:
+        while t < target - 1e-14 * max(1.0, target):
+            rho, u, temperature = _primitive(q, dimension)
+            sound = numpy.sqrt(gamma * temperature)
+            rate = sum((abs(u[a]) + sound) / dx for a, dx in enumerate(spacings))
+            dt = min(cfl / float(numpy.max(rate)), target - t)
+            if cooling is not None:
+                q = _cool(q, 0.5 * dt, cooling, dimension)
+            stage = q + dt * _euler_rate(q, spacings, sides, dimension)
+            q = 0.5 * (q + stage + dt * _euler_rate(stage, spacings, sides, dimension))
+            if cooling is not None:
+                q = _cool(q, 0.5 * dt, cooling, dimension)
+            t += dt
+            steps += 1
         rho, u, temperature = _primitive(q, dimension)
-        dt = min(cfl * dx / float(numpy.max(abs(u[0]) + numpy.sqrt(gamma * temperature))),
-                 target - t)
-        q = _piston_step(q, dt, c, dx, dimension)
-        t += dt
-    return q, t
+        for name, value in (("time", t), ("density", rho), ("velocity", u),
+                            ("temperature", temperature)):
+            out[name].append(value)
+    return {**{k: numpy.asarray(v) for k, v in out.items()}, "steps": steps}
 
 
 def granular_euler_piston(speed: float, restitution: float, knudsen: float, length: float,
@@ -491,18 +494,13 @@ def granular_euler_piston(speed: float, restitution: float, knudsen: float, leng
         ``temperature``.
     """
     dx = length / cells
-    x = (numpy.arange(cells) + 0.5) * dx
-    rho = numpy.ones(cells)
-    q = _conserved(rho, numpy.full((1, cells), -speed), numpy.ones(cells), dimension)
-    c = maxwellian_cooling_rate(restitution) / knudsen
-    out, t = {"x": x, "time": [], "density": [], "velocity": [], "temperature": []}, 0.0
-    for target in sorted(times):
-        q, t = _piston_advance(q, t, target, c, dx, cfl, dimension)
-        rho, u, temperature = _primitive(q, dimension)
-        for name, value in (("time", t), ("density", rho), ("velocity", u[0]),
-                            ("temperature", temperature)):
-            out[name].append(value)
-    return {k: numpy.asarray(v) for k, v in out.items()}
+    q = _conserved(numpy.ones(cells), numpy.full((1, cells), -speed), numpy.ones(cells),
+                   dimension)
+    run = _integrate(q, sorted(times), (dx,), (("reflecting", "reflecting"),), dimension, cfl,
+                     cooling=maxwellian_cooling_rate(restitution) / knudsen)
+    return {"x": (numpy.arange(cells) + 0.5) * dx, "time": run["time"],
+            "density": run["density"], "velocity": run["velocity"][:, 0],
+            "temperature": run["temperature"]}
 
 
 # -- The Euler equations on a rectangle ------------------------------------------------------
@@ -627,22 +625,5 @@ def euler_finite_volumes(density, velocity, temperature, spacing, times, *,
         targets = [math.nan]
     if not targets or not all(0.0 <= t < math.inf for t in targets):
         check.reject(owner, "times", times, "must be one or more finite times >= 0")
-    gamma = (dimension + 2) / dimension
-    q = _conserved(rho, u, temperature, dimension)
-    out = {"time": [], "density": [], "velocity": [], "temperature": []}
-    t, steps = 0.0, 0
-    for target in targets:
-        while t < target - 1e-14 * max(1.0, target):
-            rho, u, temperature = _primitive(q, dimension)
-            sound = numpy.sqrt(gamma * temperature)
-            rate = sum((abs(u[a]) + sound) / spacings[a] for a in range(axes))
-            dt = min(float(cfl) / float(numpy.max(rate)), target - t)
-            stage = q + dt * _euler_rate(q, spacings, sides, dimension)
-            q = 0.5 * (q + stage + dt * _euler_rate(stage, spacings, sides, dimension))
-            t += dt
-            steps += 1
-        rho, u, temperature = _primitive(q, dimension)
-        for name, value in (("time", t), ("density", rho), ("velocity", u),
-                            ("temperature", temperature)):
-            out[name].append(value)
-    return {**{k: numpy.asarray(v) for k, v in out.items()}, "steps": steps}
+    return _integrate(_conserved(rho, u, temperature, dimension), targets, spacings, sides,
+                      dimension, float(cfl))
