@@ -328,6 +328,138 @@ def check_store_chunks(ranges, chunk: int, cells, path, axis: int = 0) -> None:
                      f"{cells} // {chunk} chunks, or give the partition)")
 
 
+def process_grid(processes: int, cells, chunks, ghost: int) -> tuple:
+    """The processes along each axis (P_x, P_y[, P_z]) of a block decomposition of
+    ``processes`` processes over ``cells`` cells cut into store chunks of ``chunks`` cells:
+    among the factorisations whose blocks hold whole chunks of at least ``ghost`` cells,
+    the one whose cuts cross the fewest cell faces, sum_a (P_a - 1) prod_{b != a} C_b,
+    the cells a step's ghost exchange sends (near square on a square, more cuts across the
+    shorter side otherwise); the first such in lexicographic order on a tie.
+
+    Raises
+    ------
+    ValueError
+        No factorisation fits: more processes than the chunks can be shared by.
+    """
+    cells, chunks = tuple(int(c) for c in cells), tuple(int(c) for c in chunks)
+    best = None
+    for counts in _factorisations(int(processes), len(cells)):
+        if any(p > c // k or (c // k) // p * k < ghost
+               for p, c, k in zip(counts, cells, chunks)):
+            continue
+        crossed = sum((p - 1) * math.prod(c for b, c in enumerate(cells) if b != a)
+                      for a, p in enumerate(counts))
+        if best is None or crossed < best[0]:
+            best = (crossed, counts)
+    if best is None:
+        shares = " x ".join(f"{c // k}" for c, k in zip(cells, chunks))
+        check.reject("process_grid", "processes", processes, f"must factor into processes "
+                     f"along each axis that share its store chunks ({shares} chunks of "
+                     f"{' x '.join(map(str, chunks))} cells), at least {ghost} cells each: "
+                     "run on fewer processes, or give space.block_cells smaller chunks")
+    return best[1]
+
+
+def _factorisations(number: int, parts: int):
+    """Every ordered tuple of ``parts`` positive integers whose product is ``number``."""
+    if parts == 1:
+        yield (number,)
+        return
+    for first in range(1, number + 1):
+        if number % first == 0:
+            for rest in _factorisations(number // first, parts - 1):
+                yield (first,) + rest
+
+
+class BoxHalo:
+    """The ghost strips of the sides of an owned block that other processes own: the
+    ``neighbours`` of a :class:`~granframe.space.domain.Box` in a block decomposition.
+
+    The processes form a grid of ``counts`` (P_x, P_y[, P_z]) in C order (rank
+    r = i_x P_y + i_y); the block of place (i_x, i_y) has the neighbours i_x +- 1 along x
+    and i_y +- 1 along y (wrapped on a periodic axis, none at a wall). Along axis a the
+    ghost-width strip of owned cells at the lower side goes to the lower neighbour with
+    tag 2a + 1 and fills that neighbour's upper ghosts; the strip at the upper side goes
+    to the upper neighbour with tag 2a and fills its lower ghosts. The strips across y are
+    not contiguous in the block: each is sent from a contiguous copy and received into
+    one, copied into the ghosts when the exchange completes (the
+    :class:`~granframe.abc.Communicator` posts contiguous arrays).
+
+    Parameters
+    ----------
+    communicator : Communicator
+    peers : sequence of (int or None)
+        The rank beyond each side of :attr:`Box.sides <granframe.space.domain.Box.sides>`
+        (left, right, bottom, top), None at a wall.
+
+    Attributes
+    ----------
+    seconds : float
+        Wall time spent posting and completing the exchanges.
+    exchanges : int
+        The exchanges made.
+    """
+
+    def __init__(self, communicator: Communicator, peers):
+        self.communicator, self.peers = communicator, tuple(peers)
+        self.seconds, self.exchanges = 0.0, 0
+
+    @classmethod
+    def of(cls, communicator: Communicator, counts, periodic) -> BoxHalo:
+        """The halo of this process in the process grid ``counts``; ``periodic``: whether
+        each axis is."""
+        counts = tuple(int(c) for c in counts)
+        place = numpy.unravel_index(communicator.rank, counts)
+        peers = []
+        for axis, (count, wraps) in enumerate(zip(counts, periodic)):
+            for step in (-1, 1):
+                i = int(place[axis]) + step
+                if not 0 <= i < count:
+                    if not wraps:
+                        peers.append(None)
+                        continue
+                    i %= count
+                other = list(place)
+                other[axis] = i
+                peers.append(int(numpy.ravel_multi_index(tuple(other), counts)))
+        return cls(communicator, peers)
+
+    def start(self, box, array, sides) -> Pending:
+        """Post the exchange of the ghost strips of ``sides`` (of ``box.sides``) of the
+        block array ``array``."""
+        began = time.perf_counter()
+        g, xp = box.ghost, box.xp
+        sends, receives, fills = [], [], []
+        for side in map(Side.named, sides):
+            view = box.along(array, side.axis)
+            n = box.sizes[side.axis]
+            peer = self.peers[2 * side.axis + side.end]
+            if side.end == 0:
+                strip, ghosts, out, back = view[g:2 * g], view[:g], LEFTWARD, RIGHTWARD
+            else:
+                strip, ghosts, out, back = view[n:n + g], view[g + n:], RIGHTWARD, LEFTWARD
+            buffer = xp.empty(ghosts.shape)
+            sends.append((peer, 2 * side.axis + out, xp.ascontiguousarray(strip)))
+            receives.append((peer, 2 * side.axis + back, buffer))
+            fills.append((ghosts, buffer))
+        pending = self.communicator.start(sends, receives)
+        self.seconds += time.perf_counter() - began
+        self.exchanges += 1
+        return _Filled(_Timed(pending, self), fills)
+
+
+class _Filled(Pending):
+    """A pending exchange whose receive buffers are copied into the ghosts it completes."""
+
+    def __init__(self, pending: Pending, fills):
+        self.pending, self.fills = pending, fills
+
+    def wait(self) -> None:
+        self.pending.wait()
+        for ghosts, buffer in self.fills:
+            ghosts[...] = buffer
+
+
 class Halo:
     """The ghost cells of the ends of an owned range that other processes own: the
     ``neighbours`` of a :class:`~granframe.space.domain.Domain`.

@@ -34,10 +34,10 @@ from __future__ import annotations
 
 import numpy
 
-from granframe.space.domain import Domain, reflect
+from granframe.space.domain import Box, Domain, reflect
 
-__all__ = ["Transport", "reflect", "step_limit", "transport_speeds", "upwind_speeds",
-           "wall_weights"]
+__all__ = ["BoxTransport", "Transport", "box_step_limit", "reflect", "step_limit",
+           "transport_speeds", "upwind_speeds", "wall_weights"]
 
 
 def transport_speeds(grid, xp=numpy, axis: int = 0):
@@ -92,7 +92,33 @@ def wall_weights(grid, axis: int = 0):
                         0.5 * grid.speed_squared()]) * grid.cell_volume
 
 
-class Transport:
+class _SSPTransport:
+    """The three-stage SSP Runge-Kutta sub-step of a transport whose :meth:`rate` gives
+    the rate of the owned cells and the fluxes into the domain through its walls."""
+
+    def advance(self, array, tau: float, t: float = 0.0) -> None:
+        """Transport the owned cells of ``array`` from time t over a time tau, in place
+        (SSPRK3; the stages at t, t + tau, t + tau/2)."""
+        if tau == 0.0:
+            return
+        inner = self.domain.interior(array)
+        start = inner.copy()
+        k1, w1 = self.rate(array, t)
+        inner[...] = start + tau * k1
+        k2, w2 = self.rate(array, t + tau)
+        inner[...] = start + (0.25 * tau) * (k1 + k2)
+        k3, w3 = self.rate(array, t + 0.5 * tau)
+        inner[...] = start + (tau / 6.0) * (k1 + k2 + 4.0 * k3)
+        self.wall_totals += (tau / 6.0) * (w1 + w2 + 4.0 * w3)
+
+    def take_wall_totals(self):
+        """The (wall, [mass, p_1 .. p_d, energy]) entered since the last call, on the
+        device, and reset them."""
+        totals, self.wall_totals = self.wall_totals, self.xp.zeros(self.wall_totals.shape)
+        return totals
+
+
+class Transport(_SSPTransport):
     """The transport sub-step on the blocks of a :class:`~granframe.space.domain.Domain`
     (see the module notes).
 
@@ -161,23 +187,138 @@ class Transport:
         (:func:`wall_weights`), on the device."""
         return (self._weights * face).reshape(self._weights.shape[0], -1).sum(axis=1)
 
-    def advance(self, array, tau: float, t: float = 0.0) -> None:
-        """Transport the owned cells of ``array`` from time t over a time tau, in place
-        (SSPRK3; the stages at t, t + tau, t + tau/2)."""
-        if tau == 0.0:
-            return
-        inner = self.domain.interior(array)
-        start = inner.copy()
-        k1, w1 = self.rate(array, t)
-        inner[...] = start + tau * k1
-        k2, w2 = self.rate(array, t + tau)
-        inner[...] = start + (0.25 * tau) * (k1 + k2)
-        k3, w3 = self.rate(array, t + 0.5 * tau)
-        inner[...] = start + (tau / 6.0) * (k1 + k2 + 4.0 * k3)
-        self.wall_totals += (tau / 6.0) * (w1 + w2 + 4.0 * w3)
 
-    def take_wall_totals(self):
-        """The (wall, [mass, p_1 .. p_d, energy]) entered since the last call, on the
-        device, and reset them."""
-        totals, self.wall_totals = self.wall_totals, self.xp.zeros(self.wall_totals.shape)
-        return totals
+def box_step_limit(grid, spacing, cfl: float) -> float:
+    r"""The transport's CFL limit on a run's time step in a box of cell widths ``spacing``
+    (dx, dy[, dz]): each half step dt/2 of the unsplit transport
+    (:class:`BoxTransport`) keeps
+
+    .. math:: \frac{\Delta t}{2} \sum_a \frac{|c_a|}{\Delta x_a} \le \mathrm{cfl}
+              \quad\text{at every node,}\qquad
+              \Delta t \le \frac{2\,\mathrm{cfl}}{(L - h) \sum_a 1/\Delta x_a},
+
+    the fastest node moving at L - h along every axis at once (a corner of the velocity
+    box). One forward Euler stage of the unsplit scheme is the average, with weights
+    w_a = (|c_a|/dx_a) / sum_b |c_b|/dx_b, of one-axis stages of length dt/w_a, whose
+    Courant numbers are dt sum_b |c_b|/dx_b: each is positive (and the limited
+    reconstructions TVD along its axis) when that is at most the reconstruction's ``cfl``
+    (:func:`step_limit`), and so is their convex combination and the SSP Runge-Kutta
+    method built of such stages (Gottlieb, Shu & Tadmor, SIAM Rev. 43 (2001) 89). On a
+    square, dx = dy, it is half the one-dimensional limit of the same dx."""
+    return 2.0 * cfl / ((grid.half_width - grid.spacing) * sum(1.0 / h for h in spacing))
+
+
+class BoxTransport(_SSPTransport):
+    r"""Free transport d_t f + v . grad_x f = 0 on the block of a :class:`~granframe.space.domain.Box`:
+    finite volumes with the fluxes along every axis from the same state in each stage
+    (unsplit, dimension by dimension),
+
+    .. math:: \frac{d f_{ij}}{dt} = -\frac{F_{i+1/2,j} - F_{i-1/2,j}}{\Delta x}
+              - \frac{G_{i,j+1/2} - G_{i,j-1/2}}{\Delta y},
+
+    F the upwind flux of the module notes along x with the speeds of v_1, G along y with
+    those of v_2, each from face values reconstructed along its own axis
+    (:class:`~granframe.abc.Reconstruction`, MUSCL or WENO5 one axis at a time), stepped
+    by the same three-stage SSP Runge-Kutta method as the line. The flux of a node is
+    linear with a constant speed, c_1 f: the exact flux through the face x_{i+1/2} of
+    cell (i, j) is c_1 times the average of f over that face, and the one-axis
+    reconstruction of the cell averages (i + k, j) along x is the reconstruction of the
+    averages in y over [y_{j-1/2}, y_{j+1/2}], whose value at x_{i+1/2} is that face
+    average. So the dimension-by-dimension scheme keeps the one-axis order, 2 for MUSCL and
+    5 for WENO5 on smooth data (it falls to 2 only for nonlinear fluxes, where the face
+    average of the flux is not the flux of the face average: Zhang, Zhang & Shu, Commun.
+    Comput. Phys. 9 (2011) 807); docs/space.md, "Two dimensions", measures both.
+    The time step limit is :func:`box_step_limit`. Data that do not vary along an axis
+    have zero flux differences along it exactly, so they step as on the line.
+
+    The walls. Each side's wall sees the strip of face values next to it in its own frame
+    (:class:`~granframe.abc.Side`): the wall at the bottom (y = 0) the nodes with v_2 > 0
+    as leaving, its tangential velocity along v_1. At a corner two walls meet: the cell in
+    the corner takes its x flux from the wall at its left or right and its y flux from the
+    wall below or above it, each as on its own side; no flux crosses the corner point and
+    no ghost cell at a corner is read (:class:`~granframe.space.domain.Box`).
+
+    :attr:`wall_totals` (2 dimension, [mass, p_1 .. p_d, energy]): what entered through
+    each side (:attr:`Box.sides <granframe.space.domain.Box.sides>` order: left, right,
+    bottom, top), the face fluxes summed over the side's faces times their measure
+    (dy along a side of x, dx along one of y): per unit length along z in two space
+    dimensions.
+
+    Parameters
+    ----------
+    domain : Box
+    reconstruction : Reconstruction
+    walls : sequence of Boundary
+        The boundaries of the sides, in :attr:`Box.sides` order; periodic in pairs along
+        an axis, or two walls.
+    """
+
+    def __init__(self, domain: Box, reconstruction, walls):
+        walls = tuple(walls)
+        if len(walls) != len(domain.sides):
+            raise ValueError(f"BoxTransport: parameter 'walls' has {len(walls)} boundaries; "
+                             f"must give one for each side ({', '.join(map(str, domain.sides))})")
+        for axis in range(domain.dimension):
+            if walls[2 * axis].periodic != walls[2 * axis + 1].periodic:
+                raise ValueError(f"BoxTransport: the sides {domain.sides[2 * axis]} and "
+                                 f"{domain.sides[2 * axis + 1]} must be both periodic or both "
+                                 "walls")
+        self.domain, self.reconstruction, self.walls = domain, reconstruction, walls
+        grid, xp = domain.grid, domain.xp
+        self.grid, self.xp = grid, xp
+        self.spacing = domain.spacing
+        self.speeds = [upwind_speeds(grid, xp, axis) for axis in range(domain.dimension)]
+        self._weights = [xp.asarray(wall_weights(grid, axis))
+                         for axis in range(domain.dimension)]
+        #: what entered through each side since the last :meth:`take_wall_totals`
+        self.wall_totals = xp.zeros((len(walls), grid.dimension + 2))
+
+    @property
+    def max_speed(self) -> float:
+        """max |c_a| = L - h along every axis."""
+        return float(self.grid.half_width - self.grid.spacing)
+
+    def time_step_limit(self) -> float:
+        """The largest sub-step tau: half the run's step limit (:func:`box_step_limit`)."""
+        return 0.5 * box_step_limit(self.grid, self.spacing, self.reconstruction.cfl)
+
+    def rate(self, array, t: float):
+        """The rate of the owned cells (n_x, n_y, *grid.shape) after filling the ghosts of
+        ``array``, and what enters through each side per unit time ((side, [mass,
+        p_1 .. p_d, energy]) on the device, zero at a side the block does not touch or a
+        periodic one), at time t."""
+        domain, xp, d = self.domain, self.xp, self.grid.dimension
+        domain.exchange(array, self.walls, t)
+        rate, walls = None, []
+        for axis, (positive, negative) in enumerate(self.speeds):
+            lower, upper = domain.sides[2 * axis], domain.sides[2 * axis + 1]
+            left, right = self.walls[2 * axis], self.walls[2 * axis + 1]
+            low, high = domain.touches[axis]
+            minus, plus = self.reconstruction.faces(domain.along(array, axis), xp)
+            flux = positive * minus + negative * plus       # (n_axis + 1, others..., *grid)
+            measure = domain.cell_volume / self.spacing[axis]
+            zero = xp.zeros(d + 2)
+            if low and not left.periodic:
+                out = lower.from_wall(left.emit(lower.to_wall(plus[0], d, xp), self.grid, xp,
+                                                t=t, side=lower), d, xp)
+                flux[0] = positive * out + negative * plus[0]
+                walls.append(self._moments(flux[0], axis) * measure)
+            else:
+                walls.append(zero)
+            if high and not right.periodic:
+                out = upper.from_wall(right.emit(upper.to_wall(minus[-1], d, xp), self.grid,
+                                                 xp, t=t, side=upper), d, xp)
+                flux[-1] = positive * minus[-1] + negative * out
+                walls.append(-self._moments(flux[-1], axis) * measure)
+            else:
+                walls.append(zero)
+            part = xp.moveaxis((flux[:-1] - flux[1:]) * (1.0 / self.spacing[axis]), 0, axis)
+            rate = part if rate is None else rate + part
+        return rate, xp.stack(walls)
+
+    def _moments(self, faces, axis: int):
+        """The mass, momentum and energy fluxes sum_faces sum_v w F dv of the face fluxes
+        F of one side (faces..., *grid.shape) (:func:`wall_weights` of ``axis``)."""
+        weights = self._weights[axis]
+        total = faces.reshape((-1,) + tuple(self.grid.shape)).sum(axis=0)
+        return (weights * total).reshape(weights.shape[0], -1).sum(axis=1)
