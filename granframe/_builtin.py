@@ -116,8 +116,19 @@ def granframe_register_initial_conditions(registry):
                  examples=[{"field": "density", "amplitude": 0.2},
                            {"field": "temperature", "amplitude": 0.3, "mode": 2},
                            {"field": "velocity", "amplitude": 0.2, "component": 2}])
+    registry.add("quadrants", space_initial.QuadrantProblem,
+                 description="four Maxwellian quadrants about (a Lx, b Ly): the 2D Riemann "
+                             "problem (rectangles)",
+                 examples=[{"upper_right": {"density": 1.0, "temperature": 1.0},
+                            "upper_left": {"density": 0.5, "velocity": [-0.5, 0.0],
+                                           "temperature": 0.8},
+                            "lower_left": {"density": 1.0, "velocity": [-0.5, -0.5],
+                                           "temperature": 1.0},
+                            "lower_right": {"density": 0.5, "velocity": [0.0, -0.5],
+                                            "temperature": 0.8}}])
     registry.add("space_function", space_initial.SpaceFunction,
-                 description="f0(x, v) from a function, cell-averaged (space runs)",
+                 description="f0(x, v) (on a rectangle f0(x, y, v)) from a function, "
+                             "cell-averaged (space runs)",
                  examples=[{"function": _space_gaussian}])
 
 

@@ -93,7 +93,7 @@ def run_memory(description, backend=None, cells: int | None = None) -> dict:
 
     d = description
     space = getattr(d, "space", None)
-    cells = None if space is None else (space.cells if cells is None else cells)
+    cells = None if space is None else (math.prod(space.counts) if cells is None else cells)
     need = {"f": 8 * d.grid.n_modes ** d.grid.dimension * (1 if space is None else cells),
             "copies": integrator_copies(d.build("integrator")) + RUN_COPIES
             + (0 if space is None else TRANSPORT_COPIES), "operator": 0}

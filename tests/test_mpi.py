@@ -221,6 +221,45 @@ def test_runs_on_two_and_three_processes_equal_the_serial_run(tmp_path, case, mp
         assert numpy.abs(want.wall_energy.values[1:]).max() > 0.0
 
 
+#: the same run on a rectangle of 12 x 8 cells (chunks of 2 x 2), Riemann data in four
+#: quadrants; walls on every side or periodic across both axes
+RECTANGLE = [("space.cells", [12, 8]), ("space.length", [1.0, 0.75]),
+             ("space.block_cells", [2, 2]),
+             ("space.bottom", {"name": "diffuse", "temperature": 0.9, "velocity": 0.2}),
+             ("space.top", "specular"), ("time_step", 0.001),
+             ("initial", {"name": "quadrants",
+                          "upper_right": {"density": 1.0, "temperature": 1.0},
+                          "upper_left": {"density": 0.5, "velocity": [-0.3, 0.0],
+                                         "temperature": 0.8},
+                          "lower_left": {"density": 1.0, "velocity": [-0.3, -0.3],
+                                         "temperature": 1.0},
+                          "lower_right": {"density": 0.5, "velocity": [0.0, -0.3],
+                                          "temperature": 0.8},
+                          "interface": [0.4, 0.6]})]
+
+
+@pytest.mark.parametrize("ends", ["walls", "periodic"])
+def test_a_rectangle_on_two_and_four_processes_equals_the_serial_run(tmp_path, ends,
+                                                                      mpi_sees_two):
+    """Blocks on a 1 x 2 and a 2 x 2 grid of processes, their ghost strips exchanged along
+    both axes, and one store written by all of them in chunks of both axes: the serial
+    run's, f and the fields to round-off, the wall records of the four sides too."""
+    changes = RECTANGLE + ([("space.left", "periodic"), ("space.right", "periodic"),
+                            ("space.bottom", "periodic"), ("space.top", "periodic")]
+                           if ends == "periodic" else [])
+    toml = write_toml(tmp_path / "run.toml", changes)
+    serial(toml, tmp_path / "serial.zarr")
+    for processes in (2, 4):
+        run(toml, tmp_path / f"p{processes}.zarr", processes=processes)
+        got, want = assert_same_run(tmp_path / f"p{processes}.zarr", tmp_path / "serial.zarr")
+        meta = RunStore.open(tmp_path / f"p{processes}.zarr").metadata
+        assert meta["provenance"]["processes"] == processes
+    assert want.f.dims == ("time", "x", "y", "v1", "v2")
+    assert numpy.abs(want.f.values[-1] - want.f.values[0]).max() > 1e-3 * want.f.values.max()
+    if ends == "walls":
+        assert numpy.abs(want.wall_momentum.values[1:, 2:]).max() > 0.0
+
+
 def test_an_uneven_partition_gives_the_serial_run(tmp_path, mpi_sees_two):
     """``--partition 2,16,6``: the first process owns exactly the ghost width of MUSCL (its
     ghost cells come from the next range alone), the second most of the interval."""
@@ -258,6 +297,11 @@ def test_a_health_stop_reaches_every_process_at_the_same_step(tmp_path, mpi_sees
 #: 40 steps of 16 cells, a commit every 5 steps (8 after f0)
 LONG = [("space.cells", 16), ("final_time", 0.08), ("output.snapshot_interval", 0.01)]
 SNAPSHOTS = 9
+#: the same schedule on the rectangle (its step is half the interval's: 41 steps)
+LONG_RECTANGLE = RECTANGLE + [("final_time", 0.04), ("output.snapshot_interval", 0.005)]
+#: the processes each shape resumes on after the kill (2 in place): on the rectangle a
+#: 3 x 1 and a 2 x 2 grid of blocks
+RESUMED = {"interval": (1, 3), "rectangle": (1, 3, 4)}
 
 #: ``granframe`` whose every step also sleeps 20 ms (the same numbers, slower), so that a
 #: kill lands between two commits however fast this machine is
@@ -299,9 +343,10 @@ def _snapshots(store) -> int:
 
 @pytest.mark.skipif(not pathlib.Path("/proc/self/environ").exists(),
                     reason="finds the rank-1 process through /proc")
+@pytest.mark.parametrize("shape", ["interval", "rectangle"])
 def test_a_process_killed_mid_run_ends_the_run_and_the_store_resumes_on_any_count(
-        tmp_path, mpi_sees_two):
-    toml = write_toml(tmp_path / "run.toml", LONG)
+        tmp_path, shape, mpi_sees_two):
+    toml = write_toml(tmp_path / "run.toml", LONG if shape == "interval" else LONG_RECTANGLE)
     store = tmp_path / "run.zarr"
     marker = uuid.uuid4().hex
     launched = subprocess.Popen(
@@ -331,8 +376,8 @@ def test_a_process_killed_mid_run_ends_the_run_and_the_store_resumes_on_any_coun
     WriterLock.check_free(store)     # the dead holder's lock is free
 
     serial(toml, tmp_path / "reference.zarr")
-    copies = {1: tmp_path / "one.zarr", 2: store, 3: tmp_path / "three.zarr"}
-    for processes in (1, 3):
+    copies = {2: store, **{k: tmp_path / f"resumed{k}.zarr" for k in RESUMED[shape]}}
+    for processes in RESUMED[shape]:
         shutil.copytree(store, copies[processes])
     for processes, path in copies.items():
         run(toml, path, "--resume", processes=processes)   # 2: in place, past the lock file

@@ -117,7 +117,7 @@ def test_block_cells_below_the_ghost_width_are_refused(tmp_path):
 
 def test_an_unknown_space_key_and_a_missing_cells_are_refused(tmp_path):
     refused(tmp_path, [("space.cell", 40)], r"parameter 'cell' = 40 is invalid; is not a "
-                                            r"parameter of Space; known: block_cells, cells")
+                                            r"parameter of Space; known: block_cells, bottom, cells")
     refused(tmp_path, [("space", {"left": "specular"})], r"'cells'")
     refused(tmp_path, [("space", 40)], r"parameter 'space' = 40 is invalid; must be a Space "
                                        r"table", TypeError)

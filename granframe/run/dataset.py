@@ -22,6 +22,8 @@ from granframe.run.storage import (LEVEL_LONG_NAMES, SNAPSHOT_ARRAYS, RunStore,
 
 #: the coordinate of a space run's wall records: the wall at x = 0, then at x = ell
 WALLS = ("left", "right")
+#: the sides of a rectangle, in the order of its wall records
+SIDES = WALLS + ("bottom", "top")
 #: the time axes :func:`open_run` can name ``time``: the snapshots' (the default) or the
 #: steps'
 TIME_AXES = ("snapshots", "steps")
@@ -163,7 +165,7 @@ def run_dataset(store: RunStore) -> xarray.Dataset:
         dataset = dataset.assign_coords(axis2=names)
     space = "space" in meta
     if "wall" in dataset.dims:
-        dataset = dataset.assign_coords(wall=list(WALLS))
+        dataset = dataset.assign_coords(wall=list(SIDES[:dataset.sizes["wall"]]))
     for name, variable in dataset.variables.items():
         variable.attrs = array_attributes(name, space)
     vector = "the bulk velocity" if space else "momentum"
@@ -187,7 +189,12 @@ def label_space(dataset: xarray.Dataset, meta: dict) -> None:
     - dimensions ``x`` (the cells) and ``wall`` (2), with coordinates ``x`` (the cell
       centres (j + 1/2) ell / cells, long name "cell centre") and ``wall``
       (``"left"``, ``"right"``: the walls at x = 0 and x = ell); ``f`` is
-      (``time``, ``x``, ``v1`` ... ``vd``), the cell averages;
+      (``time``, ``x``, ``v1`` ... ``vd``), the cell averages; on a rectangle the
+      dimensions ``x`` and ``y`` (coordinates the cell centres along each) and ``wall``
+      (4: ``"left"``, ``"right"``, ``"bottom"``, ``"top"``, at x = 0, x = L_x, y = 0,
+      y = L_y), ``f`` (``time``, ``x``, ``y``, ``v1`` ... ``vd``) and the fields
+      (``step_time``, ``x``, ``y``, ...); a wall's totals are then per unit length
+      along z, the face fluxes summed along its side;
     - the fields of every cell along (``step_time``, ``x``, ...): ``density``,
       ``velocity``, ``temperature``, ``pressure_tensor`` and ``heat_flux``;
     - the totals over the interval: ``mass`` int int f dv dx, ``kinetic_energy``,
@@ -211,9 +218,13 @@ def label_space(dataset: xarray.Dataset, meta: dict) -> None:
       ``distance`` (``step_time``, ``x``): the indicators kappa and delta that chose
       it, measured after the collision step (NaN at t = 0).
     """
-    if "wall" in dataset.dims:
+    if "wall" in dataset.dims and dataset.sizes["wall"] == 2:
         dataset["wall"].attrs = {"long_name": "wall of the interval [0, ell]: left at x = 0, "
                                               "right at x = ell"}
+    elif "wall" in dataset.dims:
+        dataset["wall"].attrs = {"long_name": "side of the rectangle [0, Lx] x [0, Ly]: left "
+                                              "at x = 0, right at x = Lx, bottom at y = 0, "
+                                              "top at y = Ly"}
     if "level" in dataset:
         label_levels(dataset, meta["description"]["space"]["hierarchy"]["levels"])
 

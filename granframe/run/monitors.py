@@ -383,8 +383,9 @@ def cell_resolution_report(grid, indicators, centres, tolerance: float) -> dict:
     v_1 = 0 keeps large at every N (docs/space.md, "Resolution indicators of a cell"); it
     names ``grid.n_modes``. Added to the report: ``heat_flux_shell`` and ``fields_shell``
     (their largest values), ``cells``, the index of the worst cell of each indicator;
-    ``x``, its centre. Cells where an indicator is NaN (no mass) are left out of its
-    largest value.
+    ``x``, its centre (``centres`` (cells,) on an interval), or ``position``, its centre
+    (x, y) (``centres`` (cells, 2) on a rectangle, the cells in C order). Cells where an
+    indicator is NaN (no mass) are left out of its largest value.
     """
     indicators = numpy.asarray(indicators, dtype=float)
     finite = numpy.where(numpy.isfinite(indicators), indicators, -numpy.inf)
@@ -395,7 +396,13 @@ def cell_resolution_report(grid, indicators, centres, tolerance: float) -> dict:
                               largest["pairs_beyond_support"],
                               largest["negative_mass_fraction"], tolerance)
 
+    centres = numpy.asarray(centres, dtype=float)
+    plane = centres.ndim > 1
+
     def where(name):
+        if plane:
+            x, y = centres[worst[name]]
+            return f" (in cell {worst[name]}, (x, y) = ({x:.4g}, {y:.4g}))"
         return f" (in cell {worst[name]}, x = {float(centres[worst[name]]):.4g})"
 
     warnings = []
@@ -412,7 +419,9 @@ def cell_resolution_report(grid, indicators, centres, tolerance: float) -> dict:
                  if warning.split(":")[0] in _WARNED]
     return {**report, "heat_flux_shell": largest["heat_flux_shell"], "fields_shell": fields,
             "warnings": warnings, "cells": worst,
-            "x": {name: float(centres[i]) for name, i in worst.items()}}
+            **({"position": {name: [float(c) for c in centres[i]]
+                             for name, i in worst.items()}} if plane else
+               {"x": {name: float(centres[i]) for name, i in worst.items()}})}
 
 
 class CellEdgeMonitors(AccuracyMonitors):

@@ -36,7 +36,6 @@ from granframe.errors import NonFiniteError
 from granframe.registry import default_registries
 from granframe.run.description import COMPONENT_FAMILIES, RunDescription, fixed_steps
 from granframe.run.problems import make_problem, moments
-from granframe.parallel import check_store_chunks
 from granframe.run.storage import RECORDED_MOMENTS, RunStore, StoreExistsError, collective
 from granframe.stepping.integrators import StepController, StepSizeError
 from granframe.validators import distinct, reject
@@ -764,12 +763,10 @@ class Simulation:
         """Refuse to resume a space run whose store's chunks along x do not fall on the
         boundaries of the processes' cells (a store made with another ``block_cells``),
         before anything is written."""
-        ranges = self.problem.ranges
-        if len(ranges) == 1 or not RunStore.exists(out):
+        if len(self.problem.ranges) == 1 or not RunStore.exists(out):
             return
         space = RunStore.open(out, complete=False).metadata.get("space") or {}
-        check_store_chunks(ranges, int(space.get("block_cells", 1)), space.get("cells", "?"),
-                           out)
+        self.problem.space.check_chunks(space, out)
 
     def _first_commit(self, store, started):
         """Commit f0 and its moments to a new store and publish it: the store (opened at its

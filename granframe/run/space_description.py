@@ -20,12 +20,54 @@ from granframe import validators as check
 from granframe.parallel import store_chunk
 from granframe.registry import default_registries
 from granframe.run.components import Component, coerce_component, component_field, table_of
-from granframe.space.transport import step_limit
+from granframe.space.transport import box_step_limit, step_limit
 from granframe.velocity.grid import SCALE_RANGE
 
 #: Most cells of a space run: 1e9 cells of the smallest grid (2D N = 4) already hold 128 GB
 #: per copy of f, so more is a mistake (and it keeps dx = length / cells a float).
 MAX_CELLS = 10 ** 9
+
+
+#: what the cells of a space section may be: a number (an interval along x) or a list of two
+#: (a rectangle, cells along x and y)
+CELLS_ALLOWED = (f"must be an integer >= 1 and <= {MAX_CELLS} (the cells of an interval), or "
+                 "a list [Cx, Cy] of two such (the cells of a rectangle along x and y)")
+
+
+def _counts(value):
+    """The cells as an int, or a tuple of two ints from a list of two integers; anything
+    else as it is, for the validator."""
+    if isinstance(value, (list, tuple)) and len(value) == 2 and all(map(check.is_integer,
+                                                                         value)):
+        return tuple(int(v) for v in value)
+    return check.to_int(value)
+
+
+def _lengths(value):
+    """A length as a float, two as a tuple of floats; anything else as it is."""
+    if isinstance(value, (list, tuple)) and len(value) == 2 and all(map(check.is_real, value)):
+        try:
+            return tuple(check.to_float(v) for v in value)
+        except (TypeError, OverflowError):
+            return value
+    return check.to_float(value)
+
+
+def _check_cells(instance, attribute, value):
+    """An interval's cells (1 to MAX_CELLS) or a rectangle's two counts (each >= 1, their
+    product at most MAX_CELLS)."""
+    if isinstance(value, tuple):
+        if not all(1 <= v for v in value) or math.prod(value) > MAX_CELLS:
+            check.reject("Space", "cells", list(value), CELLS_ALLOWED[:-1]
+                         + f"; Cx Cy at most {MAX_CELLS})")
+        return
+    if not check.is_integer(value):
+        check.reject("Space", "cells", value, CELLS_ALLOWED, error=TypeError)
+    check.integer(1, MAX_CELLS)(instance, attribute, value)
+
+
+def _optional_component(value):
+    return None if value is None else coerce_component(value)
 
 
 def _levels(value):
@@ -140,27 +182,36 @@ class Hierarchy:
 
 @attrs.frozen(kw_only=True)
 class Space:
-    r"""The space interval of d_t f + v_1 d_x f = Q(f, f)/eps (+ tau Delta_v f) (docs/space.md).
+    r"""The space of d_t f + v . grad_x f = Q(f, f)/eps (+ tau Delta_v f): an interval
+    along x, or a rectangle in x and y (docs/space.md, "Two dimensions").
 
     Parameters
     ----------
-    cells : int
-        Finite-volume cells on [0, length]; at least the reconstruction's stencil,
-        2 ghost + 1 (3 for ``upwind``, 5 for ``muscl``, 7 for ``weno5``), at most
-        :data:`MAX_CELLS`.
-    length : float
-        ell, in the velocity grid's scale range (1e-50 to 1e50).
-    block_cells : int or None
-        The width along x of the store's chunks of f and of the fields; a divisor of
-        ``cells``, at least the reconstruction's ghost width. A run on several processes
-        gives each whole chunks, so it runs on at most cells / block_cells of them. None:
-        :meth:`blocks` (about 16 chunks or more, at most 64 cells each).
+    cells : int or list of two int
+        Finite-volume cells on [0, length] (an interval), or [Cx, Cy] on
+        [0, Lx] x [0, Ly] (a rectangle); along every axis at least the reconstruction's
+        stencil, 2 ghost + 1 (3 for ``upwind``, 5 for ``muscl``, 7 for ``weno5``), in all at
+        most :data:`MAX_CELLS`.
+    length : float or list of two float
+        ell, or [Lx, Ly] (one number: a square), in the velocity grid's scale range
+        (1e-50 to 1e50).
+    block_cells : int, list of two int, or None
+        The width of the store's chunks of f and of the fields along each axis (one number:
+        the same along both); a divisor of the cells, at least the reconstruction's ghost
+        width. A run on several processes gives each whole chunks, so it runs on at most
+        cells / block_cells of them along each axis. None: :meth:`blocks` (about 16
+        chunks or more along each axis, at most 64 cells wide).
     reconstruction : Component
         Registered reconstruction of the cell averages (``muscl``, ``weno5``, ``upwind``).
     left, right : Component
-        Registered boundaries (``periodic``, ``specular``, ``diffuse`` with
-        ``temperature``, ``velocity``, ``accommodation``); periodic at both ends or at
-        neither.
+        Registered boundaries at x = 0 and x = Lx (``periodic``, ``specular``,
+        ``diffuse`` with ``temperature``, ``velocity``, ``accommodation``, ``vibrating``,
+        ``reservoir``); periodic at both ends or at neither.
+    bottom, top : Component or None
+        The boundaries at y = 0 and y = Ly of a rectangle, named as ``left`` and
+        ``right`` (periodic by default; periodic at both or at neither); an interval has
+        none. A wall sees its own frame: at the bottom and the top the normal velocity
+        is v_2 and a diffuse wall's ``velocity`` is along v_1 (a lid moving along x).
 
     collisions : bool
         False: a collisionless gas (free-molecular flow, d_t f + v_1 d_x f = 0); the
@@ -172,13 +223,14 @@ class Space:
     The Knudsen number eps is the description's ``knudsen``.
     """
 
-    cells: int = attrs.field(converter=check.to_int, validator=check.integer(1, MAX_CELLS))
-    length: float = attrs.field(default=1.0, converter=check.to_float,
-                                validator=check.real(*SCALE_RANGE))
-    block_cells: int | None = attrs.field(default=None, converter=check.to_int)
+    cells: int | tuple = attrs.field(converter=_counts, validator=_check_cells)
+    length: float | tuple = attrs.field(default=1.0, converter=_lengths)
+    block_cells: int | tuple | None = attrs.field(default=None, converter=_counts)
     reconstruction: Component = component_field(default=Component("muscl"))
     left: Component = component_field(default=Component("periodic"))
     right: Component = component_field(default=Component("periodic"))
+    bottom: Component | None = attrs.field(default=None, converter=_optional_component)
+    top: Component | None = attrs.field(default=None, converter=_optional_component)
     collisions: bool = attrs.field(default=True, validator=check.boolean)
     hierarchy: Hierarchy | None = attrs.field(default=None, converter=table_of(Hierarchy))
 
@@ -193,60 +245,139 @@ class Space:
             check.reject("Space", "hierarchy", "a table", "needs collisions: a collisionless "
                          "run (collisions = false) has no collision models to choose")
 
+    @length.validator
+    def _check_length(self, attribute, value):
+        if isinstance(value, (list, tuple)):
+            if len(value) != self.dimension:
+                check.reject("Space", "length", list(value), f"must be one number, or one "
+                             f"for each of the {self.dimension} axes of cells = {self.cells}")
+            for v in value:
+                check.real(*SCALE_RANGE)(self, attribute, v)
+            return
+        check.real(*SCALE_RANGE)(self, attribute, value)
+
     @block_cells.validator
     def _check_block(self, attribute, value):
-        if value is not None and not (check.is_integer(value) and 1 <= value <= self.cells
-                                      and self.cells % value == 0):
-            check.reject("Space", "block_cells", value, f"must be a divisor of cells = "
-                         f"{self.cells} (or None)")
+        if value is None:
+            return
+        counts = self.counts
+        widths = value if isinstance(value, tuple) else (value,) * len(counts)
+        if len(widths) != len(counts) or not all(
+                check.is_integer(b) and 1 <= b <= n and n % b == 0
+                for b, n in zip(widths, counts)):
+            cells = self.cells if self.dimension == 1 else list(self.cells)
+            check.reject("Space", "block_cells", list(value) if isinstance(value, tuple)
+                         else value, f"must be a divisor of cells = {cells}"
+                         + (" (one number, the same along both axes, or one for each)"
+                            if self.dimension > 1 else "") + " (or None)")
+
+    @bottom.validator
+    def _check_bottom(self, attribute, value):
+        for name in ("bottom", "top"):
+            given = getattr(self, name) if name == "top" else value
+            if given is not None and self.dimension == 1:
+                check.reject("Space", name, given.name, "is a wall of y: an interval (one "
+                             "number of cells) has none; give cells = [Cx, Cy] for a rectangle")
+            if given is not None and not isinstance(given, Component):
+                check.reject("Space", name, given, "must be a name or a table",
+                             error=TypeError)
+
+    @property
+    def dimension(self) -> int:
+        """The number of space axes: 1 (an interval) or 2 (a rectangle)."""
+        return len(self.cells) if isinstance(self.cells, tuple) else 1
+
+    @property
+    def counts(self) -> tuple:
+        """The cells along every axis."""
+        return self.cells if isinstance(self.cells, tuple) else (self.cells,)
+
+    @property
+    def lengths(self) -> tuple:
+        """The length of every axis (one number for a rectangle: a square)."""
+        if isinstance(self.length, tuple):
+            return self.length
+        return (self.length,) * self.dimension
+
+    @property
+    def sides(self) -> tuple:
+        """The names of the walls: left, right (and bottom, top for a rectangle)."""
+        return ("left", "right") if self.dimension == 1 else ("left", "right", "bottom", "top")
+
+    def wall(self, side: str) -> Component:
+        """The component of ``side`` (a wall's name, or ``reconstruction``); bottom and
+        top are periodic when not given."""
+        component = getattr(self, side)
+        return Component("periodic") if component is None else component
+
+    @property
+    def spacing(self) -> tuple:
+        """The cell widths along every axis."""
+        return tuple(ell / n for ell, n in zip(self.lengths, self.counts))
 
     def build(self, field: str):
         """The registered reconstruction (``reconstruction``) or boundary (``left``,
-        ``right``)."""
-        component = getattr(self, field)
-        family = "reconstructions" if field == "reconstruction" else "boundaries"
+        ``right``, ``bottom``, ``top``)."""
+        if field == "reconstruction":
+            component, family = self.reconstruction, "reconstructions"
+        else:
+            component, family = self.wall(field), "boundaries"
         return default_registries().create(family, component.name, **component.params)
 
-    def blocks(self, ghost: int) -> int:
+    def blocks(self, ghost: int):
         """The store's chunk width along x (:func:`granframe.parallel.store_chunk` of
-        ``cells`` and ``block_cells``)."""
-        return store_chunk(self.cells, ghost, self.block_cells)
+        ``cells`` and ``block_cells``); of a rectangle, a tuple, one per axis."""
+        if self.dimension == 1:
+            return store_chunk(self.cells, ghost, self.block_cells)
+        widths = (self.block_cells if isinstance(self.block_cells, tuple)
+                  else (self.block_cells,) * self.dimension)
+        return tuple(store_chunk(n, ghost, b) for n, b in zip(self.counts, widths))
 
     def check(self, grid, time_step, step_limit: bool) -> dict:
         """Build and check the reconstruction and the boundaries against the cells, the
         grid and the time step (the transport's CFL limit); returns them."""
         owner = "RunDescription"
-        built = {field: self.build(field) for field in ("reconstruction", "left", "right")}
+        built = {field: self.build(field) for field in ("reconstruction",) + self.sides}
         ghost = built["reconstruction"].ghost
-        if self.cells < 2 * ghost + 1:
-            check.reject(owner, "space.cells", self.cells,
-                         f"must be >= {2 * ghost + 1}, the stencil of the reconstruction "
+        rectangle = self.dimension > 1
+        if min(self.counts) < 2 * ghost + 1:
+            check.reject(owner, "space.cells", list(self.cells) if rectangle else self.cells,
+                         f"must be >= {2 * ghost + 1}{' along every axis' if rectangle else ''}"
+                         f", the stencil of the reconstruction "
                          f"'{self.reconstruction.name}' (2 x {ghost} ghost cells + 1)")
+        if rectangle and grid.dimension < self.dimension:
+            check.reject(owner, "space.cells", list(self.cells), f"has {self.dimension} space "
+                         f"axes, more than the velocity dimension {grid.dimension}")
         block = self.blocks(ghost)
-        if block < ghost:
-            check.reject(owner, "space.block_cells", block,
+        if min(block if rectangle else (block,)) < ghost:
+            check.reject(owner, "space.block_cells", list(block) if rectangle else block,
                          f"must be >= {ghost}, the ghost width of the reconstruction "
                          f"'{self.reconstruction.name}' (a block fills its neighbour's ghosts)")
-        left, right = built["left"], built["right"]
-        if left.periodic != right.periodic:
-            check.reject(owner, "space.left" if not left.periodic else "space.right",
-                         (self.left if not left.periodic else self.right).name,
-                         "must be periodic too: an interval is periodic at both ends or at "
-                         "neither")
-        for side in ("left", "right"):
+        for lower, upper in zip(self.sides[::2], self.sides[1::2]):
+            low, high = built[lower], built[upper]
+            if low.periodic != high.periodic:
+                check.reject(owner, f"space.{lower}" if not low.periodic else f"space.{upper}",
+                             self.wall(lower if not low.periodic else upper).name,
+                             f"must be periodic too: {'an interval' if not rectangle else 'an axis'}"
+                             f" is periodic at both ends or at neither ({lower}, {upper})")
+        for side in self.sides:
             built[side].check(grid)
             if time_step is not None:
                 built[side].check_time_step(time_step)
         if step_limit and time_step is not None:
             limit = self.transport_limit(grid, built["reconstruction"])
             if time_step > limit * (1 + 1e-12):
+                widths = " and ".join(f"d{a} = {h:.6g}" for a, h in zip("xy", self.spacing))
+                moves = ("at most cfl = " if not rectangle else
+                         "along x and along y at once, sum_a (L - h) dt / (2 dx_a) at most ")
                 check.reject(owner, "time_step", time_step,
                              f"must be <= {limit:.6g}, the transport's CFL limit: each half "
-                             f"step dt/2 moves the fastest node (max|v_1| = L - h = "
-                             f"{grid.half_width - grid.spacing:.6g}) at most cfl = "
-                             f"{built['reconstruction'].cfl:g} cells of dx = "
-                             f"{self.length / self.cells:.6g} ('{self.reconstruction.name}' "
-                             "with SSP RK3); lower time_step, or use fewer space.cells")
+                             f"step dt/2 moves the fastest node (max|v_{'a' if rectangle else 1}| = L - h = "
+                             f"{grid.half_width - grid.spacing:.6g}) {moves}"
+                             f"{built['reconstruction'].cfl:g} cells of "
+                             f"{widths if rectangle else 'dx = ' + format(self.spacing[0], '.6g')}"
+                             f" ('{self.reconstruction.name}' with SSP RK3); lower time_step, "
+                             "or use fewer space.cells")
         return built
 
     def transport_limit(self, grid, reconstruction=None) -> float:
@@ -254,11 +385,17 @@ class Space:
         node (max|v_1| = L - h) at most the reconstruction's ``cfl`` cells,
         dt <= 2 cfl dx / (L - h) (:func:`granframe.space.transport.step_limit`)."""
         reconstruction = reconstruction or self.build("reconstruction")
+        if self.dimension > 1:
+            return box_step_limit(grid, self.spacing, reconstruction.cfl)
         return step_limit(grid, self.length / self.cells, reconstruction.cfl)
 
     def to_dict(self) -> dict:
-        return {"cells": self.cells, "length": self.length, "block_cells": self.block_cells,
+        def listed(value):
+            return list(value) if isinstance(value, tuple) else value
+
+        return {"cells": listed(self.cells), "length": listed(self.length),
+                "block_cells": listed(self.block_cells),
                 **({} if self.collisions else {"collisions": False}),
                 **({} if self.hierarchy is None else {"hierarchy": self.hierarchy.to_dict()}),
-                **{field: getattr(self, field).to_dict(f"space.{field}")
-                   for field in ("reconstruction", "left", "right")}}
+                **{field: self.wall(field).to_dict(f"space.{field}")
+                   for field in ("reconstruction",) + self.sides}}

@@ -11,6 +11,14 @@ over every cell at every velocity node (:meth:`SpaceCondition.sample_cells`):
 - :class:`SpaceFunction`: any f0(x, v_1, ..., v_d) given as a ``module:function``, the
   same quadrature.
 
+On a rectangle each gives the averages over the cells [x_{i-1}, x_i] x [y_{j-1}, y_j]
+(:meth:`SpaceCondition.sample_box`): a condition along x alone is the same in every row
+of cells along y (a Riemann problem with its interface across x, a mode along x);
+:class:`SinusoidalMode` takes a wave vector (k_x, k_y), :class:`SpaceFunction` is
+f0(x, y, v_1, ..., v_d), both averaged by the tensor Gauss-Legendre rule (6 x 6 points),
+and :class:`QuadrantProblem` is the two-dimensional Riemann problem of four Maxwellian
+quadrants, each cell the exact mixture by the share of it in each quadrant.
+
 Any space-homogeneous initial condition (``maxwellian``, ``bkw``, ...) is uniform in x.
 As :class:`~granframe.abc.InitialCondition` each gives ``sample(grid)``, the average of f0
 over the interval (the distribution of the whole gas).
@@ -106,6 +114,16 @@ class SpaceCondition(contracts.InitialCondition):
         f, _ = self.sample_cells(grid, numpy.linspace(0.0, 1.0, 65))
         return f.mean(axis=0)
 
+    def sample_box(self, grid, edges):
+        """(f0 cell averages (Cx, Cy, *grid.shape), the intended mass of each cell
+        (Cx, Cy) or None) on the rectangle of cell ``edges`` (along x, along y): by default
+        the data along x (:meth:`sample_cells`) in every row of cells along y."""
+        f, mass = self.sample_cells(grid, edges[0])
+        rows = len(edges[1]) - 1
+        f = numpy.broadcast_to(f[:, None], (f.shape[0], rows) + f.shape[1:])
+        return f, None if mass is None else numpy.repeat(numpy.asarray(mass)[:, None], rows,
+                                                         axis=1)
+
     @property
     def intended_mass(self):
         return None
@@ -117,6 +135,31 @@ def _gauss(edges):
     left, right = numpy.asarray(edges[:-1]), numpy.asarray(edges[1:])
     x = 0.5 * (left + right)[:, None] + 0.5 * (right - left)[:, None] * nodes[None, :]
     return x, 0.5 * weights
+
+
+def _box_points(edges):
+    """The tensor Gauss-Legendre rule of the cells of a rectangle: for each of the
+    CELL_POINTS^2 points, its x (Cx, 1) and y (1, Cy) in every cell and its weight (the
+    weights sum to 1)."""
+    (x, wx), (y, wy) = _gauss(edges[0]), _gauss(edges[1])
+    return [(x[:, p][:, None], y[:, q][None, :], wx[p] * wy[q])
+            for p in range(CELL_POINTS) for q in range(CELL_POINTS)]
+
+
+def _maxwellians(grid, density, velocity, temperature):
+    """rho (2 pi T)^(-d/2) exp(-|v - u|^2 / (2 T)) on the nodes for arrays of states:
+    ``density`` and ``temperature`` of one shape S, ``velocity`` a list of d arrays
+    broadcasting to S; the result (*S, *grid.shape)."""
+    d = grid.dimension
+    tail = (1,) * d
+    shape = numpy.shape(density)
+    lead = (1,) * len(shape)
+    square = sum((c.reshape(lead + c.shape)
+                  - numpy.broadcast_to(u, shape).reshape(shape + tail)) ** 2
+                 for c, u in zip(grid.mesh(), velocity))
+    t = numpy.reshape(temperature, shape + tail)
+    return numpy.reshape(density, shape + tail) * (2.0 * math.pi * t) ** (-d / 2) \
+        * numpy.exp(-square / (2.0 * t))
 
 
 @attrs.frozen
@@ -155,6 +198,14 @@ class RiemannProblem(SpaceCondition):
 _FIELDS = ("density", "velocity", "temperature")
 
 
+def _wave(value):
+    """A mode number as an int, a wave vector [k_x, k_y] of integers as a tuple."""
+    if isinstance(value, (list, tuple)) and len(value) == 2 and all(map(check.is_integer,
+                                                                         value)):
+        return tuple(int(v) for v in value)
+    return check.to_int(value)
+
+
 @attrs.frozen
 class SinusoidalMode(SpaceCondition):
     """A uniform Maxwellian (rho, u_1, T) with one of them times 1 + A sin(2 pi k x / ell)
@@ -170,11 +221,15 @@ class SinusoidalMode(SpaceCondition):
         The perturbed field: 'density', 'velocity' or 'temperature'.
     amplitude : float
         A; |A| < 1 for the density and the temperature (positive fields).
-    mode : int
-        k >= 1, the number of periods on the interval.
+    mode : int or list of two int
+        k >= 1, the number of periods on the interval; on a rectangle also a wave vector
+        [k_x, k_y] (integers, not both 0): the phase 2 pi (k_x x / L_x + k_y y / L_y), a
+        plane wave of wave vector K = 2 pi (k_x / L_x, k_y / L_y) (one number: along x).
     component : int
         The velocity component the ``velocity`` mode perturbs: 1 (along x, a longitudinal
-        mode, the default) to d (2 or 3: transverse, a shear mode).
+        mode, the default) to d (2 or 3: transverse, a shear mode). With a wave vector:
+        1 along K (longitudinal), 2 along K rotated by +90 degrees in the plane
+        (transverse, a shear mode in the plane), 3 along v_3.
     """
 
     density: float = attrs.field(default=1.0, converter=check.to_float,
@@ -186,7 +241,7 @@ class SinusoidalMode(SpaceCondition):
     field: str = attrs.field(default="density", validator=check.one_of(_FIELDS))
     amplitude: float = attrs.field(default=0.1, converter=check.to_float,
                                    validator=check.real(-STATE_RANGE[1], STATE_RANGE[1]))
-    mode: int = attrs.field(default=1, converter=check.to_int, validator=check.integer(1))
+    mode: int | tuple = attrs.field(default=1, converter=_wave)
     component: int = attrs.field(default=1, converter=check.to_int,
                                  validator=check.integer(1, 3))
 
@@ -195,6 +250,20 @@ class SinusoidalMode(SpaceCondition):
         if value != 1 and self.field != "velocity":
             check.reject("SinusoidalMode", "component", value, f"applies to the velocity "
                          f"mode only (field = 'velocity'), not to the {self.field}")
+
+    @mode.validator
+    def _check_mode(self, attribute, value):
+        if isinstance(value, tuple):
+            if value == (0, 0):
+                check.reject("SinusoidalMode", "mode", list(value), "must be a wave vector "
+                             "[k_x, k_y] of integers not both 0")
+            return
+        check.integer(1)(self, attribute, value)
+
+    @property
+    def wave(self) -> tuple:
+        """(k_x, k_y): the periods along x and along y."""
+        return self.mode if isinstance(self.mode, tuple) else (self.mode, 0)
 
     @amplitude.validator
     def _check_amplitude(self, attribute, value):
@@ -205,7 +274,8 @@ class SinusoidalMode(SpaceCondition):
     def profile(self, x, length: float = 1.0) -> dict:
         """rho, the velocity (its perturbed component) and T at the points x of an interval
         of length ``length``."""
-        wave = self.amplitude * numpy.sin(2.0 * math.pi * self.mode * numpy.asarray(x) / length)
+        wave = self.amplitude * numpy.sin(2.0 * math.pi * self.wave[0] * numpy.asarray(x)
+                                          / length)
         base = {"density": self.density, "velocity": self.velocity,
                 "temperature": self.temperature}
         values = {k: numpy.full(numpy.shape(x), v) for k, v in base.items()}
@@ -216,7 +286,12 @@ class SinusoidalMode(SpaceCondition):
     def sample_cells(self, grid, edges):
         edges = numpy.asarray(edges, dtype=float)
         cells = len(edges) - 1
-        if 2 * self.mode > cells:
+        along, across = self.wave
+        if across or along < 1:
+            check.reject("SinusoidalMode", "mode", list(self.mode), "must be one number k >= 1 "
+                         "on an interval (a wave vector [k_x, k_y] needs a rectangle: "
+                         "space.cells = [Cx, Cy])")
+        if 2 * along > cells:
             check.reject("SinusoidalMode", "mode", self.mode,
                          f"must be <= cells / 2 = {cells / 2:g}: {cells} cells resolve at most "
                          f"{cells // 2} periods (2 cells a period); use more space.cells")
@@ -238,6 +313,127 @@ class SinusoidalMode(SpaceCondition):
                 f[cell] += w * grid.maxwellian(fields["density"][cell, q], tuple(u),
                                                fields["temperature"][cell, q])
         return f, (fields["density"] * weights).sum(axis=1)
+
+    def sample_box(self, grid, edges):
+        """The cell averages on a rectangle: a mode along x as on the interval in every
+        row (:meth:`SpaceCondition.sample_box`); a wave vector with k_y != 0 by the tensor
+        Gauss-Legendre rule, the velocity perturbed along :attr:`component`'s direction
+        (the class notes)."""
+        kx, ky = self.wave
+        if ky == 0 and kx > 0:
+            return super().sample_box(grid, edges)
+        (ex, ey), d = (numpy.asarray(e, dtype=float) for e in edges), grid.dimension
+        for k, e, axis in ((kx, ex, "x"), (ky, ey, "y")):
+            if 2 * abs(k) > len(e) - 1:
+                check.reject("SinusoidalMode", "mode", list(self.wave), f"must have |k_{axis}|"
+                             f" <= cells along {axis} / 2 = {(len(e) - 1) / 2:g} (2 cells a "
+                             f"period); use more space.cells")
+        if self.component > d:
+            check.reject("SinusoidalMode", "component", self.component,
+                         f"must be at most the grid's dimension d = {d}")
+        lx, ly = ex[-1] - ex[0], ey[-1] - ey[0]
+        normal = numpy.array([kx / lx, ky / ly])
+        normal /= numpy.hypot(*normal)
+        direction = numpy.zeros(d)
+        if self.component == 1:
+            direction[:2] = normal
+        elif self.component == 2:
+            direction[:2] = (-normal[1], normal[0])
+        else:
+            direction[2] = 1.0
+        f = numpy.zeros((len(ex) - 1, len(ey) - 1) + tuple(grid.shape))
+        mass = numpy.zeros(f.shape[:2])
+        for x, y, w in _box_points((ex, ey)):
+            wave = self.amplitude * numpy.sin(2.0 * math.pi * (kx * x / lx + ky * y / ly))
+            rho = numpy.broadcast_to(self.density * (1.0 + wave if self.field == "density"
+                                                     else 1.0), mass.shape)
+            t = numpy.broadcast_to(self.temperature * (1.0 + wave if self.field ==
+                                                       "temperature" else 1.0), mass.shape)
+            u = [numpy.full(mass.shape, self.velocity if i == 0 else 0.0) for i in range(d)]
+            if self.field == "velocity":
+                u = [c + wave * e for c, e in zip(u, direction)]
+            f += w * _maxwellians(grid, rho, u, t)
+            mass += w * rho
+        return f, mass
+
+
+def _fractions(value):
+    """(a, b): two numbers in (0, 1), refused otherwise."""
+    if (not isinstance(value, (list, tuple)) or len(value) != 2
+            or not all(_finite(v) and 0.0 < float(v) < 1.0 for v in value)):
+        check.reject("QuadrantProblem", "interface", value, "must be [a, b], two numbers in "
+                     "(0, 1): the point where the quadrants meet, as fractions of L_x and L_y")
+    return tuple(float(v) for v in value)
+
+
+@attrs.frozen
+class QuadrantProblem(SpaceCondition):
+    r"""The two-dimensional Riemann problem: Maxwellians of four states in the quadrants
+    about the point (a L_x, b L_y) of a rectangle, numbered as Lax & Liu number them
+    (P. D. Lax & X.-D. Liu, SIAM J. Sci. Comput. 19 (1998) 319; R. Liska & B. Wendroff,
+    SIAM J. Sci. Comput. 25 (2003) 995): 1 upper right (x > a, y > b), 2 upper left,
+    3 lower left, 4 lower right. Each cell is the exact mixture by the share of its area
+    in each quadrant.
+
+    Parameters
+    ----------
+    upper_right, upper_left, lower_left, lower_right : dict
+        ``{density, velocity, temperature}``; velocity u_1 (a number) or its first
+        components (u_1, u_2), the others 0, or all d.
+    interface : list of two float
+        (a, b): the point where the quadrants meet, as fractions of L_x and L_y, in (0, 1).
+    """
+
+    upper_right: dict = attrs.field(converter=lambda v: _state(v, "QuadrantProblem",
+                                                                "upper_right"))
+    upper_left: dict = attrs.field(converter=lambda v: _state(v, "QuadrantProblem",
+                                                               "upper_left"))
+    lower_left: dict = attrs.field(converter=lambda v: _state(v, "QuadrantProblem",
+                                                               "lower_left"))
+    lower_right: dict = attrs.field(converter=lambda v: _state(v, "QuadrantProblem",
+                                                                "lower_right"))
+    interface: tuple = attrs.field(default=(0.5, 0.5), converter=_fractions)
+
+    @property
+    def states(self) -> dict:
+        """The four states by quadrant name."""
+        return {name: getattr(self, name) for name in
+                ("upper_right", "upper_left", "lower_left", "lower_right")}
+
+    def sample_cells(self, grid, edges):
+        check.reject("QuadrantProblem", "space.cells", len(edges) - 1, "must be [Cx, Cy]: four "
+                     "quadrants need a rectangle")
+
+    def sample(self, grid):
+        """The average of f0 over the rectangle (the mean of 8 x 8 equal cells)."""
+        unit = numpy.linspace(0.0, 1.0, 9)
+        return self.sample_box(grid, (unit, unit))[0].mean(axis=(0, 1))
+
+    def sample_box(self, grid, edges):
+        (ex, ey), owner = (numpy.asarray(e, dtype=float) for e in edges), "QuadrantProblem"
+        shares = []
+        for e, fraction in ((ex, self.interface[0]), (ey, self.interface[1])):
+            point = e[0] + fraction * (e[-1] - e[0])
+            below = numpy.clip((point - e[:-1]) / numpy.diff(e), 0.0, 1.0)
+            shares.append((below, 1.0 - below))
+        (left, right), (low, high) = shares
+        weights = {"upper_right": right[:, None] * high[None, :],
+                   "upper_left": left[:, None] * high[None, :],
+                   "lower_left": left[:, None] * low[None, :],
+                   "lower_right": right[:, None] * low[None, :]}
+        f = numpy.zeros((len(ex) - 1, len(ey) - 1) + tuple(grid.shape))
+        mass = numpy.zeros(f.shape[:2])
+        tail = (1,) * grid.dimension
+        for name, state in self.states.items():
+            velocity = tuple(state["velocity"])
+            if len(velocity) > grid.dimension:
+                check.reject(owner, f"{name}.velocity", list(velocity), f"must have at most "
+                             f"{grid.dimension} components on a {grid.dimension}D grid")
+            velocity += (0.0,) * (grid.dimension - len(velocity))   # (u_1, u_2): u_3 = 0
+            m = grid.maxwellian(state["density"], velocity, state["temperature"])
+            f += weights[name].reshape(weights[name].shape + tail) * m
+            mass += weights[name] * state["density"]
+        return f, mass
 
 
 def _parameters(value):
@@ -312,18 +508,33 @@ class SpaceFunction(SpaceCondition):
             f += w * self._values(function, xq, mesh, f.shape)
         return f, None
 
+    def sample_box(self, grid, edges):
+        """The cell averages on a rectangle of f0(x, y, v_1, ..., v_d): the function takes
+        x and y before the velocity components, by the tensor Gauss-Legendre rule."""
+        function = self._resolved()
+        mesh, d = grid.mesh(), grid.dimension
+        tail = (1,) * d
+        f = numpy.zeros((len(edges[0]) - 1, len(edges[1]) - 1) + tuple(grid.shape))
+        for x, y, w in _box_points([numpy.asarray(e, dtype=float) for e in edges]):
+            f += w * self._values(function, (x.reshape(x.shape + tail),
+                                             y.reshape(y.shape + tail)), mesh, f.shape)
+        return f, None
+
     def _values(self, function, x, mesh, shape):
         """function(x, *mesh) as a real array of ``shape``; refused when the call fails, the
         result does not broadcast to ``shape``, or it is complex beyond round-off
         (:data:`~granframe.model.initial.IMAGINARY_TOLERANCE`), as for ``callable``."""
+        space = x if isinstance(x, tuple) else (x,)
         try:
-            raw = numpy.asarray(function(x, *mesh))
+            raw = numpy.asarray(function(*space, *mesh))
             values = numpy.asarray(raw.real if raw.dtype.kind == "c" else raw, dtype=float)
             values = numpy.broadcast_to(values, shape)
         except check.USER_CODE_FAILURES as exc:  # the user's function, with what it was given
+            names = ("x", "y")[:len(space)]
             check.reject("SpaceFunction", "function", self.function,
-                         f"must map x and the {len(mesh)} velocity components (broadcastable "
-                         f"arrays, x of shape {x.shape}) to f0 of shape {shape}"
+                         f"must map {' and '.join(names)} and the {len(mesh)} velocity "
+                         f"components (broadcastable arrays, {', '.join(names)} of shape "
+                         f"{', '.join(str(a.shape) for a in space)}) to f0 of shape {shape}"
                          + (f" with params {self.params}" if self.params else "")
                          + f"; calling it raised {check.raised(exc)}")
         check_real(raw, values, "SpaceFunction", self.function)
@@ -331,25 +542,35 @@ class SpaceFunction(SpaceCondition):
 
 
 def cell_edges(space):
-    """The cell edges 0 = x_0 < ... < x_n = ell of a :class:`~granframe.run.description.Space`."""
+    """The cell edges 0 = x_0 < ... < x_n = ell of a :class:`~granframe.run.description.Space`;
+    of a rectangle, a tuple of the edges along x and along y."""
+    if space.dimension > 1:
+        return tuple(numpy.linspace(0.0, ell, n + 1) for ell, n in zip(space.lengths,
+                                                                         space.counts))
     return numpy.linspace(0.0, space.length, space.cells + 1)
 
 
 def initial_cells(description):
     """f0 of a space run as cell averages (cells, *grid.shape), and the intended mass of each
-    cell (None where unknown): a :class:`SpaceCondition`'s :meth:`~SpaceCondition.sample_cells`,
+    cell (None where unknown): a :class:`SpaceCondition`'s :meth:`~SpaceCondition.sample_cells`
+    (on a rectangle :meth:`~SpaceCondition.sample_box`, its cells in C order, x slowest),
     or a space-homogeneous condition repeated in every cell, refused by
     :func:`check_cells` when its moments leave floating-point range."""
     grid, space = description.grid, description.space
     initial = description.build("initial")
     owner = f"initial condition {type(initial).__name__}"
+    cells = math.prod(space.counts)
     try:
-        if isinstance(initial, SpaceCondition):
+        if isinstance(initial, SpaceCondition) and space.dimension > 1:
+            f, masses = initial.sample_box(grid, cell_edges(space))
+            f = f.reshape((cells,) + f.shape[2:])
+            masses = None if masses is None else numpy.ravel(masses)
+        elif isinstance(initial, SpaceCondition):
             f, masses = initial.sample_cells(grid, cell_edges(space))
         else:
             cell = initial.sample(grid)
-            f = numpy.broadcast_to(cell, (space.cells,) + cell.shape)
-            masses = [initial.intended_mass] * space.cells
+            f = numpy.broadcast_to(cell, (cells,) + cell.shape)
+            masses = [initial.intended_mass] * cells
     except (OverflowError, ZeroDivisionError) as exc:
         check.reject(owner, "initial", description.initial.name, f"gives f0 beyond "
                      f"floating-point range on this grid ({exc}); bring its parameters "

@@ -1,9 +1,10 @@
 """The problem of every run: d_t f + v . grad_x f = Q(f, f)/eps (+ tau Delta_v f) on the cells
-of a space of zero or one dimensions (docs/space.md, docs/architecture.md).
+of a space of zero, one or two dimensions (docs/space.md, docs/architecture.md).
 
 A space-homogeneous run is the case of zero space dimensions: one cell, no transport, one
 process (:class:`~granframe.run.problems.spaces.Point`); a description with a ``space``
-section has the cells of an interval (:class:`~granframe.run.problems.spaces.Interval`).
+section has the cells of an interval (:class:`~granframe.run.problems.spaces.Interval`) or
+of a rectangle (:class:`~granframe.run.problems.spaces.Rectangle`).
 The collision operator, the equation (one per collision model, acting on a batch of cells:
 a space-homogeneous run is a batch of none), its rescaled form, the hierarchy of collision
 models, the step limits and the commit are built here once for both; the shape of the space
@@ -26,7 +27,7 @@ from granframe.registry import default_registries
 from granframe.run.description import RunDescription
 from granframe.run.problems.parts import build_operator, check_step
 from granframe.run.problems.spaces import (LEVEL_RECORDS, WALL_RECORDS, Interval, Point,
-                                           space_layout)
+                                           Rectangle, space_layout)
 from granframe.space.collisions import FreeFlight, LevelledModels, SingleModel
 from granframe.space.hierarchy import HierarchyContext, HybridCollisions
 from granframe.stepping.stability import OperatorOutline, step_limit
@@ -58,7 +59,7 @@ class SpaceProblem(Problem):
                    error=TypeError)
         self.description = d = description
         self.grid = grid = d.grid
-        shape = Point if d.space is None else Interval
+        shape = Point if d.space is None else Interval if d.space.dimension == 1 else Rectangle
         #: the space the cells fill (:mod:`granframe.run.problems.spaces`)
         self.space = space = shape(d, outline, communicator, partition_cells)
         self.communicator = comm = space.communicator

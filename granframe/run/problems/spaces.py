@@ -22,21 +22,23 @@ against the grid and project it onto the Nyquist-free modes before anything is w
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy
 
 from granframe.backends import to_host
 from granframe.model.initial import check_fits, check_projection
-from granframe.parallel import CellLayout, Halo, SerialCommunicator, world
+from granframe.parallel import (BoxHalo, CellLayout, Halo, SerialCommunicator,
+                                check_store_chunks, process_grid, world)
 from granframe.run.monitors import (CELL_INDICATORS, AccuracyMonitors, CellEdgeMonitors,
                                     cell_resolution_report)
 from granframe.run.storage import (RECORDED_MOMENTS, STEP_RECORDS, Layout, RecordArray,
                                    homogeneous_layout)
 from granframe.space.collisions import SplitStep
-from granframe.space.domain import Domain
+from granframe.space.domain import Box, Domain
 from granframe.space.initial import initial_cells
-from granframe.space.transport import Transport
+from granframe.space.transport import BoxTransport, Transport
 from granframe.validators import reject
 from granframe.velocity.estimators import resolution_report
 from granframe.velocity.moments import FIELDS, TOTALS, FieldMoments
@@ -256,13 +258,16 @@ class Interval:
         with the moments before and after the Nyquist projection of the cell they change
         most (:func:`~granframe.model.initial.check_projection`, which refuses a cell the
         grid does not resolve), or None without ``check``."""
+        return self._checked_cells(check)
+
+    def _checked_cells(self, check: bool):
+        """f0 (cells, *grid.shape) and the projection's moments of :meth:`initial`."""
         d = self.description
         grid = d.grid
         sampled, masses = initial_cells(d)
         if not check:
             return numpy.stack([grid.project(f) for f in sampled]), None
         initial = d.build("initial")
-        edges = self.domain.edges()
         projected, worst, projection = [], -1.0, None
         for index, (f, mass) in enumerate(zip(sampled, masses)):
             cell = _cell(initial, mass)
@@ -274,16 +279,21 @@ class Interval:
                                            d.health.projection_tolerance,
                                            d.health.projection_kurtosis_tolerance)
             except ValueError as exc:
-                raise ValueError(f"{exc} (in cell {index} of {d.space.cells}, x = "
-                                 f"{0.5 * (edges[index] + edges[index + 1]):.6g})") from None
+                raise ValueError(f"{exc} ({self._where(index)})") from None
             change = max(abs(m["after"] / m["before"] - 1.0) for m in moments.values())
             if change > worst:
                 worst, projection = change, moments
         projected = numpy.stack(projected)
-        self._check_positivity(projected, edges)
+        self._check_positivity(projected)
         return projected, projection
 
-    def _check_positivity(self, f0, edges) -> None:
+    def _where(self, index: int) -> str:
+        """Where cell ``index`` is, for a message."""
+        edges = self.domain.edges()
+        return (f"in cell {index} of {self.description.space.cells}, x = "
+                f"{0.5 * (edges[index] + edges[index + 1]):.6g}")
+
+    def _check_positivity(self, f0) -> None:
         """Refuse f0 whose negative mass share over all cells, sum max(-f, 0) / sum |f| (what
         the health check takes after every step), is above ``health.positivity_tolerance``,
         naming the cell where it is largest."""
@@ -299,8 +309,7 @@ class Interval:
         reject(f"initial condition {type(d.build('initial')).__name__}",
                "negative mass share of f0 after the Nyquist projection", share,
                f"must be <= health.positivity_tolerance = {d.health.positivity_tolerance:g}, "
-               f"which the run checks after every step (largest in cell {worst} of "
-               f"{d.space.cells}, x = {0.5 * (edges[worst] + edges[worst + 1]):.6g}: "
+               f"which the run checks after every step (largest {self._where(worst)}: "
                f"{negative[worst] / absolute[worst]:.3g}): N = {grid.n_modes} modes (spacing "
                f"h = {grid.spacing:.4g}) do not resolve f0, whose projection rings below zero; "
                "use a larger grid.n_modes, or a smaller grid.support_radius if f0 is "
@@ -352,7 +361,7 @@ class Interval:
         rows = self.communicator.allgather(self.fields.partial_totals(vector, record))
         self.reduction_seconds += time.perf_counter() - began
         record.update(self.fields.combine(rows))
-        extra = record.pop("walls").reshape(2, -1)
+        extra = record.pop("walls").reshape(len(self.domain.sides), -1)
         record["wall_mass"], record["wall_energy"] = extra[:, 0], extra[:, -1]
         record["wall_momentum"] = extra[:, 1:-1]
         if hierarchy is not None:
@@ -381,16 +390,208 @@ class Interval:
         indicators = values[:count * len(CELL_INDICATORS)].reshape(count, -1)
         shares = (values[count * len(CELL_INDICATORS):].reshape(count, 2)
                   if monitors.radius > 0.0 else None)
-        if self.communicator.size > 1:     # every cell's, in every process, in cell order
-            gathered = self.communicator.allgather_object((indicators, shares))
-            indicators = numpy.concatenate([part[0] for part in gathered])
-            shares = None if shares is None else numpy.concatenate([p[1] for p in gathered])
+        indicators = self._gather_cells(indicators)     # every cell's, in every process
+        shares = None if shares is None else self._gather_cells(shares)
         resolution = cell_resolution_report(self.description.grid, indicators,
-                                            self.domain.centres(),
+                                            self._positions(),
                                             self.description.health.resolution_tolerance)
         return resolution, monitors.update(monitors.shape(shares, resolution), state.step,
                                            state.t)
 
+    def _positions(self):
+        """The centre of every cell, in cell order."""
+        return self.domain.centres()
+
+    def _gather_cells(self, values):
+        """Every cell's ``values`` (owned cells, ...) in every process, in cell order."""
+        if self.communicator.size == 1:
+            return values
+        return numpy.concatenate(self.communicator.allgather_object(values))
+
+    def check_chunks(self, space: dict, path) -> None:
+        """Refuse to resume a store whose chunks along x do not fall on the boundaries of
+        the processes' cells (a store made with another ``block_cells``), before anything
+        is written."""
+        if len(self.ranges) == 1:
+            return
+        check_store_chunks(self.ranges, int(space.get("block_cells", 1)),
+                           space.get("cells", "?"), path)
+
     def progress_text(self, record, mass0) -> str:
         low, high = record["temperature_range"]
         return f"T in [{low:.4g}, {high:.4g}], mass drift {record['mass'] / mass0 - 1:+.1e}"
+
+
+def box_layout(grid, box: Box, chunks: tuple, levels: bool = False) -> Layout:
+    """The store of a run on a rectangle: f (time, x, y, v1, ..., vd) chunked by snapshot
+    and by ``chunks`` cells along x and y, the coordinates v1 ... vd, x and y (the cell
+    centres), and after every step the totals, the fields (step_time, x, y, ...) chunked by
+    ``chunks`` along x and y, and the wall records of the four sides (step_time, wall;
+    ``wall_momentum`` (step_time, wall, axis); the walls in the order left, right, bottom,
+    top); with ``levels`` the level of every cell (step_time, x, y)."""
+    d = grid.dimension
+    axes = tuple(f"v{i + 1}" for i in range(d))
+    cells, space = box.cells, tuple(box.axes)
+    chunk = max(1, 4096 // math.prod(chunks))
+    fields = tuple(RecordArray(name, cells + tuple(d if c == "d" else c for c in shape),
+                               space + dims, chunk=chunk, cells_chunk=tuple(chunks))
+                   for name, (shape, dims) in FIELDS.items())
+    sides = len(box.sides)
+    walls = tuple(RecordArray(name, (sides, d) if name == "wall_momentum" else (sides,),
+                              ("wall", "axis") if name == "wall_momentum" else ("wall",))
+                  for name in WALL_RECORDS)
+    if levels:
+        walls += tuple(RecordArray(name, cells, space, dtype=dtype, chunk=chunk,
+                                   cells_chunk=tuple(chunks))
+                       for name, dtype in LEVEL_RECORDS.items())
+    points = grid.points()
+    return Layout(tuple((name, points, (name,)) for name in axes)
+                  + tuple((name, values, (name,))
+                          for name, values in box.coordinates().items()),
+                  cells + tuple(grid.shape), tuple(chunks) + tuple(grid.shape),
+                  space + axes,
+                  STEP_RECORDS + tuple(RecordArray(n) for n in TOTALS) + fields + walls,
+                  space={"cells": list(cells), "length": list(box.length),
+                         "block_cells": list(chunks)})
+
+
+class Rectangle(Interval):
+    """Two space dimensions: the cells of [0, L_x] x [0, L_y], in blocks over a P_x x P_y
+    grid of the processes of ``communicator`` (:func:`granframe.parallel.process_grid`,
+    near square; rank r at place (r // P_y, r % P_y)), each block whole store chunks along
+    both axes.
+
+    The state is the block array of a :class:`~granframe.space.domain.Box` (the owned
+    cells with their ghost strips), stepped by
+    :class:`~granframe.space.collisions.SplitStep` with the unsplit transport
+    (:class:`~granframe.space.transport.BoxTransport`) and the collision step on every cell
+    of the block at once; the records are those of the interval, on (x, y), and what
+    entered through each of the four sides (:func:`box_layout`). Everything else is the
+    interval's (:class:`Interval`): the fields and the totals from one device vector and one
+    transfer, the resolution indicators of every cell, the monitors.
+    """
+
+    dimension = 2
+
+    def __init__(self, description, outline: bool = False, communicator=None,
+                 partition_cells=None):
+        self.description = d = description
+        space = d.space
+        parts = d.build("space")
+        self.reconstruction = parts["reconstruction"]
+        self.walls = tuple(parts[side] for side in space.sides)
+        self.left, self.right = self.walls[:2]
+        self.collisions = space.collisions
+        self.communicator = comm = (SerialCommunicator() if outline else
+                                    world() if communicator is None else communicator)
+        if partition_cells is not None:
+            reject("make_problem", "partition_cells", partition_cells, "must be None on a "
+                   "rectangle: its blocks are whole store chunks shared as evenly as the "
+                   "process grid allows")
+        if space.hierarchy is not None:
+            reject("RunDescription", "space.hierarchy", "a table", "is not available on a "
+                   "rectangle yet: the hierarchy's levels are chosen along one axis; leave "
+                   "it out (the full operator in every cell)")
+        if d.rescaled:
+            reject("RunDescription", "rescaled", True, "is not available on a rectangle "
+                   "yet; run the cooling gas in physical variables")
+        ghost = self.reconstruction.ghost
+        chunks = space.blocks(ghost)
+        #: the processes along x and y
+        self.process_counts = process_grid(comm.size, space.counts, chunks, ghost)
+        place = [int(i) for i in numpy.unravel_index(comm.rank, self.process_counts)]
+        self.layouts = [CellLayout(n, ghost, p, i, b, axis=a) for a, (n, p, i, b) in
+                        enumerate(zip(space.counts, self.process_counts, place, chunks))]
+        self.cell_layout = None
+        #: the block (start, stop) along x and y of every process, in rank order
+        self.ranges = [tuple(layout.ranges[i] for layout, i in zip(
+            self.layouts, numpy.unravel_index(r, self.process_counts)))
+            for r in range(comm.size)]
+        self.chunks = tuple(chunks)
+        self.owned_cells = math.prod(layout.stop - layout.start for layout in self.layouts)
+        self.domain = self.transport = self.fields = None
+        self.reduction_seconds = 0.0
+
+    @property
+    def owned(self) -> tuple:
+        """The block this process owns and steps: a slice along x and one along y."""
+        return tuple(layout.owned for layout in self.layouts)
+
+    def build(self, grid, xp) -> None:
+        """The box of the owned block on ``xp``, its ghost exchange with the other
+        processes, the transport and the moment service (totals over dx dy)."""
+        space = self.description.space
+        self.domain = Box(space.counts, space.lengths, self.reconstruction.ghost, grid, xp,
+                          owned=[(layout.start, layout.stop) for layout in self.layouts])
+        if self.communicator.size > 1:
+            periodic = (self.walls[0].periodic, self.walls[2].periodic)
+            self.domain.neighbours = BoxHalo.of(self.communicator, self.process_counts,
+                                                periodic)
+        self.transport = BoxTransport(self.domain, self.reconstruction, self.walls)
+        self.fields = FieldMoments(grid, self.domain.cell_volume, xp, transport_axes=(0, 1))
+
+    def initial(self, check: bool):
+        """f0 as cell averages (C_x, C_y, *grid.shape), checked and projected cell by cell
+        (:meth:`Interval.initial`, the cells named by (i, j) and (x, y))."""
+        d = self.description
+        counts = d.space.counts
+        f, projection = self._checked_cells(check)
+        return f.reshape(counts + f.shape[1:]), projection
+
+    def _where(self, index: int) -> str:
+        i, j = numpy.unravel_index(index, self.description.space.counts)
+        x, y = self.domain.centres(0)[i], self.domain.centres(1)[j]
+        return (f"in cell ({i}, {j}) of {list(self.description.space.counts)}, (x, y) = "
+                f"({x:.6g}, {y:.6g})")
+
+    def layout(self, grid, hierarchy: bool):
+        return box_layout(grid, self.domain, self.chunks, levels=hierarchy)
+
+    def state(self, f_host, backend):
+        """The block array of the owned cells from f on the host: every cell
+        (C_x, C_y, ...), or the owned block."""
+        if f_host.shape[:2] != tuple(self.domain.sizes):
+            f_host = f_host[self.owned]
+        return self.domain.from_cells(backend.asarray(f_host))
+
+    def snapshot(self, state, backend):
+        """f of the owned block on the host, (n_x, n_y, *grid.shape)."""
+        cells = backend.to_numpy(self.domain.to_cells(state))
+        return cells.reshape(tuple(self.domain.sizes) + cells.shape[1:])
+
+    def record(self, state, backend, hierarchy) -> dict:
+        """The interval's record (:meth:`Interval.record`) with the fields of the owned
+        block on (x, y) and the wall records of the four sides."""
+        record = super().record(state, backend, hierarchy)
+        for name in FIELDS:
+            values = numpy.asarray(record[name])
+            record[name] = values.reshape(tuple(self.domain.sizes) + values.shape[1:])
+        return record
+
+    def _positions(self):
+        """The centre (x, y) of every cell, in C order."""
+        x, y = numpy.meshgrid(self.domain.centres(0), self.domain.centres(1), indexing="ij")
+        return numpy.stack([x.ravel(), y.ravel()], axis=1)
+
+    def _gather_cells(self, values):
+        """Every cell's ``values`` (owned cells in C order, ...) in every process, in the
+        global C order of the cells."""
+        counts = self.description.space.counts
+        if self.communicator.size == 1:
+            return values
+        parts = self.communicator.allgather_object(values)
+        whole = numpy.empty(counts + parts[0].shape[1:])
+        for (xs, ys), part in zip(self.ranges, parts):
+            whole[xs[0]:xs[1], ys[0]:ys[1]] = part.reshape(
+                (xs[1] - xs[0], ys[1] - ys[0]) + part.shape[1:])
+        return whole.reshape((-1,) + whole.shape[2:])
+
+    def check_chunks(self, space: dict, path) -> None:
+        """Refuse to resume a store whose chunks along x or y do not fall on the block
+        boundaries of these processes, before anything is written."""
+        if self.communicator.size == 1:
+            return
+        widths = space.get("block_cells", [1, 1])
+        cells = space.get("cells", ["?", "?"])
+        for axis, layout in enumerate(self.layouts):
+            check_store_chunks(layout.ranges, int(widths[axis]), cells[axis], path, axis)

@@ -254,9 +254,10 @@ class StoreCommits(StoreState):
         ----------
         plan : CommitPlan
             The open commit (:meth:`begin_commit`).
-        cells : slice
-            The cells a..b (``slice(a, b)``; ``slice(None)`` for all of them). a and b
-            must be multiples of the chunk width along ``x`` of every array in
+        cells : slice or tuple of slice
+            The cells a..b (``slice(a, b)``; ``slice(None)`` for all of them); on a
+            rectangle a slice along each cell axis (x, y), the block a process owns. a and
+            b must be multiples of the chunk width along that axis of every array in
             :attr:`cell_arrays` (b may be the number of cells), so that no chunk file is
             shared with the owner of other cells.
         f : sequence of array_like, optional
@@ -277,8 +278,7 @@ class StoreCommits(StoreState):
         """
         owner = "RunStore.write_block"
         _check_plan(owner, plan)
-        start, stop = self._block(cells)
-        region = (slice(start, stop),)
+        region = self._region(cells)
         names = tuple(n for n in self.cell_arrays if n != "f")
         _write(self._snapshot_writes(owner, plan, f, region)
                + self._record_writes(owner, plan, records, names, region))
@@ -356,14 +356,30 @@ class StoreCommits(StoreState):
         self._write_progress(dict(progress, snapshots=plan.snapshots.stop,
                                   records=plan.records.stop))
 
-    def _block(self, cells) -> tuple[int, int]:
-        """The first and the end cell of ``cells``, checked against the chunks along ``x``
-        of every array of :attr:`cell_arrays`."""
+    def _region(self, cells) -> tuple:
+        """The slices of ``cells`` (one slice: along the first cell axis; a tuple of
+        slices: along each cell axis of a rectangle), checked by :meth:`_block`."""
+        if not isinstance(cells, tuple):
+            return (slice(*self._block(cells)),)
+        axes = self._cell_axes()
+        if len(cells) != axes:
+            reject("RunStore.write_block", "cells", cells, f"must give a slice for each of "
+                   f"the {axes} cell axes of the store")
+        return tuple(slice(*self._block(part, axis)) for axis, part in enumerate(cells))
+
+    def _cell_axes(self) -> int:
+        """How many cell axes f has after ``time`` (1 on an interval, 2 on a rectangle)."""
+        dimensions = tuple(self.group["f"].metadata.dimension_names or ())
+        return sum(1 for name in dimensions[1:] if name in CELL_AXES)
+
+    def _block(self, cells, axis: int = 0) -> tuple[int, int]:
+        """The first and the end cell of ``cells`` along the cell axis ``axis``, checked
+        against the chunks along that axis of every array of :attr:`cell_arrays`."""
         owner, split = "RunStore.write_block", self.cell_arrays
         if "f" not in split:
             reject(owner, "cells", cells, "has no use: the store has no cells axis (a "
                    "space-homogeneous run); write f and every record with write_shared")
-        total = self.group["f"].shape[1]
+        total = self.group["f"].shape[1 + axis]
         if not isinstance(cells, slice) or cells.step not in (None, 1) or not all(
                 bound is None or is_integer(bound) for bound in (cells.start, cells.stop)):
             reject(owner, "cells", cells, f"must be a slice a:b of the {total} cells (step 1)")
@@ -373,10 +389,11 @@ class StoreCommits(StoreState):
             reject(owner, "cells", cells, f"must be a slice a:b of the {total} cells with "
                    f"0 <= a < b <= {total}")
         for name in split:
-            width = self.group[name].chunks[1]
+            width = self.group[name].chunks[1 + axis]
             if start % width or (stop % width and stop != total):
                 reject(owner, "cells", cells, f"is not aligned with the blocks of array "
-                       f"'{name}', chunked by {width} cells along x ({total} cells): a and b "
+                       f"'{name}', chunked by {width} cells along {CELL_AXES[axis]} "
+                       f"({total} cells): a and b "
                        f"must be multiples of {width} (b may be {total}), so that no chunk "
                        "file is shared with the owner of other cells")
         return start, stop

@@ -53,10 +53,11 @@ class RecordArray:
         Its data type ('f8', 'i8').
     chunk : int
         Records per chunk along ``step_time``.
-    cells_chunk : int or None
+    cells_chunk : int, tuple of int, or None
         Cells per chunk along its first dimension after ``step_time``, which must then be
-        the cells axis (``x``, or ``y`` or ``z`` for cells along those axes): a space run's
-        fields are chunked by block of cells
+        the cells axis (``x``, or ``y`` or ``z`` for cells along those axes); a tuple: along
+        each of its first dimensions, which must then be cell axes (``x``, ``y`` of a
+        rectangle): a space run's fields are chunked by block of cells
         (``cells_chunk = block_cells``), so that the owner of a block writes chunk files
         no other block touches (:meth:`RunStore.write_block`). None: one chunk spans
         each dimension after ``step_time`` whole.
@@ -67,27 +68,32 @@ class RecordArray:
     dimensions: tuple = ()
     dtype: str = "f8"
     chunk: int = MOMENT_CHUNK
-    cells_chunk: int | None = attrs.field(default=None)
+    cells_chunk: int | tuple | None = attrs.field(default=None)
 
     @cells_chunk.validator
     def _check_cells_chunk(self, attribute, value):
         if value is None:
             return
-        if not self.dimensions or self.dimensions[0] not in CELL_AXES or not self.shape:
+        widths = value if isinstance(value, tuple) else (value,)
+        if (len(self.dimensions) < len(widths) or len(self.shape) < len(widths)
+                or not all(name in CELL_AXES for name in self.dimensions[:len(widths)])):
             reject("RecordArray", "cells_chunk", value, f"is only allowed for a record whose "
                    f"first dimension after step_time is the cells axis 'x' (or 'y', 'z' "
-                   f"for cells along those axes) (record '{self.name}' has dimensions "
-                   f"{tuple(self.dimensions)}); leave it None")
-        if not is_integer(value) or not 1 <= value <= self.shape[0]:
+                   f"for cells along those axes; x and y of a rectangle for a tuple) (record "
+                   f"'{self.name}' has dimensions {tuple(self.dimensions)}); leave it None")
+        if not all(is_integer(w) and 1 <= w <= n for w, n in zip(widths, self.shape)):
             reject("RecordArray", "cells_chunk", value, f"must be None or a whole number of "
-                   f"cells from 1 to {self.shape[0]} (the cells of record '{self.name}')")
+                   f"cells from 1 to {self.shape[0]} (the cells of record '{self.name}'), "
+                   "or one for each cell axis")
 
     @property
     def chunks(self) -> tuple:
         """The chunk shape of the array in the store (``step_time`` first)."""
-        after = tuple(self.shape) if self.cells_chunk is None else \
-            (self.cells_chunk,) + tuple(self.shape[1:])
-        return (self.chunk,) + after
+        if self.cells_chunk is None:
+            return (self.chunk,) + tuple(self.shape)
+        widths = self.cells_chunk if isinstance(self.cells_chunk, tuple) else \
+            (self.cells_chunk,)
+        return (self.chunk,) + widths + tuple(self.shape[len(widths):])
 
 
 @attrs.frozen

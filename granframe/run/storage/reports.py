@@ -149,11 +149,20 @@ def _describe_space(meta: dict, group, n: int) -> list[str]:
     balance m(t) - m(0) - (mass entered) of the records."""
     space, section = meta["space"], meta["description"]["space"]
     cells, length, block = space["cells"], space["length"], space["block_cells"]
-    lines = [f"space       {cells} cells on [0, {length:g}] (dx = {length / cells:.6g}), "
-             f"{cells // block} blocks of {block} cells, reconstruction "
-             f"{_named(section.get('reconstruction', {'name': 'muscl'}))}, walls: left "
-             f"{_named(section.get('left', {'name': 'periodic'}))}, right "
-             f"{_named(section.get('right', {'name': 'periodic'}))}"]
+    walls = ", ".join(f"{side} {_named(section.get(side, {'name': 'periodic'}))}"
+                      for side in ("left", "right", "bottom", "top")[:2 * len(
+                          cells if isinstance(cells, list) else [cells])])
+    if isinstance(cells, list):         # a rectangle
+        lines = [f"space       {cells[0]} x {cells[1]} cells on [0, {length[0]:g}] x "
+                 f"[0, {length[1]:g}] (dx = {length[0] / cells[0]:.6g}, dy = "
+                 f"{length[1] / cells[1]:.6g}), chunks of {block[0]} x {block[1]} cells, "
+                 f"reconstruction {_named(section.get('reconstruction', {'name': 'muscl'}))}"
+                 f", walls: {walls}"]
+    else:
+        lines = [f"space       {cells} cells on [0, {length:g}] (dx = {length / cells:.6g}), "
+                 f"{cells // block} blocks of {block} cells, reconstruction "
+                 f"{_named(section.get('reconstruction', {'name': 'muscl'}))}, walls: "
+                 f"{walls}"]
     for name, label in (("temperature", "T(x)"), ("density", "rho(x)")):
         first, last = group[name][0], group[name][n - 1]
         lines.append(f"  {label:<12s}in [{numpy.nanmin(first):.6g}, {numpy.nanmax(first):.6g}] "
@@ -168,10 +177,11 @@ def _describe_space(meta: dict, group, n: int) -> list[str]:
                      f"balance {last - first - inflow:+.2e})")
     values = group["min_f"][[0, n - 1]]
     lines.append(f"  {'min_f':<12s}{values[0]:.10g} -> {values[1]:.10g}")
+    names = ("left", "right", "bottom", "top")
     for wall, what in (("wall_mass", "mass"), ("wall_energy", "energy")):
-        left, right = entered[wall]
-        lines.append(f"  {what} entered through the left wall {left:+.6e}, the right wall "
-                     f"{right:+.6e} (sums over the steps)")
+        lines.append(f"  {what} entered through the " + ", the ".join(
+            f"{side} wall {value:+.6e}" for side, value in zip(names, entered[wall]))
+            + " (sums over the steps)")
     return lines
 
 
@@ -233,8 +243,14 @@ def _resolution_lines(progress: dict) -> list[str]:
              f"{resolution['negative_mass_fraction']:.3g}, share of pairs beyond 2S "
              f"{resolution['pairs_beyond_support']:.3g}"]
     if "cells" in resolution:           # a space run: the worst cell of each indicator
+        def at(name):
+            if "position" in resolution:
+                x, y = resolution["position"][name]
+                return f"(x, y) = ({x:.4g}, {y:.4g})"
+            return f"x = {resolution['x'][name]:.4g}"
+
         lines.append("  worst cells " + ", ".join(
-            f"{name} {resolution[name]:.3g} in cell {cell} (x = {resolution['x'][name]:.4g})"
+            f"{name} {resolution[name]:.3g} in cell {cell} ({at(name)})"
             for name, cell in resolution["cells"].items()))
     lines.extend(f"  warning: {warning}" for warning in resolution["warnings"])
     return lines

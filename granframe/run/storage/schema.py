@@ -69,6 +69,7 @@ SPACE_LONG_NAMES = {
     **LEVEL_LONG_NAMES,
     "f": "distribution function f(t, x, v), cell averages",
     "x": "cell centre",
+    "y": "cell centre along y",
     "mass": "total mass int int f dv dx",
     "kinetic_energy": "total kinetic energy int int |v|^2/2 f dv dx",
     "min_f": "minimum of f over the cells and the grid",

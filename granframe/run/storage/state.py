@@ -68,14 +68,16 @@ class StoreState:
     def snapshot_count(self) -> int:
         return int(self.progress["snapshots"])
 
-    def last_snapshot(self, cells: slice | None = None):
+    def last_snapshot(self, cells=None):
         """(f, t) of the last committed snapshot, f as a NumPy array; ``cells``: only those
-        cells of a space run's f (the range a process owns), read from their chunks."""
+        cells of a space run's f (the range a process owns, a slice; on a rectangle the
+        block, a slice per axis), read from their chunks."""
         k = self.snapshot_count
         if k == 0:
             raise StoreError(f"store '{self.path}' has no complete snapshot to resume from")
         f = self.group["f"]
-        return (f[k - 1] if cells is None else f[(k - 1, cells)],
+        where = (k - 1,) + (cells if isinstance(cells, tuple) else (cells,))
+        return (f[k - 1] if cells is None else f[where],
                 float(self.group["time"][k - 1]))
 
     def array_names(self) -> list[str]:
