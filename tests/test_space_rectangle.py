@@ -207,3 +207,37 @@ def test_a_wall_of_y_on_an_interval_is_refused_by_name():
     with pytest.raises(ValueError, match="parameter 'bottom' = 'specular' is invalid; is a "
                                          "wall of y: an interval"):
         _description({"cells": 8, "bottom": "specular"})
+
+
+def test_the_figures_of_a_rectangle_are_maps_at_every_snapshot_and_an_animation(tmp_path,
+                                                                               capsys):
+    """``granframe plot`` of a run on a rectangle: a figure of maps (rho, T, the speed with
+    streamlines, the vorticity) per snapshot and the totals; ``--animate FIELD`` a GIF of
+    one frame per snapshot; a field it does not know, or an animation of an interval,
+    refused by name."""
+    from PIL import Image
+
+    mode = {"name": "sinusoidal_mode", "field": "velocity", "component": 2,
+            "amplitude": 0.2, "mode": [1, 1]}
+    out = tmp_path / "shear.zarr"
+    _run(_description({"cells": [8, 8]}, initial=mode, final=0.02), out)
+    folder = tmp_path / "figures"
+    assert main(["plot", str(out), "--out", str(folder), "--animate", "vorticity"]) == 0
+    names = sorted(p.name for p in folder.iterdir())
+    assert names == ["plane_0.png", "plane_1.png", "totals.png", "vorticity.gif"]
+    with Image.open(folder / "vorticity.gif") as gif:
+        assert gif.n_frames == 2
+    from granframe.tools.plot_plane import plane_field
+    from granframe.tools.plot_data import RunData
+
+    run = RunData(out)
+    vorticity, velocity = plane_field(run, "vorticity", 0)
+    # a transverse wave along the diagonal: u = A sin(2 pi (x + y)) (-1, 1)/sqrt(2) has
+    # omega = d_x u_2 - d_y u_1 = 2 sqrt(2) pi A cos(2 pi (x + y)): the differences see it
+    x, y = numpy.meshgrid(run.ds.x.values, run.ds.y.values, indexing="ij")
+    exact = 2 * numpy.sqrt(2) * numpy.pi * 0.2 * numpy.cos(2 * numpy.pi * (x + y))
+    assert numpy.abs(vorticity - exact).max() < 0.15 * numpy.abs(exact).max()
+    capsys.readouterr()
+    assert main(["plot", str(out), "--out", str(folder), "--animate", "pressure"]) == 2
+    assert "parameter 'animate' = 'pressure' is invalid; must name a field of a run on a " \
+           "rectangle" in capsys.readouterr().err

@@ -367,7 +367,8 @@ def measure_space(dimension: int, n_modes: int, cells: int, radial_points: int,
 
     The run: hard spheres, e = 0.8, RK4 collisions (4 operator calls per step) with the
     review's rules (N_rho, M), ``cells`` cells between two diffuse walls, a density wave,
-    dt at the transport's CFL limit. Reported (medians of ``repeats``, in alternating
+    dt at the transport's CFL limit; ``cells`` a pair (C_x, C_y): a rectangle with diffuse
+    walls at its four sides and a density wave along the diagonal. Reported (medians of ``repeats``, in alternating
     rounds): the step (:meth:`~granframe.abc.Problem.step`); its parts -- collisions (the
     integrator's step on all cells), transport (two half steps, walls included), of which
     the walls (ghost exchange and wall fluxes, the 6 stages' worth); the record
@@ -381,14 +382,16 @@ def measure_space(dimension: int, n_modes: int, cells: int, radial_points: int,
     baseline = peak_rss_kib()
     description = _space_description(dimension, n_modes, cells, radial_points, sphere_points,
                                      backend, threads, reconstruction)
+    count = math.prod(cells) if isinstance(cells, (tuple, list)) else cells
     start = time.perf_counter()
     problem = make_problem(description)
     precompute = time.perf_counter() - start
     parts, dt = _space_parts(problem)
     medians = _medians(parts, repeats, problem.backend)
-    per_distribution = medians["operator"] / cells
-    target = cells * per_distribution * 4
-    return {"dimension": dimension, "n_modes": n_modes, "cells": cells,
+    per_distribution = medians["operator"] / count
+    target = count * per_distribution * 4
+    return {"dimension": dimension, "n_modes": n_modes,
+            "cells": list(cells) if isinstance(cells, (tuple, list)) else cells,
             "radial_points": radial_points, "sphere_points": sphere_points,
             "reconstruction": reconstruction, "backend": backend, "threads": threads,
             "repeats": repeats, "precompute_s": precompute, "time_step": dt,
@@ -408,6 +411,10 @@ def _space_description(dimension: int, n_modes: int, cells: int, radial_points: 
     from granframe.run.description import RunDescription
 
     grid = {"dimension": dimension, "n_modes": n_modes, "support_radius": 4.0}
+    plane = isinstance(cells, (tuple, list))
+    space = {"cells": list(cells) if plane else cells, "reconstruction": reconstruction,
+             "left": "diffuse", "right": "diffuse",
+             **({"bottom": "diffuse", "top": "diffuse"} if plane else {})}
     if dimension == 2:
         sphere = {"name": "circle_trapezoid", "n_points": sphere_points}
     else:
@@ -415,11 +422,11 @@ def _space_description(dimension: int, n_modes: int, cells: int, radial_points: 
     return RunDescription.from_dict({
         "final_time": 1.0, "time_step": 1e-6, "grid": grid, "kernel": "hard_spheres",
         "restitution": {"name": "constant", "value": 0.8},
-        "initial": {"name": "sinusoidal_mode", "field": "density", "amplitude": 0.2},
+        "initial": {"name": "sinusoidal_mode", "field": "density", "amplitude": 0.2,
+                    **({"mode": [1, 1]} if plane else {})},
         "operator": {"name": "fast_spectral", "radial_points": radial_points, "sphere": sphere},
         "backend": {"name": backend, **({"threads": threads} if backend != "numpy" else {})},
-        "space": {"cells": cells, "reconstruction": reconstruction, "left": "diffuse",
-                  "right": "diffuse"},
+        "space": space,
         "health": {"step_limit": False}})
 
 
@@ -447,6 +454,13 @@ def _space_parts(problem):
     def walls():
         g, xp = domain.ghost, array_backend.xp
         for _ in range(6):
+            if hasattr(transport, "walls"):         # a rectangle: its four sides
+                domain.exchange(array, transport.walls, 0.0)
+                for side, wall in zip(domain.sides, transport.walls):
+                    strip = domain.along(array, side.axis)[g if side.end == 0 else -g - 1]
+                    wall.emit(side.to_wall(strip, problem.grid.dimension, xp), problem.grid,
+                              xp, t=0.0, side=side)
+                continue
             domain.exchange(array, transport.left, transport.right, 0.0)
             transport.left.emit(array[0, g], problem.grid, xp, t=0.0, side="left")
             transport.right.emit(array[-1, -g - 1], problem.grid, xp, t=0.0, side="right")
@@ -481,8 +495,11 @@ def run_space(configs, backend: str, threads: int, repeats: int,
     records = []
     for dimension, n_modes, cells, radial, sphere in configs:
         check_config((dimension, n_modes, radial, sphere))
-        if not check.is_integer(cells) or cells < 7:
-            check.reject("bench", "cells", cells, "must be an integer >= 7")
+        counts = cells if isinstance(cells, (tuple, list)) else (cells,)
+        if not all(check.is_integer(c) and c >= 7 for c in counts) or len(counts) > 2:
+            check.reject("bench", "cells", cells, "must be an integer >= 7, or two (a "
+                         "rectangle, CXxCY)")
+        cells = tuple(counts) if len(counts) == 2 else cells
         command = [sys.executable, "-c",
                    "import json; from granframe.tools.bench import measure_space; "
                    f"print(json.dumps(measure_space({dimension}, {n_modes}, {cells}, {radial}, "
@@ -498,13 +515,15 @@ def run_space(configs, backend: str, threads: int, repeats: int,
 
 def space_table(records) -> str:
     """Markdown table of :func:`measure_space` records."""
-    lines = ["| 1D x | cells | N_rho | M | step | collisions | transport (walls) | record "
+    lines = ["| velocities | cells | N_rho | M | step | collisions | transport (walls) | record "
              "| operator / distribution | cells x op x 4 | (step + record) / (cells x op x 4) "
              "| transport + moments share | peak RSS |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in records:
+        cells = (f"{r['cells'][0]} x {r['cells'][1]}" if isinstance(r["cells"], list)
+                 else r["cells"])
         lines.append(
-            f"| {r['dimension']}D N = {r['n_modes']} | {r['cells']} | {r['radial_points']} "
+            f"| {r['dimension']}D N = {r['n_modes']} | {cells} | {r['radial_points']} "
             f"| {r['sphere_points']} | {_ms(r['step_s'])} | {_ms(r['collisions_s'])} "
             f"| {_ms(r['transport_s'])} ({_ms(r['walls_s'])}) | {_ms(r['moments_s'])} "
             f"| {_ms(r['operator_per_distribution_s'])} | {_ms(r['target_s'])} "
@@ -516,7 +535,20 @@ def space_table(records) -> str:
 def parse_space_config(text: str):
     """'D:N:CELLS' or 'D:N:CELLS:NRHO:M' -> (d, N, cells, N_rho, M), the review's rules by
     default."""
-    values = _integers(text, "space", (3, 5), "D:N:CELLS or D:N:CELLS:N_RHO:M with D in "
-                       "{2, 3}, e.g. 3:32:64 or 2:64:256:32:16")
+    usage = ("D:N:CELLS or D:N:CELLS:N_RHO:M with D in {2, 3} and CELLS a number or CXxCY "
+             "(a rectangle), e.g. 3:32:64, 2:64:256:32:16 or 2:32:64x64")
+    parts = text.split(":")
+    plane = None
+    if len(parts) >= 3 and "x" in parts[2]:
+        try:
+            plane = tuple(int(c) for c in parts[2].split("x"))
+        except ValueError:
+            plane = ()
+        if len(plane) != 2:
+            raise ValueError(f"bench: parameter 'space' = {text!r} is invalid; use {usage}")
+        parts[2] = "0"
+    values = _integers(":".join(parts), "space", (3, 5), usage)
     check_config((values[0], values[1], values[3], values[4]))
+    if plane is not None:
+        values[2] = plane
     return tuple(values)

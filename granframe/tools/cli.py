@@ -170,9 +170,12 @@ number of steps. Exit status 3 when a health check stopped a run, 130 when inter
   granframe run studies/review_test1.py --out runs/test1 --only a,b"""),
     "plot": ("""\
 Draw the figures of a run store (temperature, relative entropy, slices and contours of f,
-moments) into a folder.""",
+moments) into a folder; of a space run, x-t maps and profiles of its fields; of a run on a
+rectangle, maps of rho, T, the speed with streamlines and the vorticity at every snapshot,
+and with --animate an x-y animation of one of them.""",
              """\
-  granframe plot runs/h.zarr --out figures/h"""),
+  granframe plot runs/h.zarr --out figures/h
+  granframe plot runs/box.zarr --out figures/box --animate vorticity"""),
     "info": ("""\
 Say what is in a store. A run store: status, snapshots, moments, the resolution of the last
 commit and its warnings, the accuracy monitors (their values, largest values, first excess
@@ -311,6 +314,9 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("--dpi", type=_dpi, default=110,
                       help="resolution of the raster parts in dots per inch, 10 to 600 "
                            "(default 110)")
+    plot.add_argument("--animate", default=None, metavar="FIELD",
+                      help="a run on a rectangle: also an x-y animation of FIELD (density, "
+                           "temperature, speed or vorticity) over the snapshots, FIELD.gif")
     plot.set_defaults(handler=plot_command)
     info = commands.add_parser("info", help="say what is in a run or sweep store")
     info.add_argument("store", metavar="STORE")

@@ -173,6 +173,7 @@ def plot_command(args) -> int:
     (:func:`granframe.tools.plotting.plot`)."""
     from granframe.tools.plotting import plot
 
-    for path in plot(args.store, args.out, format=args.format, dpi=args.dpi):
+    for path in plot(args.store, args.out, format=args.format, dpi=args.dpi,
+                     animation=args.animate):
         print(path)
     return 0

@@ -128,8 +128,9 @@ def limits_command(args) -> int:
             continue
         head = (f"[{name}] " if name else "") + f"'{d.integrator.name}': "
         if transport is not None:
+            axes = "" if d.space.dimension == 1 else ", both axes at once"
             print((f"[{name}] " if name else "") + f"transport ('{d.space.reconstruction.name}',"
-                  f" SSP RK3 half steps): dt <= {transport:.4g}; time_step = "
+                  f" SSP RK3 half steps{axes}): dt <= {transport:.4g}; time_step = "
                   f"{d.time_step:g} is " + (f"ABOVE it ({refused})" if above_cfl else
                                             f"within it ({d.time_step / transport:.3g} of it)"))
         _limit_table(head, d, limit, adaptive, above, refused)

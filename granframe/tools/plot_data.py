@@ -324,6 +324,11 @@ def _warning_lines(run, short: bool) -> list[str]:
 def _space_line(space) -> str:
     """The caption line of a space run: its interval, cells, reconstruction and walls."""
     collisions = "" if space.collisions else "; collisionless (free transport)"
+    if space.dimension == 2:
+        (cx, cy), (lx, ly) = space.counts, space.lengths
+        walls = ", ".join(f"{side} {_component(space.wall(side))}" for side in space.sides)
+        return (f"space: {cx} x {cy} cells on [0, {lx:g}] x [0, {ly:g}], reconstruction "
+                f"{_component(space.reconstruction)}, walls: {walls}{collisions}")
     return (f"space: {space.cells} cells on [0, {space.length:g}] "
             f"(dx = {space.length / space.cells:.4g}), reconstruction "
             f"{_component(space.reconstruction)}, walls: left {_component(space.left)}, "

@@ -59,6 +59,7 @@ from granframe.tools.plot_hierarchy import (LEVEL_INDICATORS, indicator_map, lev
                                             level_shares)
 from granframe.tools.plot_homogeneous import (contour, entropy, kurtosis, mass_drift, positivity,
                                               slices, temperature, temperature_error)
+from granframe.tools.plot_plane import PLANE_FIELDS, animate, plane_map
 from granframe.tools.plot_space import field_map, profiles, total_energy, total_mass
 
 #: File formats ``granframe plot --format`` writes.
@@ -78,13 +79,24 @@ _LAYOUTS = {"temperature": ((1, 2), (11, 4.4)), "entropy": ((1, 1), (8, 5.2)),
             "slices": ((1, 2), (11, 4.4)), "contour": ((1, 2), (11, 5.8)),
             "moments": ((1, 3), (14, 4.2)), "maps": ((2, 3), (15, 8.6)),
             "profiles": ((2, 3), (15, 8.2)), "totals": ((1, 3), (14, 4.2)),
-            "levels": ((2, 2), (11, 8.6))}
+            "levels": ((2, 2), (11, 8.6)), "plane": ((2, 2), (11, 9.0))}
 
 
 def _space_panels(run) -> dict:
-    """The figures of a space run: name -> the functions drawing their panels."""
+    """The figures of a space run: name -> the functions drawing their panels; on a
+    rectangle one figure of maps (:data:`PLANE_FIELDS`) per snapshot, ``plane_<k>``, and
+    the totals."""
     def drawn(function, field):
         return lambda r, ax: function(r, field, ax)
+
+    if run.space.dimension == 2:
+        def mapped(field, index):
+            return lambda r, ax: plane_map(r, field, index, ax)
+
+        panels = {f"plane_{k}": tuple(mapped(name, k) for name in PLANE_FIELDS)
+                  for k in range(run.count)}
+        panels["totals"] = (total_mass, total_energy, positivity)
+        return panels
 
     panels = {"maps": tuple(drawn(field_map, name) for name in SPACE_FIELDS),
               "profiles": tuple(drawn(profiles, name) for name in SPACE_FIELDS),
@@ -124,7 +136,7 @@ def figures(ds) -> dict:
     text = wrapped(caption(run, short=True))
     drawn = {}
     for name, draws in panels.items():
-        layout, size = _LAYOUTS[name]
+        layout, size = _LAYOUTS["plane" if name.startswith("plane_") else name]
         fig = Figure(figsize=size, layout="constrained")
         axes = numpy.atleast_1d(fig.subplots(*layout)).ravel()
         for ax, draw in zip(axes, draws):
@@ -137,7 +149,8 @@ def figures(ds) -> dict:
     return drawn
 
 
-def plot(store, out, *, format="png", dpi=DEFAULT_DPI) -> list[pathlib.Path]:
+def plot(store, out, *, format="png", dpi=DEFAULT_DPI,
+         animation: str | None = None) -> list[pathlib.Path]:
     """Write the figures of the run store ``store`` into the folder ``out``.
 
     Parameters
@@ -150,11 +163,15 @@ def plot(store, out, *, format="png", dpi=DEFAULT_DPI) -> list[pathlib.Path]:
         The file format.
     dpi : float
         Resolution of the raster parts, in dots per inch, within :data:`DPI_RANGE`.
+    animation : str, optional
+        A field of :data:`~granframe.tools.plot_plane.PLANE_FIELDS` of a run on a
+        rectangle: also its animation over the snapshots, ``<field>.gif``.
 
     Returns
     -------
     list of pathlib.Path
-        The files written, ``<figure>.<format>``.
+        The files written, ``<figure>.<format>`` (on a rectangle ``plane_<k>`` for snapshot
+        k, and ``totals``).
     """
     if format not in FORMATS:
         check.reject("plot", "format", format, f"must be one of {', '.join(FORMATS)}")
@@ -163,8 +180,13 @@ def plot(store, out, *, format="png", dpi=DEFAULT_DPI) -> list[pathlib.Path]:
         check.reject("plot", "dpi", dpi, f"must be a number from {low} to {high}")
     import matplotlib
 
+    run = RunData(store)
+    if animation is not None and (run.space is None or run.space.dimension != 2
+                                  or animation not in PLANE_FIELDS):
+        check.reject("plot", "animate", animation, "must name a field of a run on a "
+                     f"rectangle: one of {', '.join(PLANE_FIELDS)}")
     with matplotlib.rc_context(_STYLE):
-        drawn = figures(RunData(store))
+        drawn = figures(run)
     out = pathlib.Path(out)
     out.mkdir(parents=True, exist_ok=True)
     written = []
@@ -172,4 +194,7 @@ def plot(store, out, *, format="png", dpi=DEFAULT_DPI) -> list[pathlib.Path]:
         path = out / f"{name}.{format}"
         fig.savefig(path, format=format, dpi=dpi)
         written.append(path)
+    if animation is not None:
+        with matplotlib.rc_context(_STYLE):
+            written.append(animate(run, out / f"{animation}.gif", animation, dpi=dpi))
     return written
