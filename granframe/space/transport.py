@@ -295,25 +295,38 @@ class BoxTransport(_SSPTransport):
             left, right = self.walls[2 * axis], self.walls[2 * axis + 1]
             low, high = domain.touches[axis]
             minus, plus = self.reconstruction.faces(domain.along(array, axis), xp)
-            flux = positive * minus + negative * plus       # (n_axis + 1, others..., *grid)
             measure = domain.cell_volume / self.spacing[axis]
             zero = xp.zeros(d + 2)
+            ends = [None, None]           # the fluxes through the walls, from the face values
             if low and not left.periodic:
                 out = lower.from_wall(left.emit(lower.to_wall(plus[0], d, xp), self.grid, xp,
                                                 t=t, side=lower), d, xp)
-                flux[0] = positive * out + negative * plus[0]
-                walls.append(self._moments(flux[0], axis) * measure)
+                ends[0] = positive * out + negative * plus[0]
+                walls.append(self._moments(ends[0], axis) * measure)
             else:
                 walls.append(zero)
             if high and not right.periodic:
                 out = upper.from_wall(right.emit(upper.to_wall(minus[-1], d, xp), self.grid,
                                                  xp, t=t, side=upper), d, xp)
-                flux[-1] = positive * minus[-1] + negative * out
-                walls.append(-self._moments(flux[-1], axis) * measure)
+                ends[1] = positive * minus[-1] + negative * out
+                walls.append(-self._moments(ends[1], axis) * measure)
             else:
                 walls.append(zero)
-            part = xp.moveaxis((flux[:-1] - flux[1:]) * (1.0 / self.spacing[axis]), 0, axis)
-            rate = part if rate is None else rate + part
+            # F = c+ f- + c- f+, in place in the face values (n_axis + 1, others..., *grid),
+            # unless they are views of the state (the upwind reconstruction's)
+            if _may_share(xp, minus, array) or _may_share(xp, minus, plus):
+                minus, plus = minus.copy(), plus.copy()
+            flux = xp.multiply(minus, positive, out=minus)
+            flux += xp.multiply(plus, negative, out=plus)
+            for index, end in zip((0, -1), ends):
+                if end is not None:
+                    flux[index] = end
+            part = flux[:-1] - flux[1:]
+            part *= 1.0 / self.spacing[axis]
+            if rate is None:
+                rate = xp.moveaxis(part, 0, axis)
+            else:
+                rate += xp.moveaxis(part, 0, axis)
         return rate, xp.stack(walls)
 
     def _moments(self, faces, axis: int):
@@ -322,3 +335,10 @@ class BoxTransport(_SSPTransport):
         weights = self._weights[axis]
         total = faces.reshape((-1,) + tuple(self.grid.shape)).sum(axis=0)
         return (weights * total).reshape(weights.shape[0], -1).sum(axis=1)
+
+
+def _may_share(xp, a, b) -> bool:
+    """Whether arrays ``a`` and ``b`` may overlap in memory (True where the namespace cannot
+    tell)."""
+    test = getattr(xp, "may_share_memory", None)
+    return True if test is None else bool(test(a, b))
