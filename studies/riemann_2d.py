@@ -40,7 +40,7 @@ from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.space.transport import box_step_limit
 from granframe.theory.euler import euler_finite_volumes
-from granframe.tools.studykit import finish, numbers, number, write_csv
+from granframe.tools.studykit import finish, number, numbers, write_csv
 from granframe.velocity.grid import VelocityGrid
 
 GRID = {"dimension": 2, "n_modes": 32, "support_radius": 3.5}
@@ -164,11 +164,11 @@ def main(argv=None) -> int:
         rows.append(row)
         print(row, flush=True)
     write_csv(out / "riemann_2d.csv", rows)
-    lines = [f"Liska-Wendroff 4 with gamma = 2, t = {FINAL}, eps = {KNUDSEN:g}; reference: "
-             f"Euler FV on {args.reference}^2 ({reference_seconds:.0f} s for it and its "
-             f"{args.reference // 2}^2 run)", "",
-             "| cells | L1 rho | L1 u1 | L1 u2 | L1 T | reference bar rho | change rho | "
-             "seconds |", "|---|---|---|---|---|---|---|---|"]
+    lines = [(f"Liska-Wendroff 4 with gamma = 2, t = {FINAL}, eps = {KNUDSEN:g}; reference: "
+              f"Euler FV on {args.reference}^2 ({reference_seconds:.0f} s for it and its "
+              f"{args.reference // 2}^2 run)"), "",
+             ("| cells | L1 rho | L1 u1 | L1 u2 | L1 T | reference bar rho | change rho | "
+              "seconds |"), "|---|---|---|---|---|---|---|---|"]
     for row in rows:
         lines.append(f"| {row['cells']}^2 | {row['L1_rho']:.4g} | {row['L1_u1']:.4g} | "
                      f"{row['L1_u2']:.4g} | {row['L1_T']:.4g} | "

@@ -44,3 +44,14 @@ def test_the_3d_walls_example_builds_within_its_limits(capsys):
     assert lines[2] == "  time_step = 0.0125: within it (0.5 of the limit)"
     assert re.fullmatch(r"estimated cost: 80 steps x .* per step \(one step timed on \d+ "
                         r"CPUs\) = .*", lines[3]), lines
+
+
+LID_BOX = pathlib.Path(__file__).parent.parent / "docs" / "examples" / "lid_box.toml"
+
+
+def test_the_lid_box_example_builds_within_its_limits(capsys):
+    """``granframe limits docs/examples/lid_box.toml`` (the README's example on a rectangle):
+    within the transport's limit on both axes and the collisions' limit."""
+    assert main(["limits", str(LID_BOX), "--no-cost"]) == 0
+    text = capsys.readouterr().out
+    assert "both axes at once" in text and "ABOVE" not in text

@@ -251,7 +251,7 @@ def test_a_rectangle_on_two_and_four_processes_equals_the_serial_run(tmp_path, e
     serial(toml, tmp_path / "serial.zarr")
     for processes in (2, 4):
         run(toml, tmp_path / f"p{processes}.zarr", processes=processes)
-        got, want = assert_same_run(tmp_path / f"p{processes}.zarr", tmp_path / "serial.zarr")
+        _, want = assert_same_run(tmp_path / f"p{processes}.zarr", tmp_path / "serial.zarr")
         meta = RunStore.open(tmp_path / f"p{processes}.zarr").metadata
         assert meta["provenance"]["processes"] == processes
     assert want.f.dims == ("time", "x", "y", "v1", "v2")

@@ -16,7 +16,6 @@ import numpy
 import pytest
 
 import granframe
-
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.run.storage import RunStore
@@ -227,11 +226,11 @@ def test_the_figures_of_a_rectangle_are_maps_at_every_snapshot_and_an_animation(
     assert names == ["plane_0.png", "plane_1.png", "totals.png", "vorticity.gif"]
     with Image.open(folder / "vorticity.gif") as gif:
         assert gif.n_frames == 2
-    from granframe.tools.plot_plane import plane_field
     from granframe.tools.plot_data import RunData
+    from granframe.tools.plot_plane import plane_field
 
     run = RunData(out)
-    vorticity, velocity = plane_field(run, "vorticity", 0)
+    vorticity, _ = plane_field(run, "vorticity", 0)
     # a transverse wave along the diagonal: u = A sin(2 pi (x + y)) (-1, 1)/sqrt(2) has
     # omega = d_x u_2 - d_y u_1 = 2 sqrt(2) pi A cos(2 pi (x + y)): the differences see it
     x, y = numpy.meshgrid(run.ds.x.values, run.ds.y.values, indexing="ij")

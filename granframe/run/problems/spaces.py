@@ -1,23 +1,28 @@
-"""The space a run's cells fill: a point (zero space dimensions) or an interval (one).
+"""The space a run's cells fill: a point (zero space dimensions), an interval (one) or a
+rectangle (two).
 
 A run is one :class:`~granframe.run.problems.space.SpaceProblem`; what depends on the
 number of space dimensions is here, behind one interface, so that a further axis is a
 further shape and not a further problem:
 
-============================  ============================  ===================================
-member                        :class:`Point` (no ``space``)  :class:`Interval` (``[space]``)
-============================  ============================  ===================================
-cells, owned                  one, f itself (no cell axis)   ``cells`` along x, a range per process
-processes, ranges             one, ``((0, 1),)``             :class:`~granframe.parallel.CellLayout`
-state                         f on the backend               the blocks of a :class:`Domain`
-step                          the run's time integrator      Strang: transport, collisions, transport
-record                        the moments of f               fields, totals, wall totals
-store                         f (time, v)                    f (time, x, v), chunked by block
-report and monitors           f's indicators, drifts         every cell's, the worst named
-============================  ============================  ===================================
+===============  ========================  =========================  ============================
+member           :class:`Point`            :class:`Interval`          :class:`Rectangle`
+===============  ========================  =========================  ============================
+cells, owned     one, f itself             ``cells`` along x, a range  C_x x C_y, a block per
+                                           per process                process (P_x x P_y)
+state            f on the backend          the blocks of a            the block of a
+                                           :class:`Domain`            :class:`Box`
+step             the run's integrator      Strang: transport,         the same, the transport
+                                           collisions, transport      on both axes at once
+record           the moments of f          fields, totals, 2 walls    fields on (x, y), totals,
+                                                                      4 walls
+store            f (time, v)               f (time, x, v)             f (time, x, y, v)
+report           f's indicators            every cell's, the worst    the same, named by (x, y)
+                                           named
+===============  ========================  =========================  ============================
 
-Both take f0 as cells from :meth:`initial` (the point's one cell has no cell axis), check it
-against the grid and project it onto the Nyquist-free modes before anything is written.
+Each takes f0 as cells from :meth:`initial` (the point's one cell has no cell axis), checks
+it against the grid and projects it onto the Nyquist-free modes before anything is written.
 """
 
 from __future__ import annotations

@@ -153,16 +153,14 @@ def _describe_space(meta: dict, group, n: int) -> list[str]:
                       for side in ("left", "right", "bottom", "top")[:2 * len(
                           cells if isinstance(cells, list) else [cells])])
     if isinstance(cells, list):         # a rectangle
-        lines = [f"space       {cells[0]} x {cells[1]} cells on [0, {length[0]:g}] x "
-                 f"[0, {length[1]:g}] (dx = {length[0] / cells[0]:.6g}, dy = "
-                 f"{length[1] / cells[1]:.6g}), chunks of {block[0]} x {block[1]} cells, "
-                 f"reconstruction {_named(section.get('reconstruction', {'name': 'muscl'}))}"
-                 f", walls: {walls}"]
+        head = (f"space       {cells[0]} x {cells[1]} cells on [0, {length[0]:g}] x "
+                f"[0, {length[1]:g}] (dx = {length[0] / cells[0]:.6g}, dy = "
+                f"{length[1] / cells[1]:.6g}), chunks of {block[0]} x {block[1]} cells")
     else:
-        lines = [f"space       {cells} cells on [0, {length:g}] (dx = {length / cells:.6g}), "
-                 f"{cells // block} blocks of {block} cells, reconstruction "
-                 f"{_named(section.get('reconstruction', {'name': 'muscl'}))}, walls: "
-                 f"{walls}"]
+        head = (f"space       {cells} cells on [0, {length:g}] (dx = {length / cells:.6g}), "
+                f"{cells // block} blocks of {block} cells")
+    reconstruction = _named(section.get("reconstruction", {"name": "muscl"}))
+    lines = [f"{head}, reconstruction {reconstruction}, walls: {walls}"]
     for name, label in (("temperature", "T(x)"), ("density", "rho(x)")):
         first, last = group[name][0], group[name][n - 1]
         lines.append(f"  {label:<12s}in [{numpy.nanmin(first):.6g}, {numpy.nanmax(first):.6g}] "
