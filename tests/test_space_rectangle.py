@@ -240,3 +240,21 @@ def test_the_figures_of_a_rectangle_are_maps_at_every_snapshot_and_an_animation(
     assert main(["plot", str(out), "--out", str(folder), "--animate", "pressure"]) == 2
     assert "parameter 'animate' = 'pressure' is invalid; must name a field of a run on a " \
            "rectangle" in capsys.readouterr().err
+
+
+def test_advise_refuses_a_rectangle_by_name(tmp_path, capsys):
+    """``granframe advise`` prices runs on an interval only: a rectangle, as a run
+    description or as a scene, is refused naming space.cells, with status 2."""
+    toml = tmp_path / "box.toml"
+    toml.write_text(_description({"cells": [8, 8]}).to_toml())
+    assert main(["advise", str(toml)]) == 2
+    assert "parameter 'space.cells' = [8, 8] is invalid; advise prices runs on an interval" \
+        in capsys.readouterr().err
+    scene = tmp_path / "scene.toml"
+    scene.write_text("\n".join([
+        "dimension = 2", "final_time = 0.5", 'quantity = "temperature"', "tolerance = 0.01",
+        'kernel = "maxwell"', "knudsen = 0.1",
+        "[restitution]", 'name = "constant"', "value = 0.9", "[initial]",
+        'name = "maxwellian"', "[space]", "cells = [8, 8]", ""]))
+    assert main(["advise", str(scene)]) == 2
+    assert "parameter 'space.cells' = [8, 8] is invalid" in capsys.readouterr().err

@@ -156,6 +156,11 @@ class Scene:
         if not isinstance(value, Space):
             check.reject("Scene", "space", value, "must be a table (cells, length, left, right, "
                          "reconstruction, hierarchy) or absent", error=TypeError)
+        if value.dimension > 1:
+            check.reject("Scene", "space.cells", list(value.cells), "must be one number: advise "
+                         "prices runs on an interval, not yet on a rectangle (its hierarchy "
+                         "and its costs per axis are not modelled); use granframe limits for "
+                         "the step limits and the estimated cost of a run on a rectangle")
         if not value.collisions:
             check.reject("Scene", "space.collisions", False, "must be true: advise chooses the "
                          "velocity grid and the operator of the collision step and prices it, "

@@ -206,6 +206,12 @@ def advise_command(args) -> int:
                              "description (it has a grid), priced as it is: add the "
                              "fragment the report shows to it instead")
         description = RunDescription.from_dict(data)
+        if description.space is not None and description.space.dimension > 1:
+            raise ValueError(f"advise: parameter 'space.cells' = {list(description.space.cells)}"
+                             " is invalid; advise prices runs on an interval, not yet on a "
+                             "rectangle (its hierarchy and its costs per axis are not "
+                             "modelled): granframe limits gives the step limits and the "
+                             "estimated cost of a run on a rectangle")
         if description.rescaled:
             return _advise_rescaled(description, args.json)
         price = price_hierarchy(description)
