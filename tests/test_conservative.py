@@ -309,6 +309,21 @@ def test_blown_up_stage_falls_back_to_the_distribution_weight():
     assert numpy.abs(qc[1] - reference).max() < 1e-12 * numpy.abs(reference).max()
 
 
+def test_a_singular_gram_system_is_refused_by_name():
+    """A cell whose Maxwellian weight sits on fewer nodes than the d + 2 moments need (f
+    too narrow for the grid: a 2D Riemann run on N = 32 met one) makes its Gram system
+    singular: refused naming f and the setting to raise, not NumPy's bare 'Singular
+    matrix'."""
+    from granframe.equations.conservative import _solve_scaled
+
+    gram = numpy.stack([numpy.eye(4), numpy.eye(4)])
+    gram[1, 3] = gram[1, 2]                       # two equal rows: rank 3
+    with pytest.raises(ValueError, match="ConservativeCorrection: parameter 'f' is invalid; "
+                                         "the Gram system of its weight is singular.*raise "
+                                         "grid.n_modes"):
+        _solve_scaled(numpy, gram, numpy.ones((2, 4)))
+
+
 DESCRIPTION = """
 final_time = 0.02
 time_step = 0.01

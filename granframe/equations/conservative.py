@@ -299,7 +299,15 @@ def _solve_scaled(xp, gram, rhs):
     T / L^2)."""
     scale = 1.0 / xp.sqrt(xp.einsum("bii->bi", gram))
     scaled = gram * scale[:, :, None] * scale[:, None, :]
-    return xp.linalg.solve(scaled, (rhs * scale)[..., None])[..., 0] * scale
+    try:
+        return xp.linalg.solve(scaled, (rhs * scale)[..., None])[..., 0] * scale
+    except numpy.linalg.LinAlgError:     # CuPy raises NumPy's too
+        raise ValueError("ConservativeCorrection: parameter 'f' is invalid; the Gram system "
+                         "of its weight is singular in at least one distribution (a cell): "
+                         "its Maxwellian weight sits on fewer nodes than the d + 2 "
+                         "conserved moments need, f being too narrow for the velocity "
+                         "grid's spacing; raise grid.n_modes (or lower grid.support_radius)"
+                         ) from None
 
 
 def _radial_points(dimension: int, n_modes: int, spacing: float, radius: float) -> int:
