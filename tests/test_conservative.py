@@ -316,8 +316,7 @@ def test_a_singular_gram_system_is_refused_by_name():
     matrix'."""
     from granframe.equations.conservative import _solve_scaled
 
-    gram = numpy.stack([numpy.eye(4), numpy.eye(4)])
-    gram[1, 3] = gram[1, 2]                       # two equal rows: rank 3
+    gram = numpy.stack([numpy.eye(4), numpy.ones((4, 4))])     # the second of rank 1
     with pytest.raises(ValueError, match="ConservativeCorrection: parameter 'f' is invalid; "
                                          "the Gram system of its weight is singular.*raise "
                                          "grid.n_modes"):
