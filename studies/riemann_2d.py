@@ -167,7 +167,7 @@ def main(argv=None) -> int:
             row.update({f"change_from_{k}": v for k, v in change.items()})
         rows.append(row)
         print(row, flush=True)
-    write_csv(out / "riemann_2d.csv", rows)
+    write_csv(out / "riemann_2d.csv", rows, list(rows[-1]))   # the last row has every key
     lines = [(f"Liska-Wendroff 4 with gamma = 2, t = {FINAL}, eps = {KNUDSEN:g}; reference: "
               f"Euler FV on {args.reference}^2 ({reference_seconds:.0f} s for it and its "
               f"{args.reference // 2}^2 run)"), "",
