@@ -21,7 +21,8 @@ until the velocity grid's anisotropy (the nodes are not invariant under the rota
 
     python studies/isotropy_2d.py --out DIR [--cells 8,16,32] [--line 128]
 
-writes ``isotropy_2d.csv`` and ``isotropy_2d.md`` there (about 15 minutes on two cores).
+writes ``isotropy_2d.csv`` and ``isotropy_2d.md`` there (23 minutes on two cores beside
+another study).
 """
 
 from __future__ import annotations
