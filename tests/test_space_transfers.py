@@ -155,3 +155,32 @@ def test_a_hybrid_step_brings_one_vector_to_the_host_and_copies_nothing_from_it(
         counts = backend.counts(since=before)
         assert counts == {"to_host": 1, "to_device": 0}, (k, backend.log[before:])
     assert max(used) >= 2 and euler == STEPS, (used, euler)
+
+
+def test_a_step_on_a_rectangle_makes_one_device_to_host_copy_and_no_upload():
+    """A rectangle with walls on its four sides (a diffuse lid, specular sides), MUSCL:
+    after a warm-up step, three steps with their records bring one vector each to the host
+    and copy no constant array from it; the state stays on the device."""
+    import tomllib
+
+    data = tomllib.loads(TOML)
+    data["space"] = {"cells": [6, 5], "reconstruction": "muscl", "left": "specular",
+                     "right": {"name": "diffuse", "temperature": 0.9},
+                     "bottom": "specular", "top": {"name": "diffuse", "velocity": 0.2}}
+    data.pop("initial", None)
+    data["initial"] = {"name": "sinusoidal_mode", "field": "density", "amplitude": 0.1,
+                       "mode": [1, 1]}
+    description = RunDescription.from_dict(data)
+    problem, backend = counting_problem(description)
+    state = problem.state(problem.f0)
+    state = problem.step(0.0, state, description.time_step)
+    problem.record(state)
+    backend.reset()
+    for k in range(1, STEPS + 1):
+        state = problem.step(k * description.time_step, state, description.time_step)
+        record = problem.record(state)
+    assert isinstance(state, DeviceArray)
+    assert record["wall_mass"].shape == (4,) and record["density"].shape == (6, 5)
+    assert backend.counts()["to_host"] <= STEPS, collections.Counter(backend.log)  # measured: 3
+    uploads = collections.Counter(entry for entry in backend.log if entry[0] == "to_device")
+    assert not uploads, uploads
