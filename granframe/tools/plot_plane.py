@@ -3,7 +3,7 @@ speed with the streamlines of the bulk velocity, the vorticity, and an animation
 field over the snapshots.
 
 The fields are those recorded after the step that ends at the snapshot's time (the
-records of every step, :func:`~granframe.run.problems.spaces.box_layout`). The vorticity
+records of every step, :func:`~granframe.run.problems.spaces.space_layout`). The vorticity
 omega = d_x u_2 - d_y u_1 is taken by second-order centred differences of the cell
 velocities (one-sided at a wall, periodic across a periodic side): a picture of the flow,
 not a result of the scheme.

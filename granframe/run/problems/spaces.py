@@ -161,7 +161,7 @@ class Point:
                 f"mass drift {record['mass'] / mass0 - 1:+.1e}")
 
 
-def space_layout(grid, domain: Domain, block: int, levels: bool = False) -> Layout:
+def space_layout(grid, domain, block, levels: bool = False) -> Layout:
     """The store of a space run: f (time, x, v1, ..., vd) chunked by snapshot and by
     ``block`` cells along x, the coordinates v1 ... vd and x (the cell centres), and after
     every step the totals, the fields (step_time, x, ...) chunked by ``block`` along x,
@@ -169,28 +169,40 @@ def space_layout(grid, domain: Domain, block: int, levels: bool = False) -> Layo
     with ``levels`` (a hierarchy of collision models) the level of every cell,
     ``level`` (step_time, x), an integer: its index in the hierarchy's levels. The cell
     axes and their coordinates are the domain's (:attr:`Domain.axes`,
-    :meth:`Domain.coordinates`)."""
+    :meth:`Domain.coordinates`). On a rectangle (a :class:`Box` and ``block`` a pair of
+    chunk widths) f is (time, x, y, v1, ..., vd) and the fields (step_time, x, y, ...),
+    chunked along both axes, and the wall records have its four sides (left, right,
+    bottom, top)."""
     d = grid.dimension
     axes = tuple(f"v{i + 1}" for i in range(d))
-    cells, space = domain.cells, tuple(domain.axes)
-    chunk = max(1, 4096 // block)
-    fields = tuple(RecordArray(name, (cells,) + tuple(d if c == "d" else c for c in shape),
-                               space + dims, chunk=chunk, cells_chunk=block)
+    plane = isinstance(domain.cells, tuple)
+    cells, widths = ((domain.cells, tuple(block)) if plane
+                     else ((domain.cells,), (block,)))
+    space = tuple(domain.axes)
+    chunk = max(1, 4096 // math.prod(widths))
+    cells_chunk = widths if plane else block
+    fields = tuple(RecordArray(name, cells + tuple(d if c == "d" else c for c in shape),
+                               space + dims, chunk=chunk, cells_chunk=cells_chunk)
                    for name, (shape, dims) in FIELDS.items())
-    walls = tuple(RecordArray(name, (2, d) if name == "wall_momentum" else (2,),
+    sides = len(domain.sides)
+    walls = tuple(RecordArray(name, (sides, d) if name == "wall_momentum" else (sides,),
                               ("wall", "axis") if name == "wall_momentum" else ("wall",))
                   for name in WALL_RECORDS)
     if levels:
-        walls += tuple(RecordArray(name, (cells,), space, dtype=dtype, chunk=chunk,
-                                   cells_chunk=block) for name, dtype in LEVEL_RECORDS.items())
+        walls += tuple(RecordArray(name, cells, space, dtype=dtype, chunk=chunk,
+                                   cells_chunk=cells_chunk)
+                       for name, dtype in LEVEL_RECORDS.items())
     points = grid.points()
+    stored = ({"cells": list(cells), "length": list(domain.length), "block_cells": list(widths)}
+              if plane else {"cells": domain.cells, "length": domain.length,
+                             "block_cells": block})
     return Layout(tuple((name, points, (name,)) for name in axes)
                   + tuple((name, values, (name,))
                           for name, values in domain.coordinates().items()),
-                  (cells,) + tuple(grid.shape), (block,) + tuple(grid.shape),
+                  cells + tuple(grid.shape), widths + tuple(grid.shape),
                   space + axes,
                   STEP_RECORDS + tuple(RecordArray(n) for n in TOTALS) + fields + walls,
-                  space={"cells": cells, "length": domain.length, "block_cells": block})
+                  space=stored)
 
 
 def _cell(condition, mass):
@@ -221,14 +233,8 @@ class Interval:
 
     def __init__(self, description, outline: bool = False, communicator=None,
                  partition_cells=None):
-        self.description = d = description
-        space = d.space
-        parts = d.build("space")
-        self.reconstruction, self.left, self.right = (parts["reconstruction"], parts["left"],
-                                                      parts["right"])
-        self.collisions = space.collisions
-        self.communicator = comm = (SerialCommunicator() if outline else
-                                    world() if communicator is None else communicator)
+        self._take_parts(description, outline, communicator)
+        space, comm = description.space, self.communicator
         #: the store's chunks, the cells (start, stop) of every process in rank order and
         #: this one's batch blocks
         self.cell_layout = CellLayout(space.cells, self.reconstruction.ghost, comm.size,
@@ -238,6 +244,19 @@ class Interval:
         self.domain = self.transport = self.fields = None
         #: wall seconds of the reductions of the records over the processes
         self.reduction_seconds = 0.0
+
+    def _take_parts(self, description, outline: bool, communicator) -> None:
+        """The description, its reconstruction, its walls (:attr:`walls`, in the order of
+        the space's sides; ``left`` and ``right`` the first two), whether it collides, and
+        the processes it runs on (serial for an outline)."""
+        self.description = description
+        parts = description.build("space")
+        self.reconstruction = parts["reconstruction"]
+        self.walls = tuple(parts[side] for side in description.space.sides)
+        self.left, self.right = self.walls[:2]
+        self.collisions = description.space.collisions
+        self.communicator = (SerialCommunicator() if outline else
+                             world() if communicator is None else communicator)
 
     @property
     def owned(self) -> slice:
@@ -427,39 +446,6 @@ class Interval:
         return f"T in [{low:.4g}, {high:.4g}], mass drift {record['mass'] / mass0 - 1:+.1e}"
 
 
-def box_layout(grid, box: Box, chunks: tuple, levels: bool = False) -> Layout:
-    """The store of a run on a rectangle: f (time, x, y, v1, ..., vd) chunked by snapshot
-    and by ``chunks`` cells along x and y, the coordinates v1 ... vd, x and y (the cell
-    centres), and after every step the totals, the fields (step_time, x, y, ...) chunked by
-    ``chunks`` along x and y, and the wall records of the four sides (step_time, wall;
-    ``wall_momentum`` (step_time, wall, axis); the walls in the order left, right, bottom,
-    top); with ``levels`` the level of every cell (step_time, x, y)."""
-    d = grid.dimension
-    axes = tuple(f"v{i + 1}" for i in range(d))
-    cells, space = box.cells, tuple(box.axes)
-    chunk = max(1, 4096 // math.prod(chunks))
-    fields = tuple(RecordArray(name, cells + tuple(d if c == "d" else c for c in shape),
-                               space + dims, chunk=chunk, cells_chunk=tuple(chunks))
-                   for name, (shape, dims) in FIELDS.items())
-    sides = len(box.sides)
-    walls = tuple(RecordArray(name, (sides, d) if name == "wall_momentum" else (sides,),
-                              ("wall", "axis") if name == "wall_momentum" else ("wall",))
-                  for name in WALL_RECORDS)
-    if levels:
-        walls += tuple(RecordArray(name, cells, space, dtype=dtype, chunk=chunk,
-                                   cells_chunk=tuple(chunks))
-                       for name, dtype in LEVEL_RECORDS.items())
-    points = grid.points()
-    return Layout(tuple((name, points, (name,)) for name in axes)
-                  + tuple((name, values, (name,))
-                          for name, values in box.coordinates().items()),
-                  cells + tuple(grid.shape), tuple(chunks) + tuple(grid.shape),
-                  space + axes,
-                  STEP_RECORDS + tuple(RecordArray(n) for n in TOTALS) + fields + walls,
-                  space={"cells": list(cells), "length": list(box.length),
-                         "block_cells": list(chunks)})
-
-
 class Rectangle(Interval):
     """Two space dimensions: the cells of [0, L_x] x [0, L_y], in blocks over a P_x x P_y
     grid of the processes of ``communicator`` (:func:`granframe.parallel.process_grid`,
@@ -471,7 +457,7 @@ class Rectangle(Interval):
     :class:`~granframe.space.collisions.SplitStep` with the unsplit transport
     (:class:`~granframe.space.transport.BoxTransport`) and the collision step on every cell
     of the block at once; the records are those of the interval, on (x, y), and what
-    entered through each of the four sides (:func:`box_layout`). Everything else is the
+    entered through each of the four sides (:func:`space_layout`). Everything else is the
     interval's (:class:`Interval`): the fields and the totals from one device vector and one
     transfer, the resolution indicators of every cell, the monitors.
     """
@@ -480,15 +466,8 @@ class Rectangle(Interval):
 
     def __init__(self, description, outline: bool = False, communicator=None,
                  partition_cells=None):
-        self.description = d = description
-        space = d.space
-        parts = d.build("space")
-        self.reconstruction = parts["reconstruction"]
-        self.walls = tuple(parts[side] for side in space.sides)
-        self.left, self.right = self.walls[:2]
-        self.collisions = space.collisions
-        self.communicator = comm = (SerialCommunicator() if outline else
-                                    world() if communicator is None else communicator)
+        self._take_parts(description, outline, communicator)
+        d, space, comm = description, description.space, self.communicator
         if partition_cells is not None:
             reject("make_problem", "partition_cells", partition_cells, "must be None on a "
                    "rectangle: its blocks are whole store chunks shared as evenly as the "
@@ -550,7 +529,7 @@ class Rectangle(Interval):
                 f"({x:.6g}, {y:.6g})")
 
     def layout(self, grid, hierarchy: bool):
-        return box_layout(grid, self.domain, self.chunks, levels=hierarchy)
+        return space_layout(grid, self.domain, self.chunks, levels=hierarchy)
 
     def state(self, f_host, backend):
         """The block array of the owned cells from f on the host: every cell
