@@ -243,10 +243,12 @@ def test_a_rectangle_on_two_and_four_processes_equals_the_serial_run(tmp_path, e
                                                                       mpi_sees_two):
     """Blocks on a 1 x 2 and a 2 x 2 grid of processes, their ghost strips exchanged along
     both axes, and one store written by all of them in chunks of both axes: the serial
-    run's, f and the fields to round-off, the wall records of the four sides too."""
+    run's, f and the fields to round-off, the wall records of the four sides too. With the
+    walls, under a hierarchy: every process gathers the indicators of its block and puts
+    them in the cells' order, and all choose the serial run's levels, exactly."""
     changes = RECTANGLE + ([("space.left", "periodic"), ("space.right", "periodic"),
                             ("space.bottom", "periodic"), ("space.top", "periodic")]
-                           if ends == "periodic" else [])
+                           if ends == "periodic" else CASES["hierarchy"])
     toml = write_toml(tmp_path / "run.toml", changes)
     serial(toml, tmp_path / "serial.zarr")
     for processes in (2, 4):
@@ -258,6 +260,8 @@ def test_a_rectangle_on_two_and_four_processes_equals_the_serial_run(tmp_path, e
     assert numpy.abs(want.f.values[-1] - want.f.values[0]).max() > 1e-3 * want.f.values.max()
     if ends == "walls":
         assert numpy.abs(want.wall_momentum.values[1:, 2:]).max() > 0.0
+        assert want.level.dims == ("step_time", "x", "y")
+        assert len(numpy.unique(want.level.values[1:])) >= 2
 
 
 def test_an_uneven_partition_gives_the_serial_run(tmp_path, mpi_sees_two):

@@ -187,8 +187,6 @@ def _negated_v(f, grid):
 @pytest.mark.parametrize("change, parameter, allowed", [
     ({"space": {"cells": [4, 16], "reconstruction": "weno5"}}, "space.cells",
      r"must be >= 7 along every axis"),
-    ({"space": {"cells": [8, 8], "hierarchy": {}}, "conservative": True,
-      "integrator": "penalised_euler"}, "space.hierarchy", "is not available on a rectangle"),
     ({"space": {"cells": [8, 8], "bottom": "specular"}}, "space.bottom",
      r"must be periodic too: an axis is periodic at both ends or at neither \(bottom, top\)"),
     ({"space": {"cells": 8}, "initial": {"name": "sinusoidal_mode", "mode": [1, 1]}},

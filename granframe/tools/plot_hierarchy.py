@@ -11,6 +11,7 @@ from matplotlib.colors import BoundaryNorm, LogNorm
 
 from granframe import validators as check
 from granframe.tools.plot_data import RunData, TIME_LABEL, axes_for
+from granframe.tools.plot_plane import record_at
 
 
 #: The indicators of a hierarchy of collision models that :func:`indicator_map` draws:
@@ -66,6 +67,48 @@ def level_map(ds, ax=None):
     return ax
 
 
+def level_plane(ds, index=-1, ax=None):
+    """A map on (x, y) of the collision model of every cell of a run on a rectangle with a
+    hierarchy, in the step that ends at snapshot ``index``, in the colours of
+    :func:`level_map`.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset of the store of a run on a rectangle with a hierarchy.
+    index : int
+        The snapshot (negative: from the last).
+    ax : matplotlib.axes.Axes, optional
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    run = RunData.of(ds)
+    run.hierarchical("level_plane")
+    if run.space.dimension != 2:
+        check.reject("level_plane", "ds", run.title, "must be the store of a run on a "
+                     "rectangle (space.cells = [Cx, Cy]); level_map draws an interval's")
+    if not check.is_integer(index) or not -run.count <= index < run.count:
+        check.reject("level_plane", "index", index, f"must be a snapshot index from "
+                     f"{-run.count} to {run.count - 1}")
+    ax = axes_for(ax, run)
+    count = len(run.levels)
+    levels = run.ds["level"].values[record_at(run, float(run.times[index]))]
+    mesh = ax.pcolormesh(run.ds["x"].values, run.ds["y"].values, levels.T, shading="nearest",
+                         cmap=_level_colours(count),
+                         norm=BoundaryNorm(numpy.arange(count + 1) - 0.5, count))
+    bar = ax.figure.colorbar(mesh, ax=ax, ticks=numpy.arange(count),
+                             label="collision model (level)")
+    bar.set_ticklabels(run.levels)
+    bar.minorticks_off()
+    ax.grid(False)
+    lx, ly = run.space.lengths
+    ax.set(xlabel="x", ylabel="y", xlim=(0.0, lx), ylim=(0.0, ly), aspect="equal",
+           title=f"collision model of each cell at t = {float(run.times[index]):.4g}")
+    return ax
+
+
 def level_shares(ds, ax=None):
     """The share of the cells of a space run at each level of its hierarchy, against t.
 
@@ -89,6 +132,7 @@ def level_shares(ds, ax=None):
     ax = axes_for(ax, run)
     count = len(run.levels)
     levels = run.ds["level"].values
+    levels = levels.reshape(len(levels), -1)              # (records, cells), x and y alike
     shares = numpy.stack([(levels == k).mean(axis=1) for k in range(count)])
     ax.stackplot(run.step_time, shares, labels=run.levels, step="pre",
                  colors=_level_colours(count)(numpy.arange(count)))

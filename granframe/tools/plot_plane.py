@@ -25,7 +25,7 @@ PLANE_FIELDS = {
 }
 
 
-def _record_at(run, time: float) -> int:
+def record_at(run, time: float) -> int:
     """The index of the record at ``time`` (a snapshot's): the last one at or before it."""
     return int(numpy.searchsorted(run.step_time, time * (1 + 1e-12), side="right") - 1)
 
@@ -47,7 +47,7 @@ def _derivative(values, spacing: float, axis: int, periodic: bool):
 def plane_field(run, field: str, index: int):
     """The values (C_x, C_y) of ``field`` (:data:`PLANE_FIELDS`) at snapshot ``index``, and
     the velocity (C_x, C_y, 2) there."""
-    row = _record_at(run, float(run.times[index]))
+    row = record_at(run, float(run.times[index]))
     velocity = numpy.asarray(run.ds["velocity"].values[row])[..., :2]
     if field in ("density", "temperature"):
         return numpy.asarray(run.ds[field].values[row]), velocity

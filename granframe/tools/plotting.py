@@ -39,6 +39,11 @@ A space run with a hierarchy of collision models (``space.hierarchy``) has a fou
   of the cells at each level against t (:func:`level_shares`), and x-t maps of the two
   indicators that chose the levels (:func:`indicator_map`).
 
+A run on a rectangle has one figure of maps per snapshot instead, ``plane_<k>``: the
+density, the temperature, the speed with streamlines and the vorticity
+(:func:`plane_map`), and with a hierarchy the map of each cell's collision model at that
+snapshot (:func:`level_plane`) and the shares of the levels against t.
+
 This module composes the figures and writes them; the drawing functions, importable from
 here, are defined by concern in :mod:`granframe.tools.plot_homogeneous`,
 :mod:`granframe.tools.plot_space` and :mod:`granframe.tools.plot_hierarchy`, over what
@@ -56,7 +61,7 @@ from matplotlib.figure import Figure
 from granframe import validators as check
 from granframe.tools.plot_data import SPACE_FIELDS, RunData, caption, wrapped
 from granframe.tools.plot_hierarchy import (LEVEL_INDICATORS, indicator_map, level_map,
-                                            level_shares)
+                                            level_plane, level_shares)
 from granframe.tools.plot_homogeneous import (contour, entropy, kurtosis, mass_drift, positivity,
                                               slices, temperature, temperature_error)
 from granframe.tools.plot_plane import PLANE_FIELDS, animate, plane_map
@@ -79,7 +84,8 @@ _LAYOUTS = {"temperature": ((1, 2), (11, 4.4)), "entropy": ((1, 1), (8, 5.2)),
             "slices": ((1, 2), (11, 4.4)), "contour": ((1, 2), (11, 5.8)),
             "moments": ((1, 3), (14, 4.2)), "maps": ((2, 3), (15, 8.6)),
             "profiles": ((2, 3), (15, 8.2)), "totals": ((1, 3), (14, 4.2)),
-            "levels": ((2, 2), (11, 8.6)), "plane": ((2, 2), (11, 9.0))}
+            "levels": ((2, 2), (11, 8.6)), "plane": ((2, 2), (11, 9.0)),
+            "plane_levels": ((2, 3), (16, 9.0))}
 
 
 def _space_panels(run) -> dict:
@@ -93,7 +99,11 @@ def _space_panels(run) -> dict:
         def mapped(field, index):
             return lambda r, ax: plane_map(r, field, index, ax)
 
+        def levels(index):
+            return lambda r, ax: level_plane(r, index, ax)
+
         panels = {f"plane_{k}": tuple(mapped(name, k) for name in PLANE_FIELDS)
+                  + ((levels(k), level_shares) if run.levels is not None else ())
                   for k in range(run.count)}
         panels["totals"] = (total_mass, total_energy, positivity)
         return panels
@@ -136,7 +146,8 @@ def figures(ds) -> dict:
     text = wrapped(caption(run, short=True))
     drawn = {}
     for name, draws in panels.items():
-        layout, size = _LAYOUTS["plane" if name.startswith("plane_") else name]
+        plane = "plane_levels" if len(draws) > 4 else "plane"
+        layout, size = _LAYOUTS[plane if name.startswith("plane_") else name]
         fig = Figure(figsize=size, layout="constrained")
         axes = numpy.atleast_1d(fig.subplots(*layout)).ravel()
         for ax, draw in zip(axes, draws):

@@ -128,17 +128,17 @@ class SpaceProblem(Problem):
         settings = None if space is None else space.hierarchy
         if settings is None or self.equation is None:
             return None
-        moments = FieldMoments(self.grid, 1.0)(self.f0)
+        cells = self.f0.reshape((-1,) + tuple(self.grid.shape))
+        moments = FieldMoments(self.grid, 1.0)(cells)
         rho, temperature = moments["density"], moments["temperature"]
         context = HierarchyContext(self.equation, self.collision_integrator,
                                    float((rho * temperature).sum() / rho.sum()))
         registries = default_registries()
         models = [registries.create("collision_models", level.name, context=context,
                                     **level.params) for level in settings.levels]
-        return HybridCollisions(settings, models, context, self.description.space.cells,
-                                self.domain.owned, self.domain.dx, self.left.periodic,
-                                self.communicator, self.description.time_step,
-                                self.domain.axis)
+        cells, owned = self.space.hierarchy_cells()
+        return HybridCollisions(settings, models, context, cells, owned, self.communicator,
+                                self.description.time_step)
 
     @property
     def owned(self) -> slice:
@@ -171,9 +171,15 @@ class SpaceProblem(Problem):
         records = int(store.progress["records"])
         steps = numpy.asarray(store.group["step"][:records])
         row = int(numpy.flatnonzero(steps == step)[-1])
-        self.hierarchy.take_up(step, *(store.group[name][row] for name in LEVEL_RECORDS))
+        axes = self.space.dimension
+
+        def every_cell(name):                  # (cells, ...) in C order, x slowest
+            values = numpy.asarray(store.group[name][row])
+            return values.reshape((-1,) + values.shape[axes:])
+
+        self.hierarchy.take_up(step, *(every_cell(name) for name in LEVEL_RECORDS))
         owned = self.hierarchy.owned
-        self.hierarchy.follow(*(store.group[name][row][owned]
+        self.hierarchy.follow(*(every_cell(name)[owned]
                                 for name in ("density", "velocity", "temperature")))
 
     def state(self, f_host):

@@ -42,6 +42,7 @@ from granframe.run.storage import (RECORDED_MOMENTS, STEP_RECORDS, Layout, Recor
                                    homogeneous_layout)
 from granframe.space.collisions import SplitStep
 from granframe.space.domain import Box, Domain
+from granframe.space.hierarchy import CellGrid
 from granframe.space.initial import initial_cells
 from granframe.space.transport import BoxTransport, Transport
 from granframe.validators import reject
@@ -263,6 +264,13 @@ class Interval:
         """The cells this process owns and steps (all of them in a serial run)."""
         return slice(self.cell_layout.start, self.cell_layout.stop)
 
+    def hierarchy_cells(self):
+        """The cells as a hierarchy of collision models sees them
+        (:class:`~granframe.space.hierarchy.CellGrid`) and this process's among them."""
+        cells = CellGrid((self.description.space.cells,), (self.domain.dx,),
+                         (self.left.periodic,), (self.domain.axis,))
+        return cells, self.owned
+
     def build(self, grid, xp) -> None:
         """The domain of the owned cells on the array namespace ``xp``, its ghost exchange
         with the other processes, the transport and the moment service."""
@@ -472,10 +480,6 @@ class Rectangle(Interval):
             reject("make_problem", "partition_cells", partition_cells, "must be None on a "
                    "rectangle: its blocks are whole store chunks shared as evenly as the "
                    "process grid allows")
-        if space.hierarchy is not None:
-            reject("RunDescription", "space.hierarchy", "a table", "is not available on a "
-                   "rectangle yet: the hierarchy's levels are chosen along one axis; leave "
-                   "it out (the full operator in every cell)")
         if d.rescaled:
             reject("RunDescription", "rescaled", True, "is not available on a rectangle "
                    "yet; run the cooling gas in physical variables")
@@ -500,6 +504,17 @@ class Rectangle(Interval):
     def owned(self) -> tuple:
         """The block this process owns and steps: a slice along x and one along y."""
         return tuple(layout.owned for layout in self.layouts)
+
+    def hierarchy_cells(self):
+        """The cells as a hierarchy sees them (:class:`~granframe.space.hierarchy.CellGrid`,
+        C_x x C_y in C order) and the owned block's among them, in the order of its cells
+        (x slowest): a slice when this process owns every cell."""
+        counts = tuple(self.description.space.counts)
+        block = numpy.arange(math.prod(counts)).reshape(counts)[self.owned].reshape(-1)
+        owned = slice(0, len(block)) if len(block) == math.prod(counts) else block
+        cells = CellGrid(counts, self.domain.spacing,
+                         (self.walls[0].periodic, self.walls[2].periodic), (0, 1))
+        return cells, owned
 
     def build(self, grid, xp) -> None:
         """The box of the owned block on ``xp``, its ghost exchange with the other
@@ -547,7 +562,7 @@ class Rectangle(Interval):
         """The interval's record (:meth:`Interval.record`) with the fields of the owned
         block on (x, y) and the wall records of the four sides."""
         record = super().record(state, backend, hierarchy)
-        for name in FIELDS:
+        for name in tuple(FIELDS) + (tuple(LEVEL_RECORDS) if hierarchy is not None else ()):
             values = numpy.asarray(record[name])
             record[name] = values.reshape(tuple(self.domain.sizes) + values.shape[1:])
         return record

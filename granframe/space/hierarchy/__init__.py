@@ -64,8 +64,8 @@ levels' factories).
 
 from granframe.space.hierarchy.choice import choose_levels, spread_levels
 from granframe.space.hierarchy.hybrid import HierarchyContext, HybridCollisions
-from granframe.space.hierarchy.indicators import (CellIndicators, equilibrium_distance,
-                                                  realizability)
+from granframe.space.hierarchy.indicators import (CellGrid, CellIndicators,
+                                                  equilibrium_distance, realizability)
 from granframe.space.hierarchy.levels import (BoltzmannLevel, EllipsoidalLevel, EulerLevel,
                                               FluidParts, RelaxationLevel)
 from granframe.space.hierarchy.rates import (CoolingRate, StepRates, relaxation_rate,
@@ -73,7 +73,7 @@ from granframe.space.hierarchy.rates import (CoolingRate, StepRates, relaxation_
 from granframe.space.hierarchy.relaxation import (EllipsoidalEquation, RelaxationEquation,
                                                   discrete_gaussians)
 
-__all__ = ["BoltzmannLevel", "CellIndicators", "CoolingRate", "EllipsoidalEquation",
+__all__ = ["BoltzmannLevel", "CellGrid", "CellIndicators", "CoolingRate", "EllipsoidalEquation",
            "EllipsoidalLevel", "EulerLevel", "FluidParts", "HierarchyContext",
            "HybridCollisions", "RelaxationEquation", "RelaxationLevel", "StepRates",
            "choose_levels", "discrete_gaussians", "equilibrium_distance", "realizability",

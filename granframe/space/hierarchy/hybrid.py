@@ -13,7 +13,7 @@ import numpy
 
 from granframe.backends import to_host
 from granframe.space.hierarchy.choice import choose_levels
-from granframe.space.hierarchy.indicators import CellIndicators
+from granframe.space.hierarchy.indicators import CellGrid, CellIndicators
 from granframe.space.hierarchy.rates import CoolingRate, StepRates, relaxation_rate
 
 
@@ -85,31 +85,36 @@ class HybridCollisions:
     models : list of CollisionModel
         The levels, from the cheapest to the full operator.
     context : HierarchyContext
-    cells : int
-        All cells of the interval.
-    owned : slice
-        Those of this process.
-    dx : float
-    periodic : bool
+    cells : CellGrid
+        All cells of the interval or the rectangle.
+    owned : slice or integer array
+        Those of this process, in the order of its f, as indices into all cells in C order
+        (a slice on an interval; on a rectangle the block's cells, an array unless the
+        process owns them all).
     communicator : Communicator
     time_step : float
-    axis : int, optional
-        The space axis the cells lie along (0: x).
     """
 
-    def __init__(self, settings, models, context, cells: int, owned: slice, dx: float,
-                 periodic: bool, communicator, time_step: float, axis: int = 0):
+    def __init__(self, settings, models, context, cells: CellGrid, owned, communicator,
+                 time_step: float):
         self.settings, self.models, self.equation = settings, models, context.equation
         self.owned, self.communicator, self.context = owned, communicator, context
         #: kappa, delta and the reach of every cell, on the backend
-        self.cells = CellIndicators(settings, context, dx, periodic, time_step, axis)
+        self.cells = CellIndicators(settings, context, cells, time_step)
+        # where the rows of each process go among all cells (None: in rank order already)
+        self._places = None
+        if communicator.size > 1:
+            places = numpy.concatenate(communicator.allgather_object(
+                numpy.arange(cells.total)[owned]))
+            if not numpy.array_equal(places, numpy.arange(cells.total)):
+                self._places = places
         self.xp = self.cells.parts.xp
         #: where the choice runs: the backend, or the host with several processes
         self.choice_xp = numpy if communicator.size > 1 else self.xp
         top = len(models) - 1
         #: the level of every cell in the last step (all at the top before the first), on
         #: the host
-        self.levels = numpy.full(cells, top, dtype=numpy.int64)
+        self.levels = numpy.full(cells.total, top, dtype=numpy.int64)
         #: collision steps taken (decisions fall on multiples of the interval)
         self.steps = 0
         #: the indicators of all cells after the last collision step and the cells each
@@ -117,7 +122,7 @@ class HybridCollisions:
         self.kappa = self.delta = self.reach = None
         #: wall seconds spent measuring the indicators and choosing the levels
         self.choice_seconds = 0.0
-        self._levels = self.choice_xp.full(cells, top, dtype=numpy.int64)
+        self._levels = self.choice_xp.full(cells.total, top, dtype=numpy.int64)
         self._measured = None       # (kappa, delta, reach) in choice_xp, or None
         self._next = None           # the levels chosen ahead for the next step, or None
         self._order = None          # the owned cells sorted by level, on the backend
@@ -131,10 +136,14 @@ class HybridCollisions:
     def _measure(self, f):
         """(kappa, delta, reach) of all cells in :attr:`choice_xp` from f of this process's
         cells (:class:`~granframe.space.hierarchy.indicators.CellIndicators`), the rows of
-        all processes gathered in rank order."""
+        all processes gathered and put in the order of the cells."""
         rows = self.cells.rows(f)
         if self.communicator.size > 1:
             rows = numpy.concatenate(self.communicator.allgather_object(to_host(rows)))
+            if self._places is not None:
+                placed = numpy.empty_like(rows)
+                placed[self._places] = rows
+                rows = placed
         fluid = self._levels < len(self.models) - 1
         return self.cells.measure(rows, fluid, self.choice_xp)
 
@@ -145,9 +154,11 @@ class HybridCollisions:
         s, xp = self.settings, self.choice_xp
         kappa, delta, reach = self._measured
         realizable = xp.isfinite(kappa) & xp.isfinite(delta)
+        cells = self.cells.grid_of_cells
         return choose_levels(self._levels, xp.where(realizable, kappa, 0.0),
                              xp.where(realizable, delta, 0.0), realizable, s.realizability,
-                             s.distance, s.hysteresis, reach, self.cells.periodic, xp)
+                             s.distance, s.hysteresis, reach, cells.periodic, xp,
+                             cells.counts)
 
     def _fetch(self, **arrays) -> dict:
         """The arrays (in :attr:`choice_xp`) on the host, in one copy of one vector; the
@@ -237,7 +248,7 @@ class HybridCollisions:
         reach before the first step."""
         self._settle()
         owned = self.owned
-        count = owned.stop - owned.start
+        count = len(self.levels[owned])
         if self.kappa is None:
             return {"level": self.levels[owned].copy(),
                     "realizability": numpy.full(count, numpy.nan),
