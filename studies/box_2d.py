@@ -1,0 +1,165 @@
+"""A collisionless gas in a square box with four diffuse walls at different temperatures
+and velocities, against its exact steady state on the velocity nodes (docs/space.md, "Two
+dimensions", "The collisionless box").
+
+The box [0, 1]^2: the wall x = 0 at T = 1 at rest, x = 1 at T = 1.5 at rest, y = 0 at
+T = 1.2 sliding at +0.3 along v_1, y = 1 at T = 0.8 sliding at -0.2 along v_1 (full
+accommodation). 2D velocities N = 16, S = 3.5, no collisions (``space.collisions =
+false``), MUSCL, dt the transport's CFL limit on both axes, from the Maxwellian at rest at
+T = 1 to t = 24 (the L1 change of f over the last 2.4 is reported: how steady it is). The
+exact steady state (:class:`granframe.space.exact_box.FreeMolecularBox`, derived in its
+module notes) is solved with 512 panels a wall and averaged over each cell on a 512 x 512
+midpoint grid; its own bar is the difference from 256 panels and a 256 x 256 grid. Reported
+for each C of ``--cells``: the mean over the cells of |rho - rho_exact|, |u_1 - ..|,
+|u_2 - ..|, |T - ..| and the observed orders between successive C.
+
+    python studies/box_2d.py --out DIR [--cells 8,16,32]
+
+writes ``box_2d.csv``, ``box_2d.md``, ``box_2d.png`` (rho, T and the speed of the finest
+run and of the exact state) and each run's f at t = 24 (``box_<C>.npy``). About 25 minutes on two cores for 8, 16, 32 cells.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import math
+import pathlib
+import time
+
+import numpy
+
+from granframe.run.description import RunDescription
+from granframe.run.runner import Simulation
+from granframe.space.exact_box import FreeMolecularBox
+from granframe.space.transport import box_step_limit
+from granframe.tools.studykit import finish, numbers, write_csv
+from granframe.velocity.grid import VelocityGrid
+
+GRID = {"dimension": 2, "n_modes": 16, "support_radius": 3.5}
+FINAL = 24.0
+#: (T_w, U_w) of the walls left, right, bottom, top
+WALLS = ((1.0, 0.0), (1.5, 0.0), (1.2, 0.3), (0.8, -0.2))
+FIELDS = ("rho", "u1", "u2", "T")
+
+
+def description(cells: int, final: float = FINAL) -> RunDescription:
+    """The collisionless run on ``cells`` x ``cells`` cells, ten snapshots."""
+    grid = VelocityGrid(**GRID)
+    limit = box_step_limit(grid, (1.0 / cells, 1.0 / cells), 0.5)
+    steps = 10 * math.ceil(final / limit / 10 * (1 - 1e-12))
+    walls = {side: {"name": "diffuse", "temperature": t, "velocity": u}
+             for side, (t, u) in zip(("left", "right", "bottom", "top"), WALLS)}
+    return RunDescription.from_dict({
+        "title": f"collisionless box, four diffuse walls, {cells}^2 cells",
+        "grid": GRID, "kernel": "maxwell", "restitution": {"name": "constant", "value": 1.0},
+        "initial": {"name": "maxwellian"}, "operator": {"name": "fast_spectral"},
+        "backend": {"name": "numpy", "threads": 1}, "time_step": final / steps,
+        "final_time": final, "output": {"snapshot_interval": final / 10},
+        "space": {"cells": [cells, cells], "collisions": False, **walls}})
+
+
+def fields(grid, f) -> dict:
+    """rho, u_1, u_2, T (C, C) of cell averages f (C, C, *grid)."""
+    counts = f.shape[:2]
+    rows = [grid.moments(cell) for cell in f.reshape((-1,) + tuple(grid.shape))]
+    return {"rho": numpy.array([r["mass"] for r in rows]).reshape(counts),
+            "u1": numpy.array([r["bulk_velocity"][0] for r in rows]).reshape(counts),
+            "u2": numpy.array([r["bulk_velocity"][1] for r in rows]).reshape(counts),
+            "T": numpy.array([r["temperature"] for r in rows]).reshape(counts)}
+
+
+def distance(a: dict, b: dict) -> dict:
+    return {name: float(numpy.abs(a[name] - b[name]).mean()) for name in FIELDS}
+
+
+def averaged(values, cells: int):
+    """Cell averages (R, R, ...) of a finer grid averaged onto ``cells`` x ``cells``."""
+    k = values.shape[0] // cells
+    return values.reshape((cells, k, cells, k) + values.shape[2:]).mean(axis=(1, 3))
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", required=True, help="folder of the table and the figure")
+    parser.add_argument("--cells", type=numbers(5, low_open=False, kind=int),
+                        default=[8, 16, 32], help="cells a side (default 8,16,32)")
+    args = parser.parse_args(argv)
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    cells = sorted(args.cells)
+    if any(512 % c for c in cells):
+        parser.error(f"--cells {cells}: each must divide 512 (the exact state's grid)")
+    grid = VelocityGrid(**GRID)
+    rows, runs = [], {}
+    for c in cells:
+        began = time.perf_counter()
+        ds = Simulation(description(c)).run(None, progress=False).dataset
+        seconds = time.perf_counter() - began
+        f = ds.f.values
+        runs[c] = f[-1]
+        numpy.save(out / f"box_{c}.npy", f[-1])
+        change = float(numpy.abs(f[-1] - f[-2]).sum() / numpy.abs(f[-1]).sum())
+        rows.append({"cells": c, "steps": int(ds.sizes["step_time"] - 1),
+                     "seconds": round(seconds, 1), "steady_change": change})
+        print(rows[-1], flush=True)
+    rest = runs[cells[0]][0, 0]                  # the nodes v = 0 keep f0 there
+    began = time.perf_counter()
+    exact = FreeMolecularBox(grid, (1.0, 1.0), WALLS, 1.0, rest, panels=512)
+    fine = exact.cell_averages((512 // 16,) * 2, 16)            # 512 x 512 points
+    coarse = FreeMolecularBox(grid, (1.0, 1.0), WALLS, 1.0, rest, panels=256)
+    rough = coarse.cell_averages((256 // 8,) * 2, 8)            # 256 x 256 points
+    exact_seconds = time.perf_counter() - began
+    for row in rows:
+        c = row["cells"]
+        truth = fields(grid, averaged(fine, c))
+        row.update({f"L1_{k}": v for k, v in distance(fields(grid, runs[c]), truth).items()})
+        row.update({f"exact_bar_{k}": v for k, v in
+                    distance(fields(grid, averaged(rough, c)), truth).items()})
+    for previous, row in itertools.pairwise(rows):
+        ratio = math.log(row["cells"] / previous["cells"])
+        row.update({f"order_{k}": math.log(previous[f"L1_{k}"] / row[f"L1_{k}"]) / ratio
+                    for k in FIELDS})
+    write_csv(out / "box_2d.csv", rows, list(rows[-1]))
+    lines = [(f"collisionless box, walls (T, U) = {WALLS}, t = {FINAL}; exact state "
+              f"{exact_seconds:.0f} s"), "",
+             ("| cells | L1 rho | L1 u1 | L1 u2 | L1 T | orders rho, u1, u2, T | exact bar "
+              "rho, T | change over the last 2.4 | seconds |"),
+             "|---|---|---|---|---|---|---|---|---|"]
+    for row in rows:
+        orders = (", ".join(f"{row[f'order_{k}']:.2f}" for k in FIELDS)
+                  if "order_rho" in row else "—")
+        lines.append(f"| {row['cells']}^2 | {row['L1_rho']:.3g} | {row['L1_u1']:.3g} | "
+                     f"{row['L1_u2']:.3g} | {row['L1_T']:.3g} | {orders} | "
+                     f"{row['exact_bar_rho']:.1g}, {row['exact_bar_T']:.1g} | "
+                     f"{row['steady_change']:.1g} | {row['seconds']} |")
+    text = "\n".join(lines) + "\n"
+    (out / "box_2d.md").write_text(text)
+    print(text)
+    _figure(out / "box_2d.png", grid, runs[cells[-1]], averaged(fine, cells[-1]), cells[-1])
+    return 0
+
+
+def _figure(path, grid, run, truth, cells: int) -> None:
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(13, 8), layout="constrained")
+    axes = fig.subplots(2, 3)
+    centres = (numpy.arange(cells) + 0.5) / cells
+    got, want = fields(grid, run), fields(grid, truth)
+    for column, name in enumerate(("rho", "T", "speed")):
+        pair = [(got, f"run, {cells}^2 cells"), (want, "exact steady state")]
+        values = [numpy.hypot(v["u1"], v["u2"]) if name == "speed" else v[name]
+                  for v, _ in pair]
+        low, high = min(v.min() for v in values), max(v.max() for v in values)
+        for row, (v, (_, title)) in enumerate(zip(values, pair)):
+            ax = axes[row, column]
+            mesh = ax.pcolormesh(centres, centres, v.T, shading="nearest", vmin=low,
+                                 vmax=high)
+            ax.set(title=f"{name}, {title}", xlabel="x", ylabel="y", aspect="equal")
+        fig.colorbar(mesh, ax=axes[:, column], label=name)
+    fig.savefig(path, dpi=100)
+
+
+if __name__ == "__main__":
+    raise SystemExit(finish(main))

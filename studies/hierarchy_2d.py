@@ -1,0 +1,195 @@
+"""The hierarchy of collision models on a rectangle: what it saves on a two-dimensional
+Riemann problem near the Euler limit, against what it changes.
+
+The data are Liska & Wendroff's configuration 4 (SIAM J. Sci. Comput. 25 (2003) 995; four
+shocks) on [0, 1]^2, as in ``studies/riemann_2d.py``, here with 3D velocities (the Euler
+equations of gamma = 5/3), (rho, u_1, u_2, p) = (1.1, 0, 0, 1.1) upper right, (0.5065,
+0.8939, 0, 0.35) upper left, (1.1, 0.8939, 0.8939, 1.1) lower left, (0.5065, 0, 0.8939,
+0.35) lower right, as Maxwellians of T = p / rho, specular walls, to t = 0.25. Elastic
+Maxwell molecules at eps = 1e-3, penalised ARS(2,2,2) with the conservative correction, the
+fast spectral operator on 3D N = 16 (S = 4: the lower left Maxwellian, |u| = 1.26, fits the box), MUSCL, dt the transport's CFL limit on both
+axes.
+
+On C x C cells (``--cells``) the hybrid run (the default hierarchy euler / esbgk /
+boltzmann, chosen cell by cell every step) goes to t = 0.25, timed over its whole run
+(set-up included: the distance of the uniform state and the relaxation rates); the
+all-kinetic run (the full operator in every cell, the same operator calls in every step)
+is timed over ``--kinetic-steps`` steps after one. Reported: the seconds per step of each,
+their ratio, the mean share of the cells at each level over the steps and at the end. With
+``--compare`` the all-kinetic run goes to t = 0.25 too, and the table gives the mean L1
+difference (over the cells) of rho, u_1, u_2, T of the hybrid run from it, and the
+distance of the all-kinetic run from the Euler equations (gamma = 5/3, reflecting walls)
+solved by :func:`granframe.theory.euler.euler_finite_volumes` on 8C x 8C cells averaged
+onto the C x C cells: at eps = 1e-3 the shock layers (a few mean free paths, ~1e-2) are
+far thinner than a cell, so that distance is the kinetic scheme's discretisation error on
+C x C cells, up to O(eps).
+
+    python studies/hierarchy_2d.py --out DIR [--cells 16] [--kinetic-steps 3] [--compare]
+
+writes ``hierarchy_2d_<C>.csv``, ``hierarchy_2d_<C>.md`` and ``levels_<C>.png`` (the maps
+of the hybrid run at t = 0.25, its levels among them) there. On 16^2 cells (65 steps): the
+hybrid run about 40 min, the all-kinetic steps about 70 s each on two cores.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import pathlib
+import time
+
+import numpy
+
+import granframe
+from granframe.run.description import RunDescription
+from granframe.run.runner import Simulation
+from granframe.space.transport import box_step_limit
+from granframe.theory.euler import euler_finite_volumes
+from granframe.tools import plotting
+from granframe.tools.studykit import finish, number, save_figure, write_csv
+from granframe.velocity.grid import VelocityGrid
+
+GRID = {"dimension": 3, "n_modes": 24, "support_radius": 3.75}
+FINAL = 0.25
+KNUDSEN = 1e-3
+#: Liska & Wendroff's configuration 4: (rho, u_1, u_2, p) by quadrant
+STATES = {"upper_right": (1.1, 0.0, 0.0, 1.1), "upper_left": (0.5065, 0.8939, 0.0, 0.35),
+          "lower_left": (1.1, 0.8939, 0.8939, 1.1), "lower_right": (0.5065, 0.0, 0.8939, 0.35)}
+FIELDS = ("rho", "u1", "u2", "T")
+
+
+def description(cells: int, hierarchy: bool) -> RunDescription:
+    """The run on ``cells`` x ``cells`` cells, with the default hierarchy or all-kinetic."""
+    grid = VelocityGrid(**GRID)
+    limit = box_step_limit(grid, (1.0 / cells, 1.0 / cells), 0.5)
+    steps = 5 * math.ceil(FINAL / limit / 5 * (1 - 1e-12))      # five snapshots
+    space = {"cells": [cells, cells], "reconstruction": "muscl", "left": "specular",
+             "right": "specular", "bottom": "specular", "top": "specular"}
+    if hierarchy:
+        space["hierarchy"] = {}
+    return RunDescription.from_dict({
+        "title": (f"Liska-Wendroff 4, 3D velocities, eps = {KNUDSEN:g}, {cells}^2 cells, "
+                  + ("hybrid" if hierarchy else "all-kinetic")),
+        "grid": GRID, "kernel": "maxwell", "restitution": {"name": "constant", "value": 1.0},
+        "initial": {"name": "quadrants", **{
+            name: {"density": r, "velocity": [u1, u2, 0.0], "temperature": p / r}
+            for name, (r, u1, u2, p) in STATES.items()}},
+        "operator": {"name": "fast_spectral"}, "integrator": "penalised_ars222",
+        "conservative": True, "knudsen": KNUDSEN, "time_step": FINAL / steps,
+        "final_time": FINAL, "output": {"snapshot_interval": FINAL / 5},
+        "space": space})
+
+
+def run(cells: int, hierarchy: bool, out: pathlib.Path):
+    """The run's dataset (its store in ``out``) and its wall seconds."""
+    store = out / f"{'hybrid' if hierarchy else 'kinetic'}_{cells}.zarr"
+    began = time.perf_counter()
+    Simulation(description(cells, hierarchy)).run(store, progress=False, overwrite=True)
+    return granframe.open_run(store), time.perf_counter() - began
+
+
+def fields(ds) -> dict:
+    """rho, u_1, u_2, T (C, C) at the last record."""
+    velocity = ds.velocity.values[-1]
+    return {"rho": ds.density.values[-1], "u1": velocity[..., 0], "u2": velocity[..., 1],
+            "T": ds.temperature.values[-1]}
+
+
+def averaged(values: dict, cells: int) -> dict:
+    """Fields of R x R cells averaged onto ``cells`` x ``cells``: rho, the momentum and the
+    energy averaged (3D velocities: e = rho |u|^2 / 2 + 3 rho T / 2), then u and T."""
+    k = values["rho"].shape[0] // cells
+
+    def mean(a):
+        return a.reshape(cells, k, cells, k).mean(axis=(1, 3))
+
+    rho = values["rho"]
+    m1, m2 = mean(rho * values["u1"]), mean(rho * values["u2"])
+    energy = mean(rho * (values["u1"] ** 2 + values["u2"] ** 2) / 2 + 1.5 * rho * values["T"])
+    r = mean(rho)
+    u1, u2 = m1 / r, m2 / r
+    return {"rho": r, "u1": u1, "u2": u2, "T": (energy - r * (u1 ** 2 + u2 ** 2) / 2) / (1.5 * r)}
+
+
+def distance(a: dict, b: dict) -> dict:
+    """The mean over the cells of |a - b| for every field."""
+    return {name: float(numpy.abs(a[name] - b[name]).mean()) for name in FIELDS}
+
+
+def kinetic_step_seconds(cells: int, steps: int) -> float:
+    """Seconds per step of the all-kinetic run: the mean of ``steps`` steps after one."""
+    d = description(cells, False)
+    problem = Simulation(d).problem
+    state, dt = problem.state(problem.f0), d.time_step
+    state = problem.step(0.0, state, dt)                         # warm-up: plans
+    began = time.perf_counter()
+    for k in range(steps):
+        state = problem.step((k + 1) * dt, state, dt)
+    return (time.perf_counter() - began) / steps
+
+
+def euler_reference(cells: int) -> dict:
+    """The Euler equations (gamma = 5/3) on ``cells`` x ``cells`` cells to t = 0.25."""
+    half = cells // 2
+    rho, temperature = numpy.empty((cells, cells)), numpy.empty((cells, cells))
+    u = numpy.empty((2, cells, cells))
+    blocks = {"upper_right": (slice(half, None), slice(half, None)),
+              "upper_left": (slice(None, half), slice(half, None)),
+              "lower_left": (slice(None, half), slice(None, half)),
+              "lower_right": (slice(half, None), slice(None, half))}
+    for name, (r, u1, u2, p) in STATES.items():
+        where = blocks[name]
+        rho[where], u[0][where], u[1][where], temperature[where] = r, u1, u2, p / r
+    solution = euler_finite_volumes(rho, u, temperature, (1.0 / cells, 1.0 / cells),
+                                    [FINAL], boundaries=(("reflecting",) * 2,) * 2,
+                                    dimension=3)
+    return {"rho": solution["density"][-1], "u1": solution["velocity"][-1][0],
+            "u2": solution["velocity"][-1][1], "T": solution["temperature"][-1]}
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", required=True, help="folder of the tables and figures")
+    parser.add_argument("--cells", type=number(8, low_open=False, kind=int), default=16,
+                        help="cells a side (default 16)")
+    parser.add_argument("--kinetic-steps", type=number(1, low_open=False, kind=int),
+                        default=3, help="all-kinetic steps timed after one (default 3)")
+    parser.add_argument("--compare", action="store_true",
+                        help="run the all-kinetic run to the end and compare")
+    args = parser.parse_args(argv)
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    c = args.cells
+    ds_h, seconds_h = run(c, True, out)
+    steps = int(ds_h.sizes["step_time"] - 1)
+    print(f"hybrid: {steps} steps in {seconds_h:.1f} s", flush=True)
+    kinetic_s = kinetic_step_seconds(c, args.kinetic_steps)
+    levels = ds_h.level.values[1:]
+    names = list(ds_h.level.attrs["levels"])
+    row = {"cells": c, "steps": steps, "kinetic_step_s": kinetic_s,
+           "hybrid_step_s": seconds_h / steps, "speedup": kinetic_s * steps / seconds_h,
+           **{f"share_{n}": float((levels == k).mean()) for k, n in enumerate(names)},
+           **{f"final_{n}": float((levels[-1] == k).mean()) for k, n in enumerate(names)}}
+    save_figure(plotting.figures(ds_h)[f"plane_{ds_h.sizes['time'] - 1}"],
+                out / f"levels_{c}.png")
+    if args.compare:
+        ds_k, seconds_k = run(c, False, out)
+        row["kinetic_run_step_s"] = seconds_k / steps
+        row.update({f"diff_{k}": v for k, v in distance(fields(ds_h), fields(ds_k)).items()})
+        truth = averaged(euler_reference(8 * c), c)
+        row.update({f"own_{k}": v for k, v in distance(fields(ds_k), truth).items()})
+        row.update({f"ratio_{k}": row[f"diff_{k}"] / row[f"own_{k}"] for k in FIELDS})
+    print(row, flush=True)
+    write_csv(out / f"hierarchy_2d_{c}.csv", [row], list(row))
+    lines = [(f"Liska-Wendroff 4, 3D velocities N = {GRID['n_modes']}, eps = {KNUDSEN:g}, "
+              f"t = {FINAL}, {c}^2 cells"), "", "| quantity | value |", "|---|---|"]
+    lines += [f"| {k} | {v:.4g} |" if isinstance(v, float) else f"| {k} | {v} |"
+              for k, v in row.items()]
+    text = "\n".join(lines) + "\n"
+    (out / f"hierarchy_2d_{c}.md").write_text(text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(finish(main))
