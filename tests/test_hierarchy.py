@@ -337,6 +337,37 @@ def test_an_interrupted_hybrid_run_resumes_bitwise(tmp_path, monkeypatch, heatin
                                          err_msg=name)
 
 
+def test_a_hybrid_run_stopped_before_its_first_snapshot_resumes(tmp_path, monkeypatch):
+    """Ctrl-C in the second step: the store holds f0 and its record, whose indicators are
+    NaN (none measured yet), chunks at the fill value that are written all the same, so
+    the store is intact (it read as damaged when zarr left them out) and resumes to the
+    uninterrupted run, bitwise."""
+    from granframe.run.problems.space import SpaceProblem
+
+    d = _description([("space.hierarchy", {}), ("final_time", 0.024),
+                      ("output.snapshot_interval", 0.012)])
+    Simulation(d).run(tmp_path / "reference.zarr", progress=False)
+    step, calls = SpaceProblem.step, []
+
+    def stop_in_the_second(self, t, state, dt):
+        calls.append(t)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return step(self, t, state, dt)
+
+    path = tmp_path / "stopped.zarr"
+    monkeypatch.setattr(SpaceProblem, "step", stop_in_the_second)
+    with pytest.raises(KeyboardInterrupt):
+        Simulation(d).run(path, progress=False)
+    monkeypatch.setattr(SpaceProblem, "step", step)
+    assert RunStore.open(path).progress["records"] == 1
+    Simulation(d).run(path, resume=True, progress=False)
+    resumed, reference = granframe.open_run(path), granframe.open_run(tmp_path / "reference.zarr")
+    for name in ("f", "level", "distance"):
+        numpy.testing.assert_array_equal(resumed[name].values, reference[name].values,
+                                         err_msg=name)
+
+
 def test_a_resumed_hierarchy_takes_up_the_rates_of_its_last_record(tmp_path):
     """The fluid levels' substeps follow the fastest rates of the temperature law over the
     cells of the last record (StepRates): a resume takes them up from the store's fields

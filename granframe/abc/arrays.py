@@ -39,6 +39,7 @@ class ArrayBackend:
     backend runs well side by side (CPU threads, each pipeline with
     single-threaded transforms; 1 on a GPU).
 
+    The transport of a space run takes its face values through :meth:`faces`.
     Spectral operators multiply spectra by separable (per-axis) phase factors
     many times per evaluation. :meth:`separable_product` and
     :meth:`lowrank_accumulate` are those element-wise steps, written here once
@@ -107,6 +108,14 @@ class ArrayBackend:
         self.xp.multiply(spectrum[..., None, :, :], tail[:, None, :], out=out)
         out *= head[:, :, None]
         return out
+
+    def faces(self, reconstruction, f):
+        """The face values (f^-, f^+) of ``reconstruction`` (a
+        :class:`~granframe.abc.Reconstruction`) along axis 0 of ``f``: its own
+        :meth:`~granframe.abc.Reconstruction.faces` in ``xp``. A backend may override it
+        with a fused kernel for the reconstructions it knows, which must give the same
+        values."""
+        return reconstruction.faces(f, self.xp)
 
     def lowrank_accumulate(self, acc, heads, tails, values):
         r"""Add low-rank-weighted batches of spectra into per-group accumulators.

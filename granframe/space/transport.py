@@ -111,6 +111,13 @@ class _SSPTransport:
         inner[...] = start + (tau / 6.0) * (k1 + k2 + 4.0 * k3)
         self.wall_totals += (tau / 6.0) * (w1 + w2 + 4.0 * w3)
 
+    def _faces(self, f):
+        """(f^-, f^+) along axis 0 of ``f``: the backend's
+        :meth:`~granframe.abc.ArrayBackend.faces`, or the reconstruction's own."""
+        if self._backend is None:
+            return self.reconstruction.faces(f, self.xp)
+        return self._backend.faces(self.reconstruction, f)
+
     def take_wall_totals(self):
         """The (wall, [mass, p_1 .. p_d, energy]) entered since the last call, on the
         device, and reset them."""
@@ -128,10 +135,15 @@ class Transport(_SSPTransport):
     reconstruction : Reconstruction
     left, right : Boundary
         The ends of the interval; both periodic, or two walls.
+    backend : ArrayBackend, optional
+        The run's backend, whose :meth:`~granframe.abc.ArrayBackend.faces` reconstructs
+        (a fused kernel where it has one); without it the reconstruction's own, in the
+        domain's namespace.
     """
 
-    def __init__(self, domain: Domain, reconstruction, left, right):
+    def __init__(self, domain: Domain, reconstruction, left, right, backend=None):
         self.domain, self.reconstruction = domain, reconstruction
+        self._backend = backend
         self.left, self.right = left, right
         self.dx = domain.dx
         grid, xp = domain.grid, domain.xp
@@ -161,7 +173,7 @@ class Transport(_SSPTransport):
         it touches none), at time t."""
         domain, xp, d = self.domain, self.xp, self.grid.dimension
         domain.exchange(array, self.left, self.right, t)
-        minus, plus = self.reconstruction.faces(xp.swapaxes(array, 0, 1), xp)
+        minus, plus = self._faces(xp.swapaxes(array, 0, 1))
         flux = self.positive * minus + self.negative * plus     # (block_cells + 1, blocks, ...)
         walls = []
         lower, upper = domain.sides
@@ -251,9 +263,12 @@ class BoxTransport(_SSPTransport):
     walls : sequence of Boundary
         The boundaries of the sides, in :attr:`Box.sides` order; periodic in pairs along
         an axis, or two walls.
+    backend : ArrayBackend, optional
+        As in :class:`Transport`.
     """
 
-    def __init__(self, domain: Box, reconstruction, walls):
+    def __init__(self, domain: Box, reconstruction, walls, backend=None):
+        self._backend = backend
         walls = tuple(walls)
         if len(walls) != len(domain.sides):
             raise ValueError(f"BoxTransport: parameter 'walls' has {len(walls)} boundaries; "
@@ -294,7 +309,7 @@ class BoxTransport(_SSPTransport):
             lower, upper = domain.sides[2 * axis], domain.sides[2 * axis + 1]
             left, right = self.walls[2 * axis], self.walls[2 * axis + 1]
             low, high = domain.touches[axis]
-            minus, plus = self.reconstruction.faces(domain.along(array, axis), xp)
+            minus, plus = self._faces(domain.along(array, axis))
             measure = domain.cell_volume / self.spacing[axis]
             zero = xp.zeros(d + 2)
             ends = [None, None]           # the fluxes through the walls, from the face values

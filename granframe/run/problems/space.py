@@ -75,7 +75,7 @@ class SpaceProblem(Problem):
             check_run_memory(d, self.backend, cells=space.owned_cells, share=comm.local_size)
             self.operator = build_operator(d, self.backend) if collide else None
         self.collision_integrator = d.build("integrator") if collide else None
-        space.build(grid, self.backend.xp)
+        space.build(grid, self.backend)
         self.domain, self.transport, self.fields = space.domain, space.transport, space.fields
         self.left, self.right = space.left, space.right
         self.reconstruction, self.cell_layout = space.reconstruction, space.cell_layout

@@ -98,7 +98,7 @@ class Point:
         self.description = description
         self.communicator = SerialCommunicator()
 
-    def build(self, grid, xp) -> None:
+    def build(self, grid, backend) -> None:
         """Nothing to build: the point has no cells to lay out."""
 
     def initial(self, check: bool):
@@ -271,9 +271,11 @@ class Interval:
                          (self.left.periodic,), (self.domain.axis,))
         return cells, self.owned
 
-    def build(self, grid, xp) -> None:
-        """The domain of the owned cells on the array namespace ``xp``, its ghost exchange
-        with the other processes, the transport and the moment service."""
+    def build(self, grid, backend) -> None:
+        """The domain of the owned cells on the array namespace of ``backend``, its ghost
+        exchange with the other processes, the transport (its face values through the
+        backend's :meth:`~granframe.abc.ArrayBackend.faces`) and the moment service."""
+        xp = backend.xp
         d, layout = self.description, self.cell_layout
         self.domain = Domain(d.space.cells, d.space.length, layout.block,
                              self.reconstruction.ghost, grid, xp,
@@ -281,7 +283,8 @@ class Interval:
         if self.communicator.size > 1:
             self.domain.neighbours = Halo.of(self.communicator, self.ranges,
                                              self.left.periodic)
-        self.transport = Transport(self.domain, self.reconstruction, self.left, self.right)
+        self.transport = Transport(self.domain, self.reconstruction, self.left, self.right,
+                                   backend)
         self.fields = FieldMoments(grid, self.domain.dx, xp,
                                    transport_axes=(self.transport.axis,))
 
@@ -516,9 +519,10 @@ class Rectangle(Interval):
                          (self.walls[0].periodic, self.walls[2].periodic), (0, 1))
         return cells, owned
 
-    def build(self, grid, xp) -> None:
-        """The box of the owned block on ``xp``, its ghost exchange with the other
+    def build(self, grid, backend) -> None:
+        """The box of the owned block on the backend, its ghost exchange with the other
         processes, the transport and the moment service (totals over dx dy)."""
+        xp = backend.xp
         space = self.description.space
         self.domain = Box(space.counts, space.lengths, self.reconstruction.ghost, grid, xp,
                           owned=[(layout.start, layout.stop) for layout in self.layouts])
@@ -526,7 +530,7 @@ class Rectangle(Interval):
             periodic = (self.walls[0].periodic, self.walls[2].periodic)
             self.domain.neighbours = BoxHalo.of(self.communicator, self.process_counts,
                                                 periodic)
-        self.transport = BoxTransport(self.domain, self.reconstruction, self.walls)
+        self.transport = BoxTransport(self.domain, self.reconstruction, self.walls, backend)
         self.fields = FieldMoments(grid, self.domain.cell_volume, xp, transport_axes=(0, 1))
 
     def initial(self, check: bool):

@@ -399,8 +399,11 @@ class StoreCommits(StoreState):
         return start, stop
 
     def _planned(self, owner: str, plan: CommitPlan, name: str):
-        """The array ``name``, checked to be resized by :meth:`begin_commit` for ``plan``."""
-        array = self.group[name]
+        """The array ``name``, checked to be resized by :meth:`begin_commit` for ``plan``,
+        writing every chunk it is given, those all at the fill value too (zarr leaves those
+        out by default, and a committed chunk that is not there reads as damage: the
+        hierarchy's indicators are NaN in the first record)."""
+        array = self.group[name].with_config({"write_empty_chunks": True})
         stop = (plan.snapshots if name in SNAPSHOT_ARRAYS else plan.records).stop
         if array.shape[0] != stop:
             reject(owner, "plan", plan, f"does not fit the store: array '{name}' holds "
