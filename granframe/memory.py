@@ -76,6 +76,21 @@ SPACE_RESIDENT = 4
 #: 2D N = 24 with their ghost strips) 7.1 (upwind), 11.4 (MUSCL) and 17.1 (WENO5).
 TRANSPORT_COPIES = {"upwind": 8, "muscl": 12, "weno5": 18}
 
+#: Bytes of the velocity grids padded to 2N per axis in one batch of the resolution report
+#: of a space run's cells (:meth:`granframe.velocity.moments.FieldMoments.resolution`).
+RESOLUTION_BATCH_BYTES = 16 * 2 ** 20
+
+#: Bytes a space run holds besides its copies of f and its operator: the records and
+#: reports of its cells, the store's write buffers, the threads' stacks (measured: 1D runs
+#: of 2 MiB of f, 23 to 24 MiB above the estimate without it).
+SPACE_OVERHEAD = 32 * 2 ** 20
+
+#: Copies of the cells' f the resolution report of a space run holds at an output point
+#: (the cells' spectra, their moduli, the outermost shell and f without it), besides its
+#: batch of grids padded to 2N (three arrays of
+#: :data:`RESOLUTION_BATCH_BYTES`).
+REPORT_COPIES = 6
+
 
 def run_memory(description, backend=None, cells: int | None = None) -> dict:
     """Estimated bytes of a run of ``description``, found without allocating anything large.
@@ -88,10 +103,11 @@ def run_memory(description, backend=None, cells: int | None = None) -> dict:
     ``copies`` (:func:`integrator_copies` + :data:`RUN_COPIES`; in a space run, whose
     transport and collision sub-steps never hold their temporaries at once,
     :data:`SPACE_RESIDENT` + max(:func:`integrator_copies` + 3,
-    :data:`TRANSPORT_COPIES` of its reconstruction), the 3 the equation's right-hand side:
-    measured peak minus the interpreter's RSS with the backend loaded, 0.82 GiB against
-    0.84 GiB estimated at 2D N = 32 on 64 x 64 cells with MUSCL and RK4, docs/space.md,
-    "Memory on a rectangle"), ``operator`` (the operator's
+    :data:`TRANSPORT_COPIES` of its reconstruction), the 3 the equation's right-hand side,
+    or the resolution report's :data:`REPORT_COPIES` and its padded batch, whichever is
+    larger, and :data:`SPACE_OVERHEAD`; docs/space.md, "Memory on a rectangle"),
+    ``other`` (the report's padded batch and :data:`SPACE_OVERHEAD` in a space run, else
+    0), ``operator`` (the operator's
     :meth:`~granframe.CollisionOperator.estimate_memory`, 0 when it gives none) and
     ``total``. A space run evaluates Q on the stack of all its cells at once, so the
     operator's estimate is asked for ``distributions`` = cells where it takes that option:
@@ -107,11 +123,20 @@ def run_memory(description, backend=None, cells: int | None = None) -> dict:
     cells = None if space is None else (math.prod(space.counts) if cells is None else cells)
     stepping = integrator_copies(d.build("integrator"))
     need = {"f": 8 * d.grid.n_modes ** d.grid.dimension * (1 if space is None else cells),
-            "copies": (stepping + RUN_COPIES if space is None else SPACE_RESIDENT
-                       + max(stepping + 3, TRANSPORT_COPIES.get(space.reconstruction.name,
-                                                                max(TRANSPORT_COPIES.values())))),
             "operator": 0}
-    need["total"] = need["f"] * need["copies"]
+    if space is None:
+        need["copies"], report = stepping + RUN_COPIES, 0
+    else:
+        step = max(stepping + 3, TRANSPORT_COPIES.get(space.reconstruction.name,
+                                                      max(TRANSPORT_COPIES.values())))
+        report = min(3 * RESOLUTION_BATCH_BYTES, 3 * 2 ** d.grid.dimension * need["f"])
+        # the step's copies, or the report's at an output point, whichever is larger
+        if REPORT_COPIES * need["f"] + report > step * need["f"]:
+            need["copies"] = SPACE_RESIDENT + REPORT_COPIES
+        else:
+            need["copies"], report = SPACE_RESIDENT + step, 0
+    need["other"] = report + (0 if space is None else SPACE_OVERHEAD)
+    need["total"] = need["f"] * need["copies"] + need["other"]
     if need["total"] <= budget():   # else too much already, whatever the operator needs
         factory = default_registries().get("collision_operators", d.operator.name).factory
         estimate = getattr(factory, "estimate_memory", None)
@@ -158,10 +183,12 @@ def check_run_memory(description, backend=None, cells: int | None = None,
         operator = (f"operator {gib(need['operator'])} GiB + " if need["operator"] else "")
         space = getattr(description, "space", None)
         if space is not None:
+            total = math.prod(space.counts)
             process = (f" (the {cells} cells of one of the {share} processes on this host, "
-                       "which share the budget)" if share > 1 or cells not in (None, space.cells)
+                       "which share the budget)" if share > 1 or cells not in (None, total)
                        else "")
-            check.reject("Simulation", "space.cells", space.cells,
+            check.reject("Simulation", "space.cells",
+                         list(space.counts) if space.dimension > 1 else space.cells,
                          f"with grid.n_modes = {grid.n_modes} (d = {grid.dimension}) needs "
                          f"about {gib(need['total'])} GiB for this run{process} ({operator}"
                          f"{need['copies']} copies of every cell's f at {gib(need['f'])} GiB), "

@@ -51,8 +51,8 @@ def test_the_state_holds_its_mass_and_a_transport_run_settles_on_it():
     temperature within the scheme's error on 6 x 6 cells of the exact state's cell averages
     (the exact state's own bar, panels and points halved, is 5e-5 there; the study
     studies/box_2d.py refines the cells: about first order)."""
-    import sys
     import pathlib
+    import sys
 
     sys.path.insert(0, str(pathlib.Path(__file__).parents[1] / "studies"))
     from box_2d import averaged, description, fields

@@ -10,9 +10,8 @@ from matplotlib import colormaps
 from matplotlib.colors import BoundaryNorm, LogNorm
 
 from granframe import validators as check
-from granframe.tools.plot_data import RunData, TIME_LABEL, axes_for
+from granframe.tools.plot_data import TIME_LABEL, RunData, axes_for
 from granframe.tools.plot_plane import record_at
-
 
 #: The indicators of a hierarchy of collision models that :func:`indicator_map` draws:
 #: stored array -> (symbol, words).

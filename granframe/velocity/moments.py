@@ -378,8 +378,17 @@ class FieldMoments:
           the fields, not the jump (docs/space.md, "Resolution indicators of a cell").
 
         Three batched FFTs over the cells, by ``backend``'s transforms (``rfftn``,
-        ``irfftn``: on its device); NaN where the mass or T is not positive.
+        ``irfftn``: on its device); NaN where the mass or T is not positive. The cells go
+        through in batches whose grids padded to 2N hold at most
+        :data:`~granframe.memory.RESOLUTION_BATCH_BYTES` (2^d times f's size each, and three such arrays at
+        once: a whole 3D run at a time peaked at 30 copies of its f).
         """
+        from granframe.memory import RESOLUTION_BATCH_BYTES
+
+        batch = max(1, RESOLUTION_BATCH_BYTES // (8 * (2 * self.grid.n_modes) ** self.d))
+        if f.shape[0] > batch:
+            return self.xp.concatenate([self.resolution(f[start:start + batch], backend)
+                                        for start in range(0, f.shape[0], batch)])
         from granframe.velocity.estimators import outer_band, squared_lags
 
         xp, grid, d = self.xp, self.grid, self.d

@@ -37,7 +37,7 @@ def _kernels():
     return _numba_kernels
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _executor(workers: int):
     """The threads that share a fused transport kernel with the calling one (None for
     one worker), one pool per worker count."""

@@ -9,6 +9,9 @@ side. Compiled on first use and cached on disk (``cache=True``).
 
 from __future__ import annotations
 
+import itertools
+import math
+
 import numba
 import numpy
 
@@ -145,21 +148,21 @@ MUSCL_LIMITERS = {"minmod": 0, "van_leer": 1, "mc": 2}
 @numba.njit(nogil=True, cache=True)
 def _least(a, b):
     """numpy.minimum(a, b): the smaller, NaN if either is NaN."""
-    if a != a:
+    if math.isnan(a):
         return a
-    if b != b:
+    if math.isnan(b):
         return b
-    return a if a < b else b
+    return min(a, b)
 
 
 @numba.njit(nogil=True, cache=True)
 def _most(a, b):
     """numpy.maximum(a, b): the larger, NaN if either is NaN."""
-    if a != a:
+    if math.isnan(a):
         return a
-    if b != b:
+    if math.isnan(b):
         return b
-    return a if a > b else b
+    return max(a, b)
 
 
 @numba.njit(nogil=True, cache=True)
@@ -218,7 +221,7 @@ def muscl_faces(f, limiter: str, executor, workers: int):
     size = flat.shape[axis]
     bounds = numpy.linspace(0, size, min(workers, size) + 1).astype(int)
     parts = [tuple(slice(None) if a != axis else slice(lo, hi) for a in range(3))
-             for lo, hi in zip(bounds[:-1], bounds[1:])]
+             for lo, hi in itertools.pairwise(bounds)]
     if executor is None or len(parts) == 1:
         _muscl_faces(flat, minus, plus, code, tiny)
     else:
