@@ -69,7 +69,7 @@ def measure(dimension: int, n_modes: int, steps: int) -> float:
         "restitution": {"name": "constant", "value": 0.9},
         "initial": {"name": "sinusoidal_mode", "mode": [1, 1], "amplitude": 0.2},
         "operator": {"name": "fast_spectral"}, "backend": {"name": "pyfftw", "threads": 1},
-        "integrator": "ssprk2", "knudsen": 1.0, "time_step": dt, "final_time": dt,
+        "integrator": "ssp_rk2", "knudsen": 1.0, "time_step": dt, "final_time": dt,
         "space": {"cells": [8, 8]}})
     problem = Simulation(d).problem
     state = problem.state(problem.f0)

@@ -67,7 +67,8 @@ def test_lowrank_accumulate(backend, dtype, rank, groups, per_group):
     check_lowrank_accumulate(backend, dtype, rank, groups, per_group)
 
 
-FACE_SHAPES = [(9, 1, 4, 4), (14, 5, 8, 8), (10, 7, 3, 3, 3), (40, 3, 16, 16)]
+FACE_SHAPES = [(9, 1, 4, 4), (14, 5, 8, 8), (10, 7, 3, 3, 3), (40, 3, 16, 16),
+               (24, 8, 40, 40)]       # the last above THREADED_SIZE: shared by threads
 
 
 @pytest.mark.parametrize("limiter", ["minmod", "van_leer", "mc"])
