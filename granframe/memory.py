@@ -80,6 +80,12 @@ TRANSPORT_COPIES = {"upwind": 8, "muscl": 12, "weno5": 18}
 #: of a space run's cells (:meth:`granframe.velocity.moments.FieldMoments.resolution`).
 RESOLUTION_BATCH_BYTES = 16 * 2 ** 20
 
+def resolution_batch(n_modes: int, dimension: int) -> int:
+    """Cells per batch of the resolution report: their grids padded to 2N hold at most
+    :data:`RESOLUTION_BATCH_BYTES`, and a batch holds at least one cell."""
+    return max(1, RESOLUTION_BATCH_BYTES // (8 * (2 * n_modes) ** dimension))
+
+
 #: Bytes a space run holds besides its copies of f and its operator: the records and
 #: reports of its cells, the store's write buffers, the threads' stacks (measured: 1D runs
 #: of 2 MiB of f, 23 to 24 MiB above the estimate without it).
@@ -106,8 +112,9 @@ def run_memory(description, backend=None, cells: int | None = None) -> dict:
     :data:`TRANSPORT_COPIES` of its reconstruction), the 3 the equation's right-hand side,
     or the resolution report's :data:`REPORT_COPIES` and its padded batch, whichever is
     larger, and :data:`SPACE_OVERHEAD`; docs/space.md, "Memory on a rectangle"),
-    ``other`` (the report's padded batch and :data:`SPACE_OVERHEAD` in a space run, else
-    0), ``operator`` (the operator's
+    ``other`` (in a space run the report's padded batch, :data:`SPACE_OVERHEAD` and f0 of
+    the cells other processes own, which every process keeps; else 0), ``operator`` (the
+    operator's
     :meth:`~granframe.CollisionOperator.estimate_memory`, 0 when it gives none) and
     ``total``. A space run evaluates Q on the stack of all its cells at once, so the
     operator's estimate is asked for ``distributions`` = cells where it takes that option:
@@ -129,13 +136,17 @@ def run_memory(description, backend=None, cells: int | None = None) -> dict:
     else:
         step = max(stepping + 3, TRANSPORT_COPIES.get(space.reconstruction.name,
                                                       max(TRANSPORT_COPIES.values())))
-        report = min(3 * RESOLUTION_BATCH_BYTES, 3 * 2 ** d.grid.dimension * need["f"])
+        n, dim = d.grid.n_modes, d.grid.dimension
+        report = 3 * min(cells, resolution_batch(n, dim)) * 8 * (2 * n) ** dim
         # the step's copies, or the report's at an output point, whichever is larger
         if REPORT_COPIES * need["f"] + report > step * need["f"]:
             need["copies"] = SPACE_RESIDENT + REPORT_COPIES
         else:
             need["copies"], report = SPACE_RESIDENT + step, 0
-    need["other"] = report + (0 if space is None else SPACE_OVERHEAD)
+    # every process keeps f0 of all cells (its copy among the resident ones is its own)
+    others = 0 if space is None else math.prod(space.counts) - cells
+    need["other"] = report + (0 if space is None else SPACE_OVERHEAD
+                              + 8 * d.grid.n_modes ** d.grid.dimension * others)
     need["total"] = need["f"] * need["copies"] + need["other"]
     if need["total"] <= budget():   # else too much already, whatever the operator needs
         factory = default_registries().get("collision_operators", d.operator.name).factory

@@ -76,7 +76,7 @@ FACE_SHAPES = [(9, 1, 4, 4), (14, 5, 8, 8), (10, 7, 3, 3, 3), (40, 3, 16, 16),
 def test_muscl_faces_are_the_reconstructions_own_to_the_bit(backend, limiter, shape):
     """Every backend's face values (a fused kernel where it has one) equal MUSCL's NumPy
     ones bit for bit: on plateaus (a or b zero), on a strided view (a transport along y),
-    and NaN where f has one."""
+    in float32, and NaN where f has one."""
     from granframe.space.reconstruction import MUSCL
 
     rng = numpy.random.default_rng(len(shape) * shape[0])
@@ -84,7 +84,8 @@ def test_muscl_faces_are_the_reconstructions_own_to_the_bit(backend, limiter, sh
     f[rng.random(shape) < 0.15] = 0.5
     f.flat[7] = numpy.nan
     reconstruction = MUSCL(limiter=limiter)
-    views = {"contiguous": f, "strided": numpy.swapaxes(f, 0, 1)[:, 1:-1]}
+    views = {"contiguous": f, "strided": numpy.swapaxes(f, 0, 1)[:, 1:-1],
+             "float32": f.astype(numpy.float32)}
     for name, view in views.items():
         if view.shape[0] < 4:
             continue

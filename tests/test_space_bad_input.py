@@ -399,6 +399,9 @@ def test_the_memory_of_the_operator_on_every_cell_is_in_the_one_budget(tmp_path,
     need = run_memory(RunDescription.from_dict(table(*changes)))
     assert need["operator"] >= 16 * 30000 * 15 ** 4
     assert need["total"] == need["f"] * need["copies"] + need["other"] + need["operator"]
+    # a process owning a third of the cells still keeps f0 of them all
+    third = run_memory(RunDescription.from_dict(table(*changes)), cells=10000)
+    assert third["other"] - need["other"] == 8 * 16 ** 2 * 20000
     refused(tmp_path, changes, r"^Simulation: parameter 'space.cells' = 30000 is invalid; with "
                                r"grid.n_modes = 16 \(d = 2\) needs about 2\d.\d GiB for this run "
                                r"\(operator 2\d.\d GiB \+ \d+ copies of every cell's f")

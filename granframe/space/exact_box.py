@@ -125,8 +125,9 @@ class FreeMolecularBox:
         if len(walls) != 4 or any(len(w) != 2 or not w[0] > 0 for w in walls):
             check.reject(owner, "walls", walls, "must be four (T_w > 0, U_w) pairs: left, "
                          "right, bottom, top")
-        if not check.is_integer(panels) or panels < 1:
-            check.reject(owner, "panels", panels, "must be an integer >= 1")
+        for name, value in (("panels", panels), ("samples", samples)):
+            if not check.is_integer(value) or value < 1:
+                check.reject(owner, name, value, "must be an integer >= 1")
         self.grid, self.lengths = grid, (float(lengths[0]), float(lengths[1]))
         self.panels, self.samples = int(panels), int(samples)
         self.emission = _emissions(grid, walls)

@@ -383,9 +383,9 @@ class FieldMoments:
         :data:`~granframe.memory.RESOLUTION_BATCH_BYTES` (2^d times f's size each, and three such arrays at
         once: a whole 3D run at a time peaked at 30 copies of its f).
         """
-        from granframe.memory import RESOLUTION_BATCH_BYTES
+        from granframe.memory import resolution_batch
 
-        batch = max(1, RESOLUTION_BATCH_BYTES // (8 * (2 * self.grid.n_modes) ** self.d))
+        batch = resolution_batch(self.grid.n_modes, self.d)
         if f.shape[0] > batch:
             return self.xp.concatenate([self.resolution(f[start:start + batch], backend)
                                         for start in range(0, f.shape[0], batch)])

@@ -11,6 +11,7 @@ import concurrent.futures
 import functools
 
 import attrs
+import numpy
 
 from granframe import hookimpl
 from granframe import validators as check
@@ -83,12 +84,14 @@ class PyFFTWBackend(CPUBackend, SciPyFFTBackend):
         return _kernels().lowrank_accumulate(acc, heads, tails, values)
 
     def faces(self, reconstruction, f):
-        """MUSCL's face values by a fused kernel over ``threads`` threads (one pass over f
-        instead of NumPy's dozen, the same values to the bit); other reconstructions as
-        the base class computes them."""
+        """MUSCL's face values of float64 f by a fused kernel over ``threads`` threads (one
+        pass over f instead of NumPy's dozen, the same values to the bit: in float32
+        numba's float constants would promote the van Leer slope); other reconstructions
+        and dtypes as the base class computes them."""
         from granframe.space.reconstruction import MUSCL
 
-        if type(reconstruction) is not MUSCL or f.ndim < 2:
+        if type(reconstruction) is not MUSCL or f.ndim < 2 or f.dtype != numpy.float64 \
+                or 0 in f.shape:
             return super().faces(reconstruction, f)
         workers = self.workers
         return _kernels().muscl_faces(f, reconstruction.limiter, _executor(workers), workers)
