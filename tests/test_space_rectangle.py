@@ -194,8 +194,8 @@ def _negated_v(f, grid):
     ({"space": {"cells": [8, 8]}, "time_step": 0.02, "final": 0.04}, "time_step",
      r"must be <= 0.0.*along x and along y at once"),
     ({"space": {"cells": [3000, 3000], "length": [300.0, 300.0]}}, "space.cells",
-     r"with grid.n_modes = 24 \(d = 2\) needs about 7\d\d GiB for this run \(19 copies of "
-     r"every cell's f at 38.6 GiB\), more than the memory budget"),
+     (r"with grid.n_modes = 24 \(d = 2\) needs about 7\d\d GiB for this run \(19 copies of "
+      r"every cell's f at 38.6 GiB\), more than the memory budget")),
 ])
 def test_what_a_rectangle_cannot_run_is_refused_by_name(change, parameter, allowed):
     settings = {"space": change.pop("space")}
