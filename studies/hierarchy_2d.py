@@ -25,10 +25,15 @@ far thinner than a cell, so that distance is the kinetic scheme's discretisation
 C x C cells, up to O(eps).
 
     python studies/hierarchy_2d.py --out DIR [--cells 16] [--kinetic-steps 3] [--compare]
+    python studies/hierarchy_2d.py --out DIR --cells 16 --first-steps 6
+
+The second times the first K steps of both runs one by one with the levels' shares
+(``hierarchy_2d_first_<C>.md``; about 12 minutes for K = 6 on 16^2 cells).
 
 writes ``hierarchy_2d_<C>.csv``, ``hierarchy_2d_<C>.md`` and ``levels_<C>.png`` (the maps
 of the hybrid run at t = 0.25, its levels among them) there. On 16^2 cells (65 steps): the
-hybrid run about 40 min, the all-kinetic steps about 70 s each on two cores.
+hybrid run about an hour (42 to 60 s a step in its first six, the full level's share
+rising), the all-kinetic steps about 70 s each, on two cores.
 """
 
 from __future__ import annotations
@@ -128,6 +133,24 @@ def kinetic_step_seconds(cells: int, steps: int) -> float:
     return (time.perf_counter() - began) / steps
 
 
+def first_steps(cells: int, hierarchy: bool, steps: int) -> tuple:
+    """The wall seconds of each of the first ``steps`` steps with its record, and (with a
+    hierarchy) the share of the cells at each level in each."""
+    d = description(cells, hierarchy)
+    problem = Simulation(d).problem
+    state, dt = problem.state(problem.f0), d.time_step
+    times, shares = [], []
+    for k in range(steps):
+        began = time.perf_counter()
+        state = problem.step(k * dt, state, dt)
+        problem.record(state)
+        times.append(time.perf_counter() - began)
+        if hierarchy:
+            levels = problem.hierarchy.levels
+            shares.append(numpy.bincount(levels, minlength=3) / levels.size)
+    return times, shares
+
+
 def euler_reference(cells: int) -> dict:
     """The Euler equations (gamma = 5/3) on ``cells`` x ``cells`` cells to t = 0.25."""
     half = cells // 2
@@ -156,10 +179,23 @@ def main(argv=None) -> int:
                         default=3, help="all-kinetic steps timed after one (default 3)")
     parser.add_argument("--compare", action="store_true",
                         help="run the all-kinetic run to the end and compare")
+    parser.add_argument("--first-steps", type=number(1, low_open=False, kind=int),
+                        help="time only the first K steps of each run, one by one")
     args = parser.parse_args(argv)
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     c = args.cells
+    if args.first_steps:
+        hybrid, shares = first_steps(c, True, args.first_steps)
+        kinetic, _ = first_steps(c, False, args.first_steps)
+        lines = ["| step | all-kinetic (s) | hybrid (s) | shares euler / esbgk / boltzmann |",
+                 "|---|---|---|---|"]
+        lines += [f"| {k + 1} | {a:.1f} | {b:.1f} | {' / '.join(f'{x:.0%}' for x in share)} |"
+                  for k, (a, b, share) in enumerate(zip(kinetic, hybrid, shares))]
+        text = "\n".join(lines) + "\n"
+        (out / f"hierarchy_2d_first_{c}.md").write_text(text)
+        print(text)
+        return 0
     ds_h, seconds_h = run(c, True, out)
     steps = int(ds_h.sizes["step_time"] - 1)
     print(f"hybrid: {steps} steps in {seconds_h:.1f} s", flush=True)
