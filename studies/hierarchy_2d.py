@@ -19,7 +19,7 @@ their ratio, the mean share of the cells at each level over the steps and at the
 ``--compare`` the all-kinetic run goes to t = 0.25 too, and the table gives the mean L1
 difference (over the cells) of rho, u_1, u_2, T of the hybrid run from it, and the
 distance of the all-kinetic run from the Euler equations (gamma = 5/3, reflecting walls)
-solved by :func:`granframe.theory.euler.euler_finite_volumes` on 8C x 8C cells averaged
+solved by :func:`granframe.theory.euler.euler_finite_volumes` (``riemann_2d.reference``) on 8C x 8C cells averaged
 onto the C x C cells: at eps = 1e-3 the shock layers (a few mean free paths, ~1e-2) are
 far thinner than a cell, so that distance is the kinetic scheme's discretisation error on
 C x C cells, up to O(eps).
@@ -44,23 +44,18 @@ import pathlib
 import time
 
 import numpy
+from riemann_2d import FIELDS, FINAL, STATES, averaged, distance, reference
 
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.space.transport import box_step_limit
-from granframe.theory.euler import euler_finite_volumes
 from granframe.tools import plotting
 from granframe.tools.studykit import finish, number, save_figure, write_csv
 from granframe.velocity.grid import VelocityGrid
 
 GRID = {"dimension": 3, "n_modes": 24, "support_radius": 3.75}
-FINAL = 0.25
 KNUDSEN = 1e-3
-#: Liska & Wendroff's configuration 4: (rho, u_1, u_2, p) by quadrant
-STATES = {"upper_right": (1.1, 0.0, 0.0, 1.1), "upper_left": (0.5065, 0.8939, 0.0, 0.35),
-          "lower_left": (1.1, 0.8939, 0.8939, 1.1), "lower_right": (0.5065, 0.0, 0.8939, 0.35)}
-FIELDS = ("rho", "u1", "u2", "T")
 
 
 def description(cells: int, hierarchy: bool) -> RunDescription:
@@ -100,27 +95,6 @@ def fields(ds) -> dict:
             "T": ds.temperature.values[-1]}
 
 
-def averaged(values: dict, cells: int) -> dict:
-    """Fields of R x R cells averaged onto ``cells`` x ``cells``: rho, the momentum and the
-    energy averaged (3D velocities: e = rho |u|^2 / 2 + 3 rho T / 2), then u and T."""
-    k = values["rho"].shape[0] // cells
-
-    def mean(a):
-        return a.reshape(cells, k, cells, k).mean(axis=(1, 3))
-
-    rho = values["rho"]
-    m1, m2 = mean(rho * values["u1"]), mean(rho * values["u2"])
-    energy = mean(rho * (values["u1"] ** 2 + values["u2"] ** 2) / 2 + 1.5 * rho * values["T"])
-    r = mean(rho)
-    u1, u2 = m1 / r, m2 / r
-    return {"rho": r, "u1": u1, "u2": u2, "T": (energy - r * (u1 ** 2 + u2 ** 2) / 2) / (1.5 * r)}
-
-
-def distance(a: dict, b: dict) -> dict:
-    """The mean over the cells of |a - b| for every field."""
-    return {name: float(numpy.abs(a[name] - b[name]).mean()) for name in FIELDS}
-
-
 def kinetic_step_seconds(cells: int, steps: int) -> float:
     """Seconds per step of the all-kinetic run: the mean of ``steps`` steps after one."""
     d = description(cells, False)
@@ -149,25 +123,6 @@ def first_steps(cells: int, hierarchy: bool, steps: int) -> tuple:
             levels = problem.hierarchy.levels
             shares.append(numpy.bincount(levels, minlength=3) / levels.size)
     return times, shares
-
-
-def euler_reference(cells: int) -> dict:
-    """The Euler equations (gamma = 5/3) on ``cells`` x ``cells`` cells to t = 0.25."""
-    half = cells // 2
-    rho, temperature = numpy.empty((cells, cells)), numpy.empty((cells, cells))
-    u = numpy.empty((2, cells, cells))
-    blocks = {"upper_right": (slice(half, None), slice(half, None)),
-              "upper_left": (slice(None, half), slice(half, None)),
-              "lower_left": (slice(None, half), slice(None, half)),
-              "lower_right": (slice(half, None), slice(None, half))}
-    for name, (r, u1, u2, p) in STATES.items():
-        where = blocks[name]
-        rho[where], u[0][where], u[1][where], temperature[where] = r, u1, u2, p / r
-    solution = euler_finite_volumes(rho, u, temperature, (1.0 / cells, 1.0 / cells),
-                                    [FINAL], boundaries=(("reflecting",) * 2,) * 2,
-                                    dimension=3)
-    return {"rho": solution["density"][-1], "u1": solution["velocity"][-1][0],
-            "u2": solution["velocity"][-1][1], "T": solution["temperature"][-1]}
 
 
 def main(argv=None) -> int:
@@ -212,7 +167,7 @@ def main(argv=None) -> int:
         ds_k, seconds_k = run(c, False, out)
         row["kinetic_run_step_s"] = seconds_k / steps
         row.update({f"diff_{k}": v for k, v in distance(fields(ds_h), fields(ds_k)).items()})
-        truth = averaged(euler_reference(8 * c), c)
+        truth = averaged(reference(8 * c, dimension=3), c, dimension=3)
         row.update({f"own_{k}": v for k, v in distance(fields(ds_k), truth).items()})
         row.update({f"ratio_{k}": row[f"diff_{k}"] / row[f"own_{k}"] for k in FIELDS})
     print(row, flush=True)

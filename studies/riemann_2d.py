@@ -94,8 +94,9 @@ def kinetic(cells: int, out: pathlib.Path | None = None) -> tuple[dict, float]:
              "T": ds.temperature.values[-1]}, time.perf_counter() - began)
 
 
-def reference(cells: int) -> dict:
-    """The Euler equations (gamma = 2) on ``cells`` x ``cells`` cells to t = 0.25."""
+def reference(cells: int, dimension: int = 2) -> dict:
+    """The Euler equations on ``cells`` x ``cells`` cells to t = 0.25, gamma = (d + 2) / d
+    of the velocity ``dimension`` d (2: gamma = 2)."""
     half = cells // 2
     rho = numpy.empty((cells, cells))
     u = numpy.empty((2, cells, cells))
@@ -109,14 +110,15 @@ def reference(cells: int) -> dict:
         rho[where], u[0][where], u[1][where], temperature[where] = r, u1, u2, p / r
     solution = euler_finite_volumes(rho, u, temperature, (1.0 / cells, 1.0 / cells),
                                     [FINAL], boundaries=(("reflecting",) * 2,) * 2,
-                                    dimension=2)
+                                    dimension=dimension)
     return {"rho": solution["density"][-1], "u1": solution["velocity"][-1][0],
             "u2": solution["velocity"][-1][1], "T": solution["temperature"][-1]}
 
 
-def averaged(fields: dict, cells: int) -> dict:
+def averaged(fields: dict, cells: int, dimension: int = 2) -> dict:
     """Fields of R x R cells averaged onto ``cells`` x ``cells`` (R a multiple): the
-    conserved rho, rho u and the energy averaged, then u and T of the averages."""
+    conserved rho, rho u and the energy rho |u|^2 / 2 + d rho T / 2 averaged (d the
+    velocity ``dimension``), then u and T of the averages."""
     size = fields["rho"].shape[0]
     k = size // cells
 
@@ -125,10 +127,12 @@ def averaged(fields: dict, cells: int) -> dict:
 
     rho = fields["rho"]
     m1, m2 = mean(rho * fields["u1"]), mean(rho * fields["u2"])
-    energy = mean(rho * (fields["u1"] ** 2 + fields["u2"] ** 2) / 2 + rho * fields["T"])
+    half = 0.5 * dimension
+    energy = mean(rho * (fields["u1"] ** 2 + fields["u2"] ** 2) / 2 + half * rho * fields["T"])
     r = mean(rho)
     u1, u2 = m1 / r, m2 / r
-    return {"rho": r, "u1": u1, "u2": u2, "T": (energy - r * (u1 ** 2 + u2 ** 2) / 2) / r}
+    return {"rho": r, "u1": u1, "u2": u2,
+            "T": (energy - r * (u1 ** 2 + u2 ** 2) / 2) / (half * r)}
 
 
 def distance(a: dict, b: dict) -> dict:

@@ -149,6 +149,14 @@ class FreeMolecularBox:
     def _wall_length(self, wall: int) -> float:
         return self.lengths[1] if WALLS[wall][0] == 0 else self.lengths[0]
 
+    def _wall_points(self, wall: int):
+        """(x, y) of the midpoints of the ``samples`` sub-panels of every panel of ``wall``."""
+        axis, end = WALLS[wall]
+        count = self.panels * self.samples
+        along = (numpy.arange(count) + 0.5) / count * self._wall_length(wall)
+        fixed = numpy.full_like(along, 0.0 if end == 0 else self.lengths[axis])
+        return (fixed, along) if axis == 0 else (along, fixed)
+
     def _panel(self, wall, coordinate):
         """The global panel index of wall coordinates."""
         length = numpy.where(numpy.asarray(wall) < 2, self.lengths[1], self.lengths[0])
@@ -161,15 +169,8 @@ class FreeMolecularBox:
         normalised to a unit total flux sum |panel| sigma."""
         m, q, h = self.panels, self.samples, self.grid.cell_volume
         K = numpy.zeros((4 * m, 4 * m))
-        fractions = (numpy.arange(m * q) + 0.5) / (m * q)
         for wall, (axis, end) in enumerate(WALLS):
-            length = self._wall_length(wall)
-            along = fractions * length
-            if axis == 0:
-                px = numpy.full_like(along, 0.0 if end == 0 else self.lengths[0])
-                py = along
-            else:
-                px, py = along, numpy.full_like(along, 0.0 if end == 0 else self.lengths[1])
+            px, py = self._wall_points(wall)
             rows = wall * m + numpy.arange(m * q) // q
             for j, v1, v2 in self.nodes:
                 normal = (v1, v2)[axis] * (1 if end == 0 else -1)
@@ -218,16 +219,10 @@ class FreeMolecularBox:
         of wall that crosses for a time tau fills the area |v.n| tau per unit length with
         F / |v.n| mass per unit area and speed), on ``samples`` sub-points of each panel."""
         m, q, h = self.panels, self.samples, self.grid.cell_volume
-        fractions = (numpy.arange(m * q) + 0.5) / (m * q)
         total = 0.0
         for wall, (axis, end) in enumerate(WALLS):
             length = self._wall_length(wall)
-            along = fractions * length
-            if axis == 0:
-                px = numpy.full_like(along, 0.0 if end == 0 else self.lengths[0])
-                py = along
-            else:
-                px, py = along, numpy.full_like(along, 0.0 if end == 0 else self.lengths[1])
+            px, py = self._wall_points(wall)
             sigma = numpy.repeat(self.sigma[wall], q)
             for j, v1, v2 in self.nodes:
                 normal = (v1, v2)[axis] * (1 if end == 0 else -1)

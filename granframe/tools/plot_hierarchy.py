@@ -11,7 +11,7 @@ from matplotlib.colors import BoundaryNorm, LogNorm
 
 from granframe import validators as check
 from granframe.tools.plot_data import TIME_LABEL, RunData, axes_for
-from granframe.tools.plot_plane import record_at
+from granframe.tools.plot_plane import check_snapshot, record_at, rectangle_run
 
 #: The indicators of a hierarchy of collision models that :func:`indicator_map` draws:
 #: stored array -> (symbol, words).
@@ -28,6 +28,19 @@ INDICATOR_FLOOR = 1e-3
 def _level_colours(count):
     """The colour map of ``count`` levels: one colour of viridis each, cheapest first."""
     return colormaps["viridis"].resampled(count)
+
+
+def _level_mesh(ax, run, x, y, levels) -> None:
+    """``levels`` on the quads of (x, y) in :func:`_level_colours`, with a colour bar that
+    names the levels."""
+    count = len(run.levels)
+    mesh = ax.pcolormesh(x, y, levels, shading="nearest", cmap=_level_colours(count),
+                         norm=BoundaryNorm(numpy.arange(count + 1) - 0.5, count))
+    bar = ax.figure.colorbar(mesh, ax=ax, ticks=numpy.arange(count),
+                             label="collision model (level)")
+    bar.set_ticklabels(run.levels)
+    bar.minorticks_off()
+    ax.grid(False)
 
 
 def level_map(ds, ax=None):
@@ -51,15 +64,7 @@ def level_map(ds, ax=None):
     run = RunData.of(ds)
     run.hierarchical("level_map")
     ax = axes_for(ax, run)
-    count = len(run.levels)
-    mesh = ax.pcolormesh(run.ds["x"].values, run.step_time, run.ds["level"].values,
-                         shading="nearest", cmap=_level_colours(count),
-                         norm=BoundaryNorm(numpy.arange(count + 1) - 0.5, count))
-    bar = ax.figure.colorbar(mesh, ax=ax, ticks=numpy.arange(count),
-                             label="collision model (level)")
-    bar.set_ticklabels(run.levels)
-    bar.minorticks_off()
-    ax.grid(False)
+    _level_mesh(ax, run, run.ds["x"].values, run.step_time, run.ds["level"].values)
     ax.set(xlabel="position x, cell centres (dimensionless)", ylabel=TIME_LABEL,
            xlim=(0.0, run.space.length),
            title="collision model of each cell (t, x)")
@@ -85,23 +90,11 @@ def level_plane(ds, index=-1, ax=None):
     """
     run = RunData.of(ds)
     run.hierarchical("level_plane")
-    if run.space.dimension != 2:
-        check.reject("level_plane", "ds", run.title, "must be the store of a run on a "
-                     "rectangle (space.cells = [Cx, Cy]); level_map draws an interval's")
-    if not check.is_integer(index) or not -run.count <= index < run.count:
-        check.reject("level_plane", "index", index, f"must be a snapshot index from "
-                     f"{-run.count} to {run.count - 1}")
+    rectangle_run(run, "level_plane", "; level_map draws an interval's")
+    check_snapshot(run, "level_plane", index)
     ax = axes_for(ax, run)
-    count = len(run.levels)
     levels = run.ds["level"].values[record_at(run, float(run.times[index]))]
-    mesh = ax.pcolormesh(run.ds["x"].values, run.ds["y"].values, levels.T, shading="nearest",
-                         cmap=_level_colours(count),
-                         norm=BoundaryNorm(numpy.arange(count + 1) - 0.5, count))
-    bar = ax.figure.colorbar(mesh, ax=ax, ticks=numpy.arange(count),
-                             label="collision model (level)")
-    bar.set_ticklabels(run.levels)
-    bar.minorticks_off()
-    ax.grid(False)
+    _level_mesh(ax, run, run.ds["x"].values, run.ds["y"].values, levels.T)
     lx, ly = run.space.lengths
     ax.set(xlabel="x", ylabel="y", xlim=(0.0, lx), ylim=(0.0, ly), aspect="equal",
            title=f"collision model of each cell at t = {float(run.times[index]):.4g}")

@@ -25,6 +25,23 @@ PLANE_FIELDS = {
 }
 
 
+def rectangle_run(ds, owner: str, hint: str = ""):
+    """The :class:`RunData` of ``ds``, refused in ``owner`` unless a run on a rectangle
+    (``hint`` added to the message)."""
+    run = RunData.of(ds)
+    if run.space is None or run.space.dimension != 2:
+        check.reject(owner, "ds", run.title, "must be the store of a run on a rectangle "
+                     f"(space.cells = [Cx, Cy]){hint}")
+    return run
+
+
+def check_snapshot(run, owner: str, index) -> None:
+    """Refuse in ``owner`` an ``index`` that is not a snapshot of ``run``."""
+    if not check.is_integer(index) or not -run.count <= index < run.count:
+        check.reject(owner, "index", index, f"must be a snapshot index from {-run.count} to "
+                     f"{run.count - 1}")
+
+
 def record_at(run, time: float) -> int:
     """The index of the record at ``time`` (a snapshot's): the last one at or before it."""
     return int(numpy.searchsorted(run.step_time, time * (1 + 1e-12), side="right") - 1)
@@ -78,16 +95,11 @@ def plane_map(ds, field="density", index=-1, ax=None):
     -------
     matplotlib.axes.Axes
     """
-    run = RunData.of(ds)
-    if run.space is None or run.space.dimension != 2:
-        check.reject("plane_map", "ds", run.title, "must be the store of a run on a "
-                     "rectangle (space.cells = [Cx, Cy])")
+    run = rectangle_run(ds, "plane_map")
     if field not in PLANE_FIELDS:
         check.reject("plane_map", "field", field,
                      f"must be one of {', '.join(PLANE_FIELDS)}{check.did_you_mean(field, PLANE_FIELDS)}")
-    if not check.is_integer(index) or not -run.count <= index < run.count:
-        check.reject("plane_map", "index", index, f"must be a snapshot index from "
-                     f"{-run.count} to {run.count - 1}")
+    check_snapshot(run, "plane_map", index)
     symbol, words, signed = PLANE_FIELDS[field]
     values, velocity = plane_field(run, field, index)
     x, y = run.ds["x"].values, run.ds["y"].values
@@ -132,10 +144,7 @@ def animate(ds, out, field="density", *, fps: float = 4.0, dpi: float = 110):
     from matplotlib.animation import FuncAnimation, PillowWriter
     from matplotlib.figure import Figure
 
-    run = RunData.of(ds)
-    if run.space is None or run.space.dimension != 2:
-        check.reject("animate", "ds", run.title, "must be the store of a run on a rectangle "
-                     "(space.cells = [Cx, Cy])")
+    run = rectangle_run(ds, "animate")
     if field not in PLANE_FIELDS:
         check.reject("animate", "field", field, f"must be one of {', '.join(PLANE_FIELDS)}")
     if not check.is_real(fps) or not 0.1 <= fps <= 60:
