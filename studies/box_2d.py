@@ -41,7 +41,7 @@ from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.space.exact_box import FreeMolecularBox
 from granframe.space.transport import box_step_limit
-from granframe.tools.studykit import finish, numbers, write_csv
+from granframe.tools.studykit import finish, mean_distances, numbers, write_csv
 from granframe.velocity.grid import VelocityGrid
 
 GRID = {"dimension": 2, "n_modes": 16, "support_radius": 3.5}
@@ -94,10 +94,6 @@ def fields(grid, f) -> dict:
             "T": numpy.array([r["temperature"] for r in rows]).reshape(counts)}
 
 
-def distance(a: dict, b: dict) -> dict:
-    return {name: float(numpy.abs(a[name] - b[name]).mean()) for name in FIELDS}
-
-
 def averaged(values, cells: int):
     """Cell averages (R, R, ...) of a finer grid averaged onto ``cells`` x ``cells``."""
     k = values.shape[0] // cells
@@ -139,9 +135,9 @@ def main(argv=None) -> int:
     for row in rows:
         c = row["cells"]
         truth = fields(grid, averaged(fine, c))
-        row.update({f"L1_{k}": v for k, v in distance(fields(grid, runs[c]), truth).items()})
+        row.update({f"L1_{k}": v for k, v in mean_distances(fields(grid, runs[c]), truth).items()})
         row.update({f"exact_bar_{k}": v for k, v in
-                    distance(fields(grid, averaged(rough, c)), truth).items()})
+                    mean_distances(fields(grid, averaged(rough, c)), truth).items()})
     for previous, row in itertools.pairwise(rows):
         ratio = math.log(row["cells"] / previous["cells"])
         row.update({f"order_{k}": math.log(previous[f"L1_{k}"] / row[f"L1_{k}"]) / ratio

@@ -38,7 +38,7 @@ from granframe.stepping.integrators import EquilibriumProjection
 from granframe.theory.euler import euler_riemann_cell_averages
 from granframe.tools.space_cases import (GAMMA, SOD_FINAL, SOD_GRID, SOD_LEFT, SOD_RIGHT,
                                          euler_state, sod_description, sod_errors)
-from granframe.tools.studykit import cfl_time_step, finish, number, write_csv
+from granframe.tools.studykit import cfl_time_step, finish, mean_distances, number, write_csv
 
 #: the knudsen numbers of the table
 KNUDSEN = (1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
@@ -49,11 +49,6 @@ def fields(rho, velocity, temperature) -> dict:
     """The Sod tube's compared fields: rho, u_1, T per cell."""
     return {"rho": numpy.asarray(rho), "u": numpy.asarray(velocity)[:, 0],
             "T": numpy.asarray(temperature)}
-
-
-def l1(a: dict, b: dict) -> dict:
-    """sum_i dx |a_i - b_i| of every field (dx = 1/cells)."""
-    return {k: float(numpy.abs(a[k] - b[k]).mean()) for k in a}
 
 
 def limit_fields(cells: int, final: float = FINAL, time_step: float | None = None) -> dict:
@@ -103,7 +98,7 @@ def table(cells: int, knudsen=KNUDSEN) -> list[dict]:
     rows = []
     for eps in knudsen:
         run = sod_run(cells, eps)
-        distance = l1(run["fields"], limit)
+        distance = mean_distances(run["fields"], limit)
         rows.append({"knudsen": eps, "dt_over_eps": run["dt"] / eps, "steps": run["steps"],
                      "energy_drift": run["energy_drift"], "mass_drift": run["mass_drift"],
                      "min_f": run["min_f"], "negative": run["negative"],
@@ -111,7 +106,7 @@ def table(cells: int, knudsen=KNUDSEN) -> list[dict]:
                      **{f"limit_{k}": v for k, v in distance.items()},
                      "seconds": run["seconds"]})
         print(" ".join(f"{k}={v:.3g}" for k, v in rows[-1].items()), flush=True)
-    limit_exact = l1(limit, _exact(cells))
+    limit_exact = mean_distances(limit, _exact(cells))
     rows.append({"knudsen": 0.0, **{f"exact_{k}": v for k, v in limit_exact.items()}})
     return rows
 
@@ -134,7 +129,7 @@ def schemes(cells: int, knudsen: float = 1e-8) -> list[dict]:
             run = sod_run(cells, knudsen, integrator, time_step=step)
             rows.append({"integrator": integrator, "dt": step,
                          **{f"exact_{k}": v for k, v in run["exact"].items()},
-                         **{f"limit_{k}": v for k, v in l1(run["fields"], limit).items()},
+                         **{f"limit_{k}": v for k, v in mean_distances(run["fields"], limit).items()},
                          "energy_drift": run["energy_drift"], "seconds": run["seconds"]})
             print(" ".join(f"{k}={v}" if isinstance(v, str) else f"{k}={v:.3g}"
                            for k, v in rows[-1].items()), flush=True)

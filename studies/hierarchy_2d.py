@@ -19,7 +19,7 @@ their ratio, the mean share of the cells at each level over the steps and at the
 ``--compare`` the all-kinetic run goes to t = 0.25 too, and the table gives the mean L1
 difference (over the cells) of rho, u_1, u_2, T of the hybrid run from it, and the
 distance of the all-kinetic run from the Euler equations (gamma = 5/3, reflecting walls)
-solved by :func:`granframe.theory.euler.euler_finite_volumes` (``riemann_2d.reference``) on 8C x 8C cells averaged
+solved by :func:`granframe.theory.euler.euler_finite_volumes` (:func:`granframe.theory.euler.euler_quadrants`) on 8C x 8C cells averaged
 onto the C x C cells: at eps = 1e-3 the shock layers (a few mean free paths, ~1e-2) are
 far thinner than a cell, so that distance is the kinetic scheme's discretisation error on
 C x C cells, up to O(eps).
@@ -44,18 +44,28 @@ import pathlib
 import time
 
 import numpy
-from riemann_2d import FIELDS, FINAL, STATES, averaged, distance, reference
 
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.space.transport import box_step_limit
+from granframe.theory.cells import conserved_block_average
+from granframe.theory.euler import LISKA_WENDROFF_4 as STATES
+from granframe.theory.euler import euler_quadrants
 from granframe.tools import plotting
-from granframe.tools.studykit import finish, number, save_figure, write_csv
+from granframe.tools.studykit import (
+    finish,
+    mean_distances,
+    number,
+    save_figure,
+    write_csv,
+)
 from granframe.velocity.grid import VelocityGrid
 
 GRID = {"dimension": 3, "n_modes": 24, "support_radius": 3.75}
 KNUDSEN = 1e-3
+FINAL = 0.25
+FIELDS = ("rho", "u1", "u2", "T")
 
 
 def description(cells: int, hierarchy: bool) -> RunDescription:
@@ -166,9 +176,10 @@ def main(argv=None) -> int:
     if args.compare:
         ds_k, seconds_k = run(c, False, out)
         row["kinetic_run_step_s"] = seconds_k / steps
-        row.update({f"diff_{k}": v for k, v in distance(fields(ds_h), fields(ds_k)).items()})
-        truth = averaged(reference(8 * c, dimension=3), c, dimension=3)
-        row.update({f"own_{k}": v for k, v in distance(fields(ds_k), truth).items()})
+        row.update({f"diff_{k}": v for k, v in mean_distances(fields(ds_h), fields(ds_k)).items()})
+        truth = conserved_block_average(euler_quadrants(STATES, 8 * c, FINAL, dimension=3),
+                                        c, dimension=3)
+        row.update({f"own_{k}": v for k, v in mean_distances(fields(ds_k), truth).items()})
         row.update({f"ratio_{k}": row[f"diff_{k}"] / row[f"own_{k}"] for k in FIELDS})
     print(row, flush=True)
     write_csv(out / f"hierarchy_2d_{c}.csv", [row], list(row))

@@ -9,11 +9,12 @@ import pytest
 import scipy.integrate
 import scipy.linalg
 
-from granframe.theory.cells import gauss_cell_averages
+from granframe.theory.cells import conserved_block_average, gauss_cell_averages
 from granframe.theory.cooling import maxwellian_cooling_rate, relative_speed_average
-from granframe.theory.euler import (euler_finite_volumes, euler_riemann,
-                                    euler_riemann_cell_averages, euler_riemann_star,
-                                    granular_euler_piston, piston_speed, rankine_hugoniot)
+from granframe.theory.euler import (LISKA_WENDROFF_4, euler_finite_volumes, euler_quadrants,
+                                    euler_riemann, euler_riemann_cell_averages,
+                                    euler_riemann_star, granular_euler_piston, piston_speed,
+                                    rankine_hugoniot)
 from granframe.theory.modes import (cooling_rate_burnett, density_response,
                                     heat_critical_wavenumber, heat_mode, heat_mode_index,
                                     longitudinal_matrix, longitudinal_maxwellian, shear_mode)
@@ -626,6 +627,42 @@ def test_the_euler_solver_keeps_the_symmetry_of_data_about_the_diagonal():
     assert numpy.abs(velocity).max() > 0.1
     assert numpy.abs(density - density.T).max() < 1e-14
     assert numpy.abs(velocity[0] - velocity[1].T).max() < 1e-14
+
+
+@pytest.mark.parametrize("dimension", [2, 3])
+def test_the_quadrants_conserve_between_walls_and_average_onto_coarser_cells(dimension):
+    """Liska & Wendroff 4 on 16 x 16 cells to t = 0.1 between reflecting walls: its data are
+    symmetric about the diagonal and stay so, the mass and the energy are the data's to
+    round-off, and averaging onto 4 x 4 cells keeps the mass and the energy (not the
+    temperature's mean) to round-off; a constant state averages to itself."""
+    run = euler_quadrants(LISKA_WENDROFF_4, 16, 0.1, dimension=dimension)
+    data = euler_quadrants(LISKA_WENDROFF_4, 16, 0.0, dimension=dimension)
+
+    def totals(f, k):
+        return (f["rho"].sum() * k, (f["rho"] * (f["u1"] ** 2 + f["u2"] ** 2) / 2
+                                     + dimension / 2 * f["rho"] * f["T"]).sum() * k)
+
+    assert numpy.abs(run["rho"] - run["rho"].T).max() < 1e-13
+    assert numpy.abs(run["u1"] - run["u2"].T).max() < 1e-13
+    assert numpy.abs(run["rho"] - data["rho"]).max() > 0.05
+    coarse = conserved_block_average(run, 4, dimension)
+    for before, after in zip(totals(data, 1.0), totals(run, 1.0)):
+        assert abs(after / before - 1) < 1e-13
+    for fine, rough in zip(totals(run, 1.0), totals(coarse, 16.0)):
+        assert abs(rough / fine - 1) < 1e-13
+    flat = {"rho": numpy.full((8, 8), 1.3), "u1": numpy.full((8, 8), 0.2),
+            "u2": numpy.full((8, 8), -0.1), "T": numpy.full((8, 8), 0.7)}
+    for key, value in conserved_block_average(flat, 2, dimension).items():
+        assert numpy.allclose(value, flat[key][0, 0], rtol=1e-14, atol=0)
+
+
+def test_the_quadrants_and_the_block_average_refuse_bad_cells_by_name():
+    with pytest.raises(ValueError, match="'cells' = 15"):
+        euler_quadrants(LISKA_WENDROFF_4, 15, 0.1)
+    with pytest.raises(ValueError, match="'states'"):
+        euler_quadrants({"upper_right": (1, 0, 0, 1)}, 16, 0.1)
+    with pytest.raises(ValueError, match="'cells' = 3"):
+        conserved_block_average({"rho": numpy.ones((8, 8))}, 3, 2)
 
 
 def test_the_granular_piston_solver_is_the_one_axis_case_of_the_euler_solver():

@@ -1,8 +1,11 @@
-"""Cell averages of profiles that are smooth between known break points."""
+"""Cell averages: of profiles that are smooth between known break points, and of fine
+fields onto coarser cells through their conserved quantities."""
 
 from __future__ import annotations
 
 import numpy
+
+from granframe import validators as check
 
 
 def gauss_cell_averages(edges, function, breaks, points: int):
@@ -50,3 +53,40 @@ def gauss_cell_averages(edges, function, breaks, points: int):
     starts = numpy.searchsorted(left, edges[:-1])
     widths = numpy.diff(edges).reshape((-1,) + (1,) * (pieces.ndim - 1))
     return numpy.add.reduceat(pieces, starts, axis=0) / widths
+
+
+def conserved_block_average(fields: dict, cells: int, dimension: int) -> dict:
+    r"""Fields on R x R cells averaged onto ``cells`` x ``cells`` (R a multiple of it)
+    through the conserved quantities: rho, rho u and E = rho |u|^2/2 + d rho T/2 are averaged
+    over each block of (R/cells)^2 cells, then u = <rho u>/<rho> and
+    T = (<E> - <rho> |u|^2/2) / (d <rho>/2), d the velocity ``dimension``.
+
+    Parameters
+    ----------
+    fields : dict
+        ``rho``, ``u1``, ``u2``, ``T``, each (R, R).
+    cells : int
+        The coarse cells per axis, dividing R.
+    dimension : int
+        d of the velocities (T is per velocity dimension).
+
+    Returns
+    -------
+    dict
+        ``rho``, ``u1``, ``u2``, ``T``, each (cells, cells).
+    """
+    size = fields["rho"].shape[0]
+    if cells < 1 or size % cells:
+        check.reject("conserved_block_average", "cells", cells,
+                     f"must divide the fields' {size} cells per axis")
+    k = size // cells
+
+    def mean(a):
+        return numpy.asarray(a).reshape(cells, k, cells, k).mean(axis=(1, 3))
+
+    rho = numpy.asarray(fields["rho"])
+    half = 0.5 * dimension
+    r = mean(rho)
+    u1, u2 = mean(rho * fields["u1"]) / r, mean(rho * fields["u2"]) / r
+    energy = mean(rho * (fields["u1"] ** 2 + fields["u2"] ** 2) / 2 + half * rho * fields["T"])
+    return {"rho": r, "u1": u1, "u2": u2, "T": (energy - r * (u1 ** 2 + u2 ** 2) / 2) / (half * r)}

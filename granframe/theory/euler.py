@@ -627,3 +627,58 @@ def euler_finite_volumes(density, velocity, temperature, spacing, times, *,
         check.reject(owner, "times", times, "must be one or more finite times >= 0")
     return _integrate(_conserved(rho, u, temperature, dimension), targets, spacings, sides,
                       dimension, float(cfl))
+
+
+#: Liska & Wendroff's configuration 4 (SIAM J. Sci. Comput. 25 (2003) 995, Lax & Liu's
+#: configuration 4: four shocks) on [0, 1]^2 about (1/2, 1/2): (rho, u_1, u_2, p) by quadrant
+LISKA_WENDROFF_4 = {"upper_right": (1.1, 0.0, 0.0, 1.1),
+                    "upper_left": (0.5065, 0.8939, 0.0, 0.35),
+                    "lower_left": (1.1, 0.8939, 0.8939, 1.1),
+                    "lower_right": (0.5065, 0.0, 0.8939, 0.35)}
+
+
+def euler_quadrants(states, cells: int, time: float, *, dimension: int = 2,
+                    boundaries=(("reflecting",) * 2,) * 2) -> dict:
+    """A two-dimensional Riemann problem of the Euler equations on [0, 1]^2 at ``time``,
+    solved by :func:`euler_finite_volumes` on ``cells`` x ``cells`` cells.
+
+    Parameters
+    ----------
+    states : dict
+        (rho, u_1, u_2, p) of each quadrant about (1/2, 1/2), keyed ``upper_right``,
+        ``upper_left``, ``lower_left``, ``lower_right`` (as :data:`LISKA_WENDROFF_4`).
+    cells : int
+        Cells per axis, even (the quadrants meet at a face).
+    time : float
+        The time of the returned fields, >= 0.
+    dimension : int
+        d of the velocities: gamma = (d + 2)/d, and T = p / rho per velocity dimension.
+    boundaries : sequence of (str, str)
+        The ends of each axis, as in :func:`euler_finite_volumes` (reflecting walls by
+        default).
+
+    Returns
+    -------
+    dict
+        ``rho``, ``u1``, ``u2``, ``T``, each (cells, cells) indexed (x, y).
+    """
+    owner = "euler_quadrants"
+    if isinstance(cells, bool) or not isinstance(cells, int) or cells < 2 or cells % 2:
+        check.reject(owner, "cells", cells, "must be an even integer >= 2")
+    blocks = {"upper_right": (slice(cells // 2, None), slice(cells // 2, None)),
+              "upper_left": (slice(None, cells // 2), slice(cells // 2, None)),
+              "lower_left": (slice(None, cells // 2), slice(None, cells // 2)),
+              "lower_right": (slice(cells // 2, None), slice(None, cells // 2))}
+    if not isinstance(states, dict) or set(states) != set(blocks):
+        check.reject(owner, "states", states, f"must map each of {sorted(blocks)} to "
+                     "(rho, u_1, u_2, p)")
+    rho = numpy.empty((cells, cells))
+    u = numpy.empty((2, cells, cells))
+    temperature = numpy.empty((cells, cells))
+    for name, where in blocks.items():
+        r, u1, u2, p = (float(value) for value in states[name])
+        rho[where], u[0][where], u[1][where], temperature[where] = r, u1, u2, p / r
+    solution = euler_finite_volumes(rho, u, temperature, (1.0 / cells, 1.0 / cells), [time],
+                                    boundaries=boundaries, dimension=dimension)
+    return {"rho": solution["density"][-1], "u1": solution["velocity"][-1][0],
+            "u2": solution["velocity"][-1][1], "T": solution["temperature"][-1]}

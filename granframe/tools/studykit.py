@@ -13,6 +13,7 @@ import sys
 from typing import Callable
 
 import matplotlib
+import numpy
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -204,6 +205,12 @@ def relaxation_fit(times, values, starts, rate_guess: float, bounds,
             return None
         fits.append((float(a), float(rate)))
     return {"steady": fits[0][0], "spread": abs(fits[0][0] - fits[1][0]), "rate": fits[0][1]}
+
+
+def mean_distances(a: dict, b: dict) -> dict:
+    """The mean over the cells of |a - b| for every field of ``a`` (on a uniform mesh of unit
+    length, the L1 distance sum_i dx |a_i - b_i|)."""
+    return {name: float(numpy.abs(numpy.asarray(a[name]) - b[name]).mean()) for name in a}
 
 
 def write_csv(path, rows: list[dict], fields=None) -> None:
