@@ -30,9 +30,12 @@ Then T(t) = T_g(s) / (1 + \kappa a_0 t)^{2/\kappa}: Haff's law, with T_g(s)
 converging to the HCS. For \kappa < 0 that state repels, and such kernels are
 refused.
 
-A space run takes one scale for the whole interval, f(t, x, v) = \omega^d g(s, x, \omega v)
-about a gas at rest along x: the transport becomes \omega^{\kappa - 1} \xi_1 \partial_x g
-(:meth:`Rescaling.transport_time`; :class:`RescaledBoltzmann` with ``transport_axes``).
+A space run takes one scale for the whole interval or rectangle,
+f(t, x, v) = \omega^d g(s, x, \omega v) about a gas at rest along every space axis: the
+transport becomes \omega^{\kappa - 1} \xi \cdot \nabla_x g (:meth:`Rescaling.transport_time`;
+:class:`RescaledBoltzmann` with ``transport_axes``). Its mean velocity is read with the node
+-L of each space axis as its two halves, as the fields read it (a sine's data then have
+u = 0 along those axes to round-off).
 
 References: F. Filbet, T. Rey, "A rescaling velocity method for dissipative kinetic
 equations. Applications to granular media", J. Comput. Phys. 248 (2013) 177-199;
@@ -51,6 +54,7 @@ from granframe.abc import Part
 from granframe.backends import to_host
 from granframe.equations.homogeneous import HomogeneousBoltzmann
 from granframe.model.restitution import is_elastic
+from granframe.velocity.moments import FieldMoments
 
 
 @attrs.frozen
@@ -91,8 +95,8 @@ class Rescaling:
         r"""The time of free transport that ``duration`` of s, from s, stands for in a
         rescaled space run: \int_s^{s + \Delta s} \omega^{\kappa - 1} d\sigma.
 
-        With f(t, x, v) = \omega^d g(s, x, \omega v) (mean velocity 0 along x),
-        v_1 \partial_x f becomes \omega^{\kappa - 1} \xi_1 \partial_x g in s, so the
+        With f(t, x, v) = \omega^d g(s, x, \omega v) (mean velocity 0 along the space axes),
+        v \cdot \nabla_x f becomes \omega^{\kappa - 1} \xi \cdot \nabla_x g in s, so the
         transport of g over [s, s + \Delta s] is that of the unscaled equation over this
         time: \Delta s itself for hard spheres (\kappa = 1), else
         e^{(\kappa - 1) a_0 s} (e^{(\kappa - 1) a_0 \Delta s} - 1) / ((\kappa - 1) a_0).
@@ -321,6 +325,9 @@ class RescaledBoltzmann(HomogeneousBoltzmann):
         degree = check_rescalable(operator.kernel, operator.restitution, 0.0, owner)
         super().__init__(operator, 0.0, knudsen, penalty)
         grid = operator.grid
+        if transport_axes > 1:      # the node -L of every space axis read as its halves
+            self.moments = FieldMoments(grid, 1.0, operator.backend.xp,
+                                        tuple(range(transport_axes)))
         gather = ((lambda part: [part]) if communicator is None
                   else communicator.allgather_object)
         flat = initial.reshape((-1,) + tuple(grid.shape))
@@ -353,11 +360,13 @@ class RescaledBoltzmann(HomogeneousBoltzmann):
             value = float(along[:, axis].sum() / rho.sum())
             if not abs(value) <= DRIFT_TOLERANCE * thermal:
                 name = "u_1" if axis == 0 else f"u_{axis + 1}"
+                along_axes = "x" if transport_axes == 1 else "x and y"
                 check.reject(owner, "initial", f"f0 with mean velocity {name} = {value:.6g}",
-                             f"must have mean velocity 0 along x (to {DRIFT_TOLERANCE:g} of "
-                             f"the thermal speed {thermal:.6g}) in a rescaled space run: the "
-                             "transport of g is then omega^(kappa - 1) xi_1 d_x g; take the "
-                             "frame that moves with the gas")
+                             f"must have mean velocity 0 along {along_axes} (to "
+                             f"{DRIFT_TOLERANCE:g} of the thermal speed {thermal:.6g}) in a "
+                             "rescaled space run: the transport of g is then "
+                             "omega^(kappa - 1) xi . grad_x g; take the frame that moves "
+                             "with the gas")
         return ((0.0,) * transport_axes
                 + tuple(float(m) for m in across[:, transport_axes:].sum(axis=0) / rho.sum()))
 

@@ -409,7 +409,7 @@ class RunDescription:
             check.reject(owner, "space.hierarchy", "a hierarchy", "must be left out of a "
                          "rescaled run: its fluid and relaxation levels have no "
                          "self-similar drift")
-        for side in ("left", "right"):
+        for side in self.space.sides:
             if not self._light["space"][side].scale_free:
                 check.reject(owner, f"space.{side}", getattr(self.space, side).name,
                              "must be a boundary that commutes with the scaling of the "

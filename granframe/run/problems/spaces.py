@@ -483,9 +483,6 @@ class Rectangle(Interval):
             reject("make_problem", "partition_cells", partition_cells, "must be None on a "
                    "rectangle: its blocks are whole store chunks shared as evenly as the "
                    "process grid allows")
-        if d.rescaled:
-            reject("RunDescription", "rescaled", True, "is not available on a rectangle "
-                   "yet; run the cooling gas in physical variables")
         ghost = self.reconstruction.ghost
         chunks = space.blocks(ghost)
         #: the processes along x and y
