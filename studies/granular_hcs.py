@@ -33,6 +33,8 @@ from granframe.run.runner import Simulation
 from granframe.theory.modes import (density_response, heat_critical_wavenumber, heat_mode,
                                     heat_mode_index, longitudinal_matrix, shear_mode)
 from granframe.theory.sonine import reference_frequency
+from granframe.tools.analysis import (cooling_state_rate, heat_and_sound, last_quarter,
+                                      relaxed_rate)
 from granframe.tools.studykit import (draw, finish, json_text, number, numbers,
                                       output_folder, parse_study, print_table, run_study,
                                       save_figure, study_arguments)
@@ -86,57 +88,18 @@ def amplitude_history(ds, length: float, field: str = "velocity"):
                                           axis=1)
 
 
-def last_quarter(s, skip: float):
-    """Where s lies in the last quarter of the window skip <= s <= s[-1]."""
-    return s >= skip + 0.75 * (s[-1] - skip)
-
-
 def measured_rate(ds, length: float, skip: float) -> dict:
     """The rate Gamma of the sine amplitude A of u_2 / sqrt(T) (= that of g) in the
-    hydrodynamic regime, after the kinetic relaxation of the Maxwellian f0.
-
-    Past the first collision times the local rate d ln A / ds approaches Gamma
-    geometrically, so over s >= ``skip`` the least-squares fit is
-
-        ln A(s) = c + Gamma s + b exp(-mu s),
-
-    linear in (c, Gamma, b) for each mu, mu by a bounded scalar search (the relaxation
-    rate, of the order of the collision frequency nu_0). ``late`` is the straight-line
-    slope over the last quarter of the window: it differs from Gamma by what is left of
-    the relaxation there. A straight line over the whole window would carry the
-    relaxation into the rate (+4.7e-4 at e = 0.9, +2.4e-3 at e = 0.5 over 1 <= s <= 4).
-    """
-    import scipy.optimize
-
-    s, amplitude = amplitude_history(ds, length)
-    keep = s >= skip
-    s, log_a = s[keep], numpy.log(amplitude[keep])
-
-    def fit(mu):
-        basis = numpy.stack([numpy.ones_like(s), s, numpy.exp(-mu * (s - s[0]))], axis=1)
-        coefficients, *_ = numpy.linalg.lstsq(basis, log_a, rcond=None)
-        return coefficients, float(numpy.sum((basis @ coefficients - log_a) ** 2))
-
-    mu = scipy.optimize.minimize_scalar(lambda m: fit(m)[1], bounds=(0.05, 20.0),
-                                        method="bounded",
-                                        options={"xatol": 1e-8}).x
-    late = last_quarter(s, skip)
-    return {"rate": float(fit(mu)[0][1]),
-            "late": float(numpy.polyfit(s[late], log_a[late], 1)[0]),
-            "relaxation": float(mu)}
+    hydrodynamic regime, after the kinetic relaxation of the Maxwellian f0
+    (:func:`granframe.tools.analysis.relaxed_rate`)."""
+    return relaxed_rate(*amplitude_history(ds, length), skip)
 
 
 def cooling_rate(ds, skip: float) -> float:
-    """zeta_g / 2, half the collisional cooling rate of g in the cooling state the run
-    reaches (not a_0, the rescaling rate, which is that of the Maxwellian f0): with
-    T the mass-weighted mean temperature, d ln T / ds = 2 a_0 - zeta_g, fitted by a straight
-    line over the last quarter of s >= ``skip``."""
-    s = ds.time.values
-    density = ds.density.values
-    temperature = (density * ds.temperature.values).sum(axis=1) / density.sum(axis=1)
-    window = last_quarter(s, skip)
-    slope = numpy.polyfit(s[window], numpy.log(temperature[window]), 1)[0]
-    return float(ds.attrs["rescaling_rate"] - slope / 2)
+    """zeta_g / 2 of the cooling state the run reaches
+    (:func:`granframe.tools.analysis.cooling_state_rate`)."""
+    return cooling_state_rate(ds.time.values, ds.density.values, ds.temperature.values,
+                              ds.attrs["rescaling_rate"], skip)
 
 
 def density_comparison(ds, e: float, length: float, knudsen: float = 1.0) -> dict:
@@ -149,40 +112,6 @@ def density_comparison(ds, e: float, length: float, knudsen: float = 1.0) -> dic
     predicted = density_response(e, knudsen, temperature, 2 * math.pi / length, s)
     return {"A(end)/A(0)": float(measured[-1]), "NS A(end)/A(0)": float(predicted[-1]),
             "max difference": float(numpy.abs(measured - predicted).max())}
-
-
-def heat_and_sound(s, amplitude, sound: complex, skip: float) -> dict:
-    r"""The heat mode's rate from a density amplitude that also carries the sound pair.
-
-    A run started on the Navier-Stokes heat mode as a local Maxwellian has no heat flux at
-    s = 0; while the flux builds up over the first collision times it excites the sound
-    pair a little (a per cent of the amplitude), which is damped only over ~10 s, so the
-    slope of ln A is the heat mode's only after several runs' lengths. Over s >= ``skip``
-    the least-squares fit
-
-        A(s) = a exp(lambda s) + exp(sigma s) (b cos(omega s) + c sin(omega s)),
-
-    with sigma + i omega = ``sound`` (the Navier-Stokes sound pair, per unit s), is linear
-    in (a, b, c) for each lambda, and lambda is found by a bounded scalar search. Returns
-    ``rate`` (lambda), ``sound/heat`` (|b + i c|/a) and ``rms`` (the fit's residual over
-    the mean amplitude)."""
-    import scipy.optimize
-
-    keep = numpy.asarray(s) >= skip
-    s, amplitude = numpy.asarray(s)[keep], numpy.asarray(amplitude)[keep]
-    damping = numpy.exp(sound.real * s)
-
-    def fit(rate):
-        basis = numpy.stack([numpy.exp(rate * s), damping * numpy.cos(sound.imag * s),
-                             damping * numpy.sin(sound.imag * s)], axis=1)
-        coefficients, *_ = numpy.linalg.lstsq(basis, amplitude, rcond=None)
-        return coefficients, float(numpy.sum((basis @ coefficients - amplitude) ** 2))
-
-    rate = scipy.optimize.minimize_scalar(lambda r: fit(r)[1], bounds=(-1.0, 1.0),
-                                          method="bounded", options={"xatol": 1e-10}).x
-    (a, b, c), residual = fit(rate)
-    return {"rate": float(rate), "sound/heat": float(math.hypot(b, c) / abs(a)),
-            "rms": math.sqrt(residual / s.size) / float(numpy.mean(numpy.abs(amplitude)))}
 
 
 def heat_projection(ds, e: float, length: float, k_star: float, zeta: float):

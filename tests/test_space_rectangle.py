@@ -259,3 +259,63 @@ def test_advise_refuses_a_rectangle_by_name(tmp_path, capsys):
         'name = "maxwellian"', "[space]", "cells = [8, 8]", ""]))
     assert main(["advise", str(scene)]) == 2
     assert "parameter 'space.cells' = [8, 8] is invalid" in capsys.readouterr().err
+
+
+def test_plane_modes_are_the_sinusoidal_modes_and_the_heat_mode_of_the_line():
+    """granframe.theory.modes:plane_modes_maxwellian as a space function: one transverse mode
+    on the wave vector [1, 1] has the cell averages of the sinusoidal mode (component 2) to
+    round-off; the heat mode's three parts along x are
+    :func:`~granframe.theory.modes.longitudinal_maxwellian` (3D velocities) in every row;
+    two transverse modes, along x and along y, are a lattice of vortices whose velocity is
+    the sum of the two; bad modes are refused by name."""
+    import math
+    import re
+
+    import granframe as gf
+    from granframe.theory.modes import plane_modes_maxwellian
+
+    grid = gf.VelocityGrid(2, 16, 3.5)
+    edges = (numpy.linspace(0, 1, 9), numpy.linspace(0, 1, 9))
+    name = "granframe.theory.modes:plane_modes_maxwellian"
+    shear = SinusoidalMode(field="velocity", amplitude=0.2, mode=[1, 1], component=2)
+    plane = SpaceFunction(function=name, params={"lengths": [1.0, 1.0], "modes": [
+        {"field": "transverse", "wave": [1, 1], "amplitude": 0.2}]})
+    f_mode, _ = shear.sample_box(grid, edges)
+    f_plane, _ = plane.sample_box(grid, edges)
+    numpy.testing.assert_allclose(f_plane, f_mode, rtol=0, atol=1e-14 * f_mode.max())
+
+    grid3 = gf.VelocityGrid(3, 8, 4.0)
+    k, (r, w, theta) = 2 * math.pi / 3.0, (0.7, -0.4, 0.5)
+    heat = SpaceFunction(function=name, params={"lengths": [3.0, 1.0], "modes": [
+        {"field": "density", "wave": [1, 0], "amplitude": 0.1 * r},
+        {"field": "longitudinal", "wave": [1, 0], "amplitude": 0.1 * w,
+         "phase": math.pi / 2},
+        {"field": "temperature", "wave": [1, 0], "amplitude": 0.1 * theta}]})
+    line = SpaceFunction(function="granframe.theory.modes:longitudinal_maxwellian",
+                         params={"k": k, "amplitude": 0.1, "density": r, "velocity": w,
+                                 "temperature": theta})
+    x_edges = numpy.linspace(0, 3, 7)
+    f_heat, _ = heat.sample_box(grid3, (x_edges, numpy.linspace(0, 1, 3)))
+    f_line, _ = line.sample_cells(grid3, x_edges)
+    for row in range(2):
+        numpy.testing.assert_allclose(f_heat[:, row], f_line, rtol=0, atol=1e-14 * f_line.max())
+
+    x, y = numpy.meshgrid(numpy.linspace(0, 1, 5), numpy.linspace(0, 1, 5), indexing="ij")
+    vortices = [{"field": "transverse", "wave": [1, 0], "amplitude": 0.1},
+                {"field": "transverse", "wave": [0, 1], "amplitude": 0.1}]
+    v = grid.points()
+    f = plane_modes_maxwellian(x[..., None, None], y[..., None, None], v[:, None], v[None],
+                               lengths=[1.0, 1.0], modes=vortices)
+    u1 = (f * v[:, None]).sum(axis=(-2, -1)) / f.sum(axis=(-2, -1))
+    u2 = (f * v[None]).sum(axis=(-2, -1)) / f.sum(axis=(-2, -1))
+    numpy.testing.assert_allclose(u1, -0.1 * numpy.sin(2 * math.pi * y), atol=1e-6)
+    numpy.testing.assert_allclose(u2, 0.1 * numpy.sin(2 * math.pi * x), atol=1e-6)
+    for modes, bad in (([{"field": "shear", "wave": [1, 0], "amplitude": 0.1}], "[0].field"),
+                       ([{"field": "density", "wave": [0, 0], "amplitude": 0.1}], "[0].wave"),
+                       ([{"field": "density", "wave": [1.5, 0], "amplitude": 0.1}],
+                        "[0].wave"),
+                       ([{"field": "density", "wave": [1, 0], "amplitude": "big"}],
+                        "[0].amplitude"),
+                       ([], "")):
+        with pytest.raises(ValueError, match=f"parameter 'modes{re.escape(bad)}'"):
+            plane_modes_maxwellian(0.5, 0.5, v, v, lengths=[1.0, 1.0], modes=modes)

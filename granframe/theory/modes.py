@@ -347,3 +347,92 @@ def longitudinal_maxwellian(x, v1, v2, v3, k: float, amplitude: float, density: 
     t = 1.0 + amplitude * temperature * numpy.sin(phase)
     return (rho / (2.0 * math.pi * t) ** 1.5
             * numpy.exp(-((v1 - u1) ** 2 + v2 ** 2 + v3 ** 2) / (2.0 * t)))
+
+
+#: the fields a plane mode of :func:`plane_modes_maxwellian` perturbs
+PLANE_MODE_FIELDS = ("density", "temperature", "longitudinal", "transverse")
+
+
+def _plane_modes(modes, lengths) -> list:
+    """``modes`` checked: (field, K_x, K_y, amplitude, phase) of each, K in radians per
+    unit length."""
+    owner = "plane_modes_maxwellian"
+    try:
+        lx, ly = (float(value) for value in lengths)
+    except (TypeError, ValueError):
+        lx = ly = math.nan
+    if not (0.0 < lx < math.inf and 0.0 < ly < math.inf):
+        check.reject(owner, "lengths", lengths, "must be [L_x, L_y], two finite lengths > 0")
+    if isinstance(modes, dict) or not isinstance(modes, (list, tuple)) or not modes:
+        check.reject(owner, "modes", modes, "must be a list of one or more modes, each a "
+                     "table {field, wave = [k_x, k_y], amplitude[, phase]}")
+    checked = []
+    for index, mode in enumerate(modes):
+        name = f"modes[{index}]"
+        if not isinstance(mode, dict) or set(mode) - {"field", "wave", "amplitude", "phase"}:
+            check.reject(owner, name, mode, "must be a table {field, wave = [k_x, k_y], "
+                         "amplitude[, phase]}")
+        if mode.get("field") not in PLANE_MODE_FIELDS:
+            check.reject(owner, f"{name}.field", mode.get("field"),
+                         f"must be one of {list(PLANE_MODE_FIELDS)}")
+        wave = mode.get("wave")
+        if (not isinstance(wave, (list, tuple)) or len(wave) != 2
+                or not all(isinstance(k, int) and not isinstance(k, bool) for k in wave)
+                or wave[0] == wave[1] == 0):
+            check.reject(owner, f"{name}.wave", wave, "must be [k_x, k_y], integers (periods "
+                         "on L_x and L_y), not both 0")
+        values = []
+        for key, default in (("amplitude", None), ("phase", 0.0)):
+            value = mode.get(key, default)
+            if not check.is_real(value) or not math.isfinite(float(value)):
+                check.reject(owner, f"{name}.{key}", value, "must be a finite real number")
+            values.append(float(value))
+        checked.append((mode["field"], 2 * math.pi * wave[0] / lx, 2 * math.pi * wave[1] / ly,
+                        *values))
+    return checked
+
+
+def plane_modes_maxwellian(x, y, v1, v2, v3=None, *, lengths, modes):
+    r"""The local Maxwellian of plane modes about rho = T = 1, u = 0, on a rectangle
+    [0, L_x] x [0, L_y] (2D velocities, or 3D with ``v3``):
+
+        rho = 1 + sum_density A sin(phi),   T = 1 + sum_temperature A sin(phi),
+        u = sum_longitudinal A sin(phi) K/|K| + sum_transverse A sin(phi) K_perp/|K|,
+        phi = K . x + phase,   K = 2 pi (k_x / L_x, k_y / L_y),   K_perp = (-K_y, K_x),
+        f = rho (2 pi T)^{-d/2} exp(-|v - u|^2 / (2 T)),
+
+    the sums over the ``modes`` of each field. One transverse mode is a shear (vortex)
+    mode of the cooling state on a wave vector in any direction; transverse modes along
+    x and along y together make a lattice of vortices; the heat mode of
+    :func:`heat_mode`, (r, w, theta), is a density mode A r, a longitudinal mode A w of
+    phase pi/2 (u = A w cos(K . x) K/|K|, as :func:`longitudinal_maxwellian`) and a
+    temperature mode A theta.
+
+    Parameters
+    ----------
+    x, y, v1, v2, v3 : array_like
+        Positions and velocity components, broadcast against each other (the call of a
+        ``space_function`` initial condition on a rectangle).
+    lengths : sequence of float
+        [L_x, L_y].
+    modes : list of dict
+        Each {``field``: one of :data:`PLANE_MODE_FIELDS`, ``wave``: [k_x, k_y] (integers:
+        periods on L_x and L_y), ``amplitude``: A, ``phase``: optional, radians}.
+    """
+    rho, temperature = 1.0, 1.0
+    u = [0.0, 0.0]
+    for field, kx, ky, amplitude, phase in _plane_modes(modes, lengths):
+        wave = amplitude * numpy.sin(kx * numpy.asarray(x) + ky * numpy.asarray(y) + phase)
+        norm = math.hypot(kx, ky)
+        if field == "density":
+            rho = rho + wave
+        elif field == "temperature":
+            temperature = temperature + wave
+        else:
+            direction = (kx / norm, ky / norm) if field == "longitudinal" else (-ky / norm,
+                                                                                 kx / norm)
+            u = [u[0] + wave * direction[0], u[1] + wave * direction[1]]
+    squared = (v1 - u[0]) ** 2 + (v2 - u[1]) ** 2 + (0.0 if v3 is None else v3 ** 2)
+    d = 2 if v3 is None else 3
+    return rho / (2.0 * math.pi * temperature) ** (d / 2) * numpy.exp(-squared
+                                                                         / (2.0 * temperature))

@@ -1,7 +1,9 @@
 """Quantities the studies extract from runs: relative entropy, decay rates, tail exponents,
-the energy budget of a space run with walls."""
+the energy budget of a space run with walls, the rates of the modes of the cooling state."""
 
 from __future__ import annotations
+
+import math
 
 import numpy
 
@@ -86,3 +88,99 @@ def energy_balance(ds, operator, knudsen: float, window: float = 0.2,
             "dissipation": dissipation, "dEdt": dEdt,
             "mismatch": (heat + dissipation) / heat, "unsteadiness": dEdt / heat,
             "residual": (heat + dissipation - dEdt) / heat}
+
+
+def last_quarter(s, skip: float):
+    """Where s lies in the last quarter of the window skip <= s <= s[-1]."""
+    s = numpy.asarray(s)
+    return s >= skip + 0.75 * (s[-1] - skip)
+
+
+def relaxed_rate(s, amplitude, skip: float) -> dict:
+    """The rate Gamma of a mode's amplitude A(s) > 0 in the hydrodynamic regime, after the
+    kinetic relaxation of its initial data.
+
+    Past the first collision times the local rate d ln A / ds approaches Gamma
+    geometrically, so over s >= ``skip`` the least-squares fit is
+
+        ln A(s) = c + Gamma s + b exp(-mu s),
+
+    linear in (c, Gamma, b) for each mu, mu by a bounded scalar search in [0.05, 20] (the
+    relaxation rate, of the order of the collision frequency). ``late`` is the straight-line
+    slope over the last quarter of the window: it differs from Gamma by what is left of
+    the relaxation there. A straight line over the whole window would carry the
+    relaxation into the rate (+4.7e-4 at e = 0.9, +2.4e-3 at e = 0.5 over 1 <= s <= 4, for
+    the shear mode of the cooling state, docs/granular.md).
+
+    Returns
+    -------
+    dict
+        ``rate`` (Gamma), ``late`` and ``relaxation`` (mu).
+    """
+    import scipy.optimize
+
+    s, amplitude = numpy.asarray(s, float), numpy.asarray(amplitude, float)
+    keep = s >= skip
+    s, log_a = s[keep], numpy.log(amplitude[keep])
+
+    def fit(mu):
+        basis = numpy.stack([numpy.ones_like(s), s, numpy.exp(-mu * (s - s[0]))], axis=1)
+        coefficients, *_ = numpy.linalg.lstsq(basis, log_a, rcond=None)
+        return coefficients, float(numpy.sum((basis @ coefficients - log_a) ** 2))
+
+    mu = scipy.optimize.minimize_scalar(lambda m: fit(m)[1], bounds=(0.05, 20.0),
+                                        method="bounded",
+                                        options={"xatol": 1e-8}).x
+    late = last_quarter(s, skip)
+    return {"rate": float(fit(mu)[0][1]),
+            "late": float(numpy.polyfit(s[late], log_a[late], 1)[0]),
+            "relaxation": float(mu)}
+
+
+def cooling_state_rate(s, density, temperature, rescaling_rate: float, skip: float) -> float:
+    """zeta_g / 2, half the collisional cooling rate of g in the cooling state a rescaled
+    run reaches (not a_0, the rescaling rate, which is that of the Maxwellian f0): with
+    T the mass-weighted mean temperature over the cells (``density`` and ``temperature``:
+    records x cells of any shape), d ln T / ds = 2 a_0 - zeta_g, fitted by a straight line
+    over the last quarter of s >= ``skip``."""
+    s = numpy.asarray(s, float)
+    density = numpy.asarray(density, float).reshape(len(s), -1)
+    temperature = numpy.asarray(temperature, float).reshape(len(s), -1)
+    mean = (density * temperature).sum(axis=1) / density.sum(axis=1)
+    window = last_quarter(s, skip)
+    slope = numpy.polyfit(s[window], numpy.log(mean[window]), 1)[0]
+    return float(rescaling_rate - slope / 2)
+
+
+def heat_and_sound(s, amplitude, sound: complex, skip: float) -> dict:
+    r"""The heat mode's rate from a density amplitude that also carries the sound pair.
+
+    A run started on the Navier-Stokes heat mode as a local Maxwellian has no heat flux at
+    s = 0; while the flux builds up over the first collision times it excites the sound
+    pair a little (a per cent of the amplitude), which is damped only over ~10 s, so the
+    slope of ln A is the heat mode's only after several runs' lengths. Over s >= ``skip``
+    the least-squares fit
+
+        A(s) = a exp(lambda s) + exp(sigma s) (b cos(omega s) + c sin(omega s)),
+
+    with sigma + i omega = ``sound`` (the Navier-Stokes sound pair, per unit s), is linear
+    in (a, b, c) for each lambda, and lambda is found by a bounded scalar search. Returns
+    ``rate`` (lambda), ``sound/heat`` (|b + i c|/a) and ``rms`` (the fit's residual over
+    the mean amplitude)."""
+    import scipy.optimize
+
+    keep = numpy.asarray(s) >= skip
+    s, amplitude = numpy.asarray(s)[keep], numpy.asarray(amplitude)[keep]
+    damping = numpy.exp(sound.real * s)
+
+    def fit(rate):
+        basis = numpy.stack([numpy.exp(rate * s), damping * numpy.cos(sound.imag * s),
+                             damping * numpy.sin(sound.imag * s)], axis=1)
+        coefficients, *_ = numpy.linalg.lstsq(basis, amplitude, rcond=None)
+        return coefficients, float(numpy.sum((basis @ coefficients - amplitude) ** 2))
+
+    rate = scipy.optimize.minimize_scalar(lambda r: fit(r)[1], bounds=(-1.0, 1.0),
+                                          method="bounded", options={"xatol": 1e-10}).x
+    (a, b, c), residual = fit(rate)
+    return {"rate": float(rate), "sound/heat": float(math.hypot(b, c) / abs(a)),
+            "rms": math.sqrt(residual / s.size) / float(numpy.mean(numpy.abs(amplitude)))}
