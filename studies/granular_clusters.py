@@ -29,6 +29,7 @@ import numpy
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import HealthError, Simulation
+from granframe.tools.analysis import cluster_monitors
 from granframe.tools.studykit import (draw, finish, json_text, number, output_folder,
                                       parse_study, print_table, run_study, save_figure,
                                       study_arguments)
@@ -50,24 +51,6 @@ def description(e: float, length: float, cells: int, n_modes: int, support: floa
         final_time=final, rescaled=True, conservative=True, knudsen=1.0,
         output={"snapshot_interval": min(2.0, final)},
         space={"cells": cells, "length": length, "reconstruction": "weno5"})
-
-
-def monitors(ds) -> dict:
-    """What the run's monitors say: the largest mass drift, the smallest f, the largest
-    negative mass share, the density contrast rho_max/rho_min and the coldest cell's
-    T/<T> at the end, and the step at which the accuracy monitor first flagged (if it did)."""
-    mass = ds.mass.values
-    density = ds.density.values
-    temperature = ds.temperature.values
-    return {"s": float(ds.time.values[-1]), "steps": int(len(mass) - 1),
-            "mass drift": float(numpy.abs(mass / mass[0] - 1.0).max()),
-            "min f / max f0": float(ds.min_f.values.min()),
-            "negative mass share": float(ds.negative_mass_fraction.values.max()),
-            "rho max/min": float(density[-1].max() / density[-1].min()),
-            "T min/mean": float(temperature[-1].min() / temperature[-1].mean()),
-            "status": ds.attrs.get("progress_status"),
-            "accuracy flagged at s": ds.attrs.get("progress_accuracy_flagged_time"),
-            "accuracy flagged monitor": ds.attrs.get("progress_accuracy_flagged_monitor")}
 
 
 def figure(stores, path) -> None:
@@ -131,7 +114,7 @@ def main(argv=None):
     ds = granframe.open_run(store, time_axis="steps")
     row = {"e": args.restitution, "length": args.length, "cells": args.cells,
            "N": args.n_modes, "S": args.support, "seconds": time.perf_counter() - began,
-           **monitors(ds), "warnings": warnings}
+           **cluster_monitors(ds), "warnings": warnings}
     print_table([row], {key: ".5g" for key, value in row.items() if isinstance(value, float)})
     store.with_suffix(".json").write_text(json_text(row, indent=1))
     print(f"table: {store.with_suffix('.json')}")

@@ -24,6 +24,7 @@ from granframe.theory.euler import granular_euler_piston, piston_speed, rankine_
 from granframe.theory.modes import (heat_critical_wavenumber, heat_mode, longitudinal_matrix,
                                     shear_mode)
 from granframe.theory.sonine import reference_frequency
+from granframe.tools.analysis import cluster_monitors
 from granframe.tools.studykit import finish, json_text
 
 STUDIES = pathlib.Path(__file__).parent.parent / "studies"
@@ -459,7 +460,7 @@ def test_a_quick_cluster_run_reports_its_monitors(tmp_path):
     d = CLUSTERS.description(0.8, 40.0, 16, 24, 4.0, 1.0, 0.3)
     store = tmp_path / "clusters.zarr"
     Simulation(d).run(store, progress=False)
-    row = CLUSTERS.monitors(granframe.open_run(store, time_axis="steps"))
+    row = cluster_monitors(granframe.open_run(store, time_axis="steps"))
     assert row["mass drift"] < 1e-13
     assert row["rho max/min"] > 1.0 + 1e-6
     assert row["status"] == "finished"

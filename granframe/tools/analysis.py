@@ -184,3 +184,23 @@ def heat_and_sound(s, amplitude, sound: complex, skip: float) -> dict:
     (a, b, c), residual = fit(rate)
     return {"rate": float(rate), "sound/heat": float(math.hypot(b, c) / abs(a)),
             "rms": math.sqrt(residual / s.size) / float(numpy.mean(numpy.abs(amplitude)))}
+
+
+def cluster_monitors(ds) -> dict:
+    """What the run's monitors say: the largest mass drift, the smallest f, the largest
+    negative mass share, the density contrast rho_max/rho_min and the coldest cell's
+    T/<T> (over all cells, on a line or a rectangle) at the end, and the step at which the
+    accuracy monitor first flagged (if it did), from the dataset ``ds`` of a run
+    (:func:`granframe.open_run` with ``time_axis="steps"``)."""
+    mass = ds.mass.values
+    density = ds.density.values
+    temperature = ds.temperature.values
+    return {"s": float(ds.time.values[-1]), "steps": int(len(mass) - 1),
+            "mass drift": float(numpy.abs(mass / mass[0] - 1.0).max()),
+            "min f / max f0": float(ds.min_f.values.min()),
+            "negative mass share": float(ds.negative_mass_fraction.values.max()),
+            "rho max/min": float(density[-1].max() / density[-1].min()),
+            "T min/mean": float(temperature[-1].min() / temperature[-1].mean()),
+            "status": ds.attrs.get("progress_status"),
+            "accuracy flagged at s": ds.attrs.get("progress_accuracy_flagged_time"),
+            "accuracy flagged monitor": ds.attrs.get("progress_accuracy_flagged_monitor")}
