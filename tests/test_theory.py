@@ -14,7 +14,8 @@ from granframe.theory.cooling import maxwellian_cooling_rate, relative_speed_ave
 from granframe.theory.euler import (LISKA_WENDROFF_4, euler_finite_volumes, euler_quadrants,
                                     euler_riemann, euler_riemann_cell_averages,
                                     euler_riemann_star, granular_euler_piston, piston_speed,
-                                    rankine_hugoniot)
+                                    plane_states_maxwellian, rankine_hugoniot,
+                                    shock_states)
 from granframe.theory.modes import (cooling_rate_burnett, density_response,
                                     heat_critical_wavenumber, heat_mode, heat_mode_index,
                                     longitudinal_matrix, longitudinal_maxwellian, shear_mode)
@@ -663,6 +664,53 @@ def test_the_quadrants_and_the_block_average_refuse_bad_cells_by_name():
         euler_quadrants({"upper_right": (1, 0, 0, 1)}, 16, 0.1)
     with pytest.raises(ValueError, match="'cells' = 3"):
         conserved_block_average({"rho": numpy.ones((8, 8))}, 3, 2)
+
+
+@pytest.mark.parametrize("gamma", [2.0, 5.0 / 3.0])
+def test_the_shock_states_are_the_piston_problem_seen_from_the_gas_ahead(gamma):
+    """A shock of Mach M into gas at rest is the piston problem's (gas at -U into a wall at
+    rest, :func:`rankine_hugoniot`) in the frame of the gas ahead: the same rho_2, T_2 and
+    M, and the shock speed s = M c_1 is the piston problem's plus U; M = 1 is a sound wave
+    (no jump)."""
+    sound = shock_states(1.0, gamma, density=1.3, temperature=0.7)
+    assert (sound["rho_2"], sound["T_2"], sound["velocity"]) == pytest.approx((1.3, 0.7, 0.0))
+    for mach in (1.2, 1.5, 3.0):
+        state = shock_states(mach, gamma, density=1.3, temperature=0.7)
+        piston = rankine_hugoniot(state["velocity"], gamma, density=1.3, temperature=0.7)
+        assert state["rho_2"] == pytest.approx(piston["rho_2"], rel=1e-12)
+        assert state["T_2"] == pytest.approx(piston["T_2"], rel=1e-12)
+        assert piston["mach"] == pytest.approx(mach, rel=1e-12)
+        assert state["shock_speed"] == pytest.approx(piston["shock_speed"] + state["velocity"],
+                                                     rel=1e-12, abs=1e-12)
+    with pytest.raises(ValueError, match="'mach' = 0.5"):
+        shock_states(0.5, gamma)
+
+
+def test_the_plane_states_are_their_maxwellians_on_either_side_of_the_line():
+    """plane_states_maxwellian: each point gets the Maxwellian of its side of n . x = c
+    (n normalised, the line itself on the high side), with 2D and 3D velocities; bad
+    states and normals are refused by name."""
+    v = numpy.linspace(-4, 4, 17)
+    low, high = (1.0, 0.0, 0.0, 1.0), (1.6, -0.5, -0.3, 1.7)
+    x = numpy.array([0.1, 0.5, 0.9])[:, None, None]
+    y = numpy.array([0.2, 0.6, 0.6])[:, None, None]
+    f = plane_states_maxwellian(x, y, v[:, None], v[None], normal=[3.0, 4.0], offset=0.5,
+                                low=low, high=high)
+    for i, state in enumerate((low, high, high)):      # 0.38, 0.66, 0.9: low, high, high
+        rho, u1, u2, t = state
+        expected = rho / (2 * math.pi * t) * numpy.exp(
+            -((v[:, None] - u1) ** 2 + (v[None] - u2) ** 2) / (2 * t))
+        numpy.testing.assert_allclose(f[i], expected, rtol=1e-14)
+    on_line = plane_states_maxwellian(0.3, 0.4, 0.0, 0.0, 0.0, normal=[0.6, 0.8],
+                                      offset=0.5, low=low, high=high)
+    assert on_line == pytest.approx(1.6 / (2 * math.pi * 1.7) ** 1.5
+                                    * math.exp(-(0.25 + 0.09) / 3.4), rel=1e-14)
+    for change, name in (({"normal": [0.0, 0.0]}, "normal"),
+                         ({"low": [1.0, 0.0, 0.0, -1.0]}, "low"),
+                         ({"high": [1.0, 0.0, 0.0]}, "high")):
+        options = {"normal": [1.0, 0.0], "offset": 0.5, "low": low, "high": high, **change}
+        with pytest.raises(ValueError, match=f"parameter '{name}'"):
+            plane_states_maxwellian(0.1, 0.1, v, v, **options)
 
 
 def test_the_granular_piston_solver_is_the_one_axis_case_of_the_euler_solver():

@@ -682,3 +682,68 @@ def euler_quadrants(states, cells: int, time: float, *, dimension: int = 2,
                                     boundaries=boundaries, dimension=dimension)
     return {"rho": solution["density"][-1], "u1": solution["velocity"][-1][0],
             "u2": solution["velocity"][-1][1], "T": solution["temperature"][-1]}
+
+
+def shock_states(mach: float, gamma: float, density: float = 1.0,
+                 temperature: float = 1.0) -> dict:
+    r"""The state behind a shock of Mach number M moving into gas (rho_1, T_1) at rest
+    (Landau & Lifshitz, Fluid Mechanics, section 89):
+
+        rho_2/rho_1 = (gamma+1) M^2 / ((gamma-1) M^2 + 2),
+        p_2/p_1 = 1 + 2 gamma (M^2 - 1)/(gamma + 1),
+
+    the gas behind moving at U = 2 c_1 (M - 1/M)/(gamma + 1) (:func:`piston_speed`) along
+    the shock's motion, which is at the speed s = M c_1, c_1 = sqrt(gamma T_1).
+
+    Returns
+    -------
+    dict
+        ``rho_2``, ``T_2``, ``velocity`` (U) and ``shock_speed`` (s).
+    """
+    owner = "shock_states"
+    if not check.is_real(mach) or not 1.0 <= float(mach) < math.inf:
+        check.reject(owner, "mach", mach, "must be a finite real number >= 1")
+    _gamma_argument(owner, gamma)
+    m2 = float(mach) ** 2
+    rho2 = density * (gamma + 1.0) * m2 / ((gamma - 1.0) * m2 + 2.0)
+    p2 = density * temperature * (1.0 + 2.0 * gamma * (m2 - 1.0) / (gamma + 1.0))
+    return {"rho_2": rho2, "T_2": p2 / rho2,
+            "velocity": piston_speed(float(mach), gamma, temperature),
+            "shock_speed": float(mach) * math.sqrt(gamma * temperature)}
+
+
+def plane_states_maxwellian(x, y, v1, v2, v3=None, *, normal, offset, low, high):
+    r"""Two Maxwellians on either side of the line n . x = ``offset`` of a rectangle (2D
+    velocities, or 3D with ``v3``, the third component at rest):
+
+        f = rho (2 pi T)^{-d/2} exp(-|v - u|^2 / (2 T)),
+        (rho, u_1, u_2, T) = ``low`` where n . x < offset, ``high`` where n . x >= offset,
+
+    n = ``normal`` / |``normal``|: the data of a plane shock or contact at any angle (a
+    ``space_function`` initial condition on a rectangle, its cells averaged by the tensor
+    Gauss-Legendre rule).
+    """
+    owner = "plane_states_maxwellian"
+    try:
+        n = numpy.array([float(a) for a in normal])
+    except (TypeError, ValueError):
+        n = numpy.array([math.nan])
+    if n.shape != (2,) or not numpy.isfinite(n).all() or not numpy.hypot(*n) > 0:
+        check.reject(owner, "normal", normal, "must be [n_x, n_y], finite and not zero")
+    n = n / numpy.hypot(*n)
+    states = []
+    for name, state in (("low", low), ("high", high)):
+        try:
+            values = [float(a) for a in state]
+        except (TypeError, ValueError):
+            values = []
+        if len(values) != 4 or not all(math.isfinite(a) for a in values) \
+                or values[0] <= 0 or values[3] <= 0:
+            check.reject(owner, name, state, "must be [rho, u_1, u_2, T], finite, rho > 0 "
+                         "and T > 0")
+        states.append(values)
+    side = n[0] * numpy.asarray(x) + n[1] * numpy.asarray(y) >= float(offset)
+    rho, u1, u2, t = (numpy.where(side, b, a) for a, b in zip(*states))
+    squared = (v1 - u1) ** 2 + (v2 - u2) ** 2 + (0.0 if v3 is None else v3 ** 2)
+    d = 2 if v3 is None else 3
+    return rho / (2.0 * math.pi * t) ** (d / 2) * numpy.exp(-squared / (2.0 * t))
