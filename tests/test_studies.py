@@ -8,6 +8,7 @@ import pathlib
 import subprocess
 import sys
 
+import numpy
 import pytest
 
 from granframe.tools.cli import main
@@ -200,6 +201,12 @@ def test_heated_state_sweep_quick_runs_on_one_and_two_workers(tmp_path):
      "argument --thresholds: 'abc' is not allowed: must be a number in (0, inf]"),
     ("hierarchy.py", ["--scenes", "sod_1e-3,bogus"],
      "argument --scenes: 'bogus' not allowed: choose from sod_1e-3, sod_1e-2, walls"),
+    ("granular_hcs_2d.py", ["--cells", "6"],
+     "--cells [6]: WENO5 needs at least 7 cells per side"),
+    ("cavity_2d.py", ["--restitution", "1.5"],
+     "--restitution [1.5]: each e must be in (0, 1]"),
+    ("shock_reflection_2d.py", ["--cells", "16", "--reference", "100"],
+     "--reference 100 must be a multiple of twice every --cells value ([16])"),
 ])
 def test_study_commands_refuse_bad_options_by_name_without_a_traceback(tmp_path, study, argv,
                                                                       message):
@@ -210,3 +217,41 @@ def test_study_commands_refuse_bad_options_by_name_without_a_traceback(tmp_path,
     done = subprocess.run(command, capture_output=True, text=True, timeout=300)
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert message in done.stderr
+
+
+def test_the_plane_cooling_study_measures_what_it_names():
+    """granular_hcs_2d's helpers: the structure factor puts a density mode's power in its
+    shell (Parseval: the shell's points hold the variance times C^2); the vorticity of a
+    lattice of vortices u = (-a sin 2 pi y, a sin 2 pi x) is 2 pi a (cos 2 pi x + cos 2 pi y)
+    to the central differences' accuracy; the sine amplitude of a diagonal shear mode is its
+    amplitude."""
+    import math
+
+    import xarray
+
+    study = _load_study("granular_hcs_2d")
+    cells = 16
+    x = (numpy.arange(cells) + 0.5) / cells
+    X, Y = numpy.meshgrid(x, x, indexing="ij")
+    rho = 1.0 + 0.1 * numpy.sin(2 * math.pi * 2 * X)
+    shells = study.structure_factor(rho[None])[0]
+    assert numpy.argmax(shells) == 1 and shells[[0, 2, 3]].max() < 1e-28
+    n = numpy.fft.fftfreq(cells, 1.0 / cells)
+    count = (numpy.rint(numpy.hypot(n[:, None], n[None, :])) == 2).sum()
+    assert shells[1] * count == pytest.approx(((rho - 1.0) ** 2).sum(), rel=1e-12)
+    a = 0.2
+    velocity = numpy.stack([-a * numpy.sin(2 * math.pi * Y), a * numpy.sin(2 * math.pi * X)],
+                           axis=-1)
+    wave = 0.05 * numpy.sin(2 * math.pi * (X + Y))
+    shear = numpy.stack([-wave, wave], axis=-1) / math.sqrt(2.0)
+    ds = xarray.Dataset(
+        {"velocity": (("step_time", "x", "y", "axis"), numpy.stack([velocity, shear])),
+         "temperature": (("step_time", "x", "y"), numpy.ones((2, cells, cells))),
+         "density": (("step_time", "x", "y"), numpy.stack([rho, rho]))},
+        coords={"x": x, "y": x, "time": ("step_time", [0.0, 1.0])})
+    exact = 2 * math.pi * a * (numpy.cos(2 * math.pi * X) + numpy.cos(2 * math.pi * Y))
+    factor = math.sin(2 * math.pi / cells) / (2 * math.pi / cells)     # central differences
+    numpy.testing.assert_allclose(study.vorticity(ds, 0), factor * exact, atol=1e-12)
+    s, amplitude = study.plane_amplitude(ds, "shear")
+    assert amplitude[1] == pytest.approx(0.05, rel=1e-12)
+
