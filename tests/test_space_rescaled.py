@@ -157,6 +157,27 @@ def test_data_along_x_on_a_rectangle_follow_the_interval_run_up_to_their_frames(
     assert numpy.abs(g_rect - g_rect[:, :1]).max() < 1e-15 * g_rect.max()
 
 
+def test_a_rescaled_rectangle_plots_its_physical_fields(tmp_path):
+    """granframe plot draws a rescaled run on a rectangle (it failed on the cell size of
+    the kinetic energy: a length and a count per axis), its energy that of f."""
+    from granframe.tools.cli import main
+    from granframe.tools.plot_data import RunData
+
+    path = tmp_path / "square.zarr"
+    Simulation(_description(final=0.02, dt=0.01, cells=[6, 5], space=PERIODIC_Y,
+                            initial={**SHEAR, "mode": [1, 1]})).run(path, progress=False)
+    run = RunData(granframe.open_run(path))
+    ds = granframe.open_run(path)
+    law = Rescaling.from_store(RunStore.open(path))
+    fields = law.physical_fields(ds.step_time.values, *(
+        ds[name].values for name in ("density", "velocity", "temperature", "pressure_tensor",
+                                     "heat_flux")))
+    energy = fields["energy_density"].sum(axis=(1, 2)) / 30
+    numpy.testing.assert_allclose(run.moments["kinetic_energy"], energy, rtol=1e-14)
+    assert main(["plot", str(path), "--out", str(tmp_path / "plots")]) == 0
+    assert {"plane_0.png", "plane_1.png"} <= {p.name for p in (tmp_path / "plots").iterdir()}
+
+
 def test_a_diagonal_shear_mode_mapped_back_is_the_physical_run_on_a_square():
     """Maxwell molecules (the transport of g slowed by 1/omega), e = 0.8, eps = 0.2: the shear
     mode u = 0.2 sin 2 pi (x + y) (-1, 1)/sqrt 2 on a periodic 8 x 8 square, MUSCL, rescaled to

@@ -5,6 +5,7 @@ every figure carries (:func:`caption`), and the small helpers the figures share.
 
 from __future__ import annotations
 
+import math
 import pathlib
 import re
 import textwrap
@@ -141,8 +142,9 @@ class RunData:
         fields = law.physical_fields(self.step_time, *(
             self.ds[name].values for name in ("density", "velocity", "temperature",
                                               "pressure_tensor", "heat_flux")))
-        energy = fields.pop("energy_density").sum(axis=1) * (self.space.length
-                                                             / self.space.cells)
+        density = fields.pop("energy_density")
+        cell = math.prod(self.space.lengths) / math.prod(self.space.counts)
+        energy = density.reshape(len(density), -1).sum(axis=1) * cell
         self.ds = self.ds.assign({name: (self.ds[name].dims, values)
                                   for name, values in fields.items()})
         self.moments["kinetic_energy"] = energy
