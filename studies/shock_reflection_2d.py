@@ -144,7 +144,7 @@ def main(argv=None) -> int:
             row.update({f"change_{k}": v for k, v in change.items()})
         rows.append(row)
         print(row, flush=True)
-    write_csv(out / "shock_reflection_2d.csv", rows)
+    write_csv(out / "shock_reflection_2d.csv", rows, list(rows[-1]))  # the last has every key
     fields = ("rho", "u1", "u2", "T")
     title = (f"Plane shock, M = {MACH:g} at 30 degrees, reflected from specular walls, "
              f"gamma = 2, eps = {KNUDSEN:g}, t = {FINAL}; reference R = {args.reference} "
