@@ -160,6 +160,7 @@ def _run_one(description, out, args) -> int:
               "before it and the moments up to it.", file=sys.stderr)
         return 3
     except KeyboardInterrupt:
+        quiet_teardown()
         print("\ngranframe: interrupted; " + _interrupted(out), file=sys.stderr)
         return 130
     if result.status == "already finished":      # --rollback found nothing to take back
@@ -235,6 +236,18 @@ def _cost(problem, resumed=None) -> str:
         cost = attrs.evolve(cost, steps=max(cost.steps - done, 0))
         return cost.text() + f" (the {done} steps done are not counted)"
     return cost.text()
+
+
+def quiet_teardown() -> None:
+    """After Ctrl-C the process only exits: objects the interrupt left half built (an event
+    loop interrupted in its constructor) may fail in their destructors at exit, and Python
+    would print those failures as "Exception ignored ... Traceback" and unawaited
+    coroutines as warnings. Silence both for the rest of the process, so that an interrupt
+    ends with granframe's one line and status 130."""
+    import warnings
+
+    sys.unraisablehook = lambda unraisable: None
+    warnings.simplefilter("ignore")
 
 
 def _interrupted(out) -> str:
