@@ -28,10 +28,10 @@ import numpy
 
 import granframe
 from granframe.run.description import RunDescription
-from granframe.run.runner import HealthError, Simulation
+from granframe.run.runner import Simulation
 from granframe.tools.analysis import cluster_monitors
 from granframe.tools.studykit import (draw, finish, json_text, number, output_folder,
-                                      parse_study, print_table, run_study, save_figure,
+                                      parse_study, print_table, run_to_stop, save_figure,
                                       study_arguments)
 
 DT = 0.05
@@ -106,11 +106,7 @@ def main(argv=None):
     run = Simulation(description(args.restitution, args.length, args.cells, args.n_modes,
                                  args.support, args.final, args.amplitude))
     store = out / f"clusters_e{args.restitution:g}_c{args.cells}_n{args.n_modes}.zarr"
-    try:
-        result = run_study(run, store, args, overwrite=True)
-        warnings = [str(w) for w in result.warnings + result.accuracy_warnings]
-    except HealthError as stop:              # the store keeps every step up to the stop
-        warnings = [f"stopped: {stop}"]
+    warnings = run_to_stop(run, store, args)
     ds = granframe.open_run(store, time_axis="steps")
     row = {"e": args.restitution, "length": args.length, "cells": args.cells,
            "N": args.n_modes, "S": args.support, "seconds": time.perf_counter() - began,

@@ -48,13 +48,13 @@ import numpy
 
 import granframe
 from granframe.run.description import RunDescription
-from granframe.run.runner import HealthError, Simulation
+from granframe.run.runner import Simulation
 from granframe.theory.modes import heat_mode, longitudinal_matrix, shear_mode
 from granframe.theory.sonine import reference_frequency
 from granframe.tools.analysis import (cluster_monitors, cooling_state_rate, heat_and_sound,
                                       last_quarter, relaxed_rate)
 from granframe.tools.studykit import (finish, json_text, number, numbers, print_table,
-                                      run_study, save_figure)
+                                      run_study, run_to_stop, save_figure)
 
 DT = 0.05
 MODES = "granframe.theory.modes:plane_modes_maxwellian"
@@ -298,11 +298,7 @@ def run_clusters(args, out: pathlib.Path) -> None:
                                          args.n_modes, args.support, args.final,
                                          args.amplitude))
     store = out / f"clusters_e{args.restitution:g}_c{cells}_n{args.n_modes}.zarr"
-    try:
-        result = run_study(run, store, args, overwrite=True)
-        warnings = [str(w) for w in result.warnings + result.accuracy_warnings]
-    except HealthError as stop:              # the store keeps every step up to the stop
-        warnings = [f"stopped: {stop}"]
+    warnings = run_to_stop(run, store, args)
     ds = granframe.open_run(store, time_axis="steps")
     history = cluster_history(ds)
     marks = sorted({int(i) for i in numpy.linspace(0, len(history["s"]) - 1, 9)})

@@ -135,6 +135,19 @@ def run_study(simulation, store, args, **mode):
     return result
 
 
+def run_to_stop(simulation, store, args) -> list[str]:
+    """:func:`run_study` of a run that may stop itself on a health check (overwriting
+    ``store``): the warnings of its result, or the stop as one warning (the store keeps
+    every step up to it)."""
+    from granframe.run.runner import HealthError
+
+    try:
+        result = run_study(simulation, store, args, overwrite=True)
+    except HealthError as stop:
+        return [f"stopped: {stop}"]
+    return [str(w) for w in result.warnings + result.accuracy_warnings]
+
+
 def print_table(rows: list[dict], columns: dict) -> None:
     """The rows as an aligned text table of ``columns`` (key -> format spec, e.g. ".4g");
     the full rows go to the study's JSON file."""
