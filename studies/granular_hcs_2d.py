@@ -74,18 +74,9 @@ def mode_description(field: str, e: float, k: float, cells: int, n_modes: int,
                   "phase": math.pi / 2},
                  {"field": "temperature", "wave": [1, 1],
                   "amplitude": amplitude * float(theta)}]
-    return RunDescription(
-        title=f"HCS {field} mode on [1, 1], e = {e:g}, k = {k:.4g}, {cells}^2 cells, "
-              f"N = {n_modes}",
-        grid={"dimension": 3, "n_modes": n_modes, "support_radius": support},
-        kernel="hard_spheres", restitution={"name": "constant", "value": e},
-        initial={"name": "space_function", "function": MODES,
-                 "params": {"lengths": [length, length], "modes": modes}},
-        operator={"name": "fast_spectral"}, integrator="rk4", time_step=DT,
-        final_time=final, rescaled=True, conservative=True, knudsen=1.0,
-        output={"snapshot_interval": final},
-        space={"cells": [cells, cells], "length": [length, length],
-               "reconstruction": "weno5", "bottom": "periodic", "top": "periodic"})
+    return _square_run(f"HCS {field} mode on [1, 1], e = {e:g}, k = {k:.4g}, {cells}^2 "
+                       f"cells, N = {n_modes}", 3, n_modes, support, e, modes, length, cells,
+                       final, final)
 
 
 def plane_amplitude(ds, field: str):
@@ -194,16 +185,26 @@ def cluster_description(e: float, length: float, cells: int, n_modes: int, suppo
     modes = [{"field": "transverse", "wave": [1, 0], "amplitude": amplitude},
              {"field": "transverse", "wave": [0, 1], "amplitude": amplitude},
              {"field": "transverse", "wave": [1, 1], "amplitude": amplitude / 10}]
+    return _square_run(f"vortices and clusters, e = {e:g}, square {length:g}, {cells}^2 "
+                       f"cells, N = {n_modes}", 2, n_modes, support, e, modes, length, cells,
+                       final, min(2.0, final))
+
+
+def _square_run(title: str, dimension: int, n_modes: int, support: float, e: float,
+                modes: list, length: float, cells: int, final: float,
+                snapshot: float) -> RunDescription:
+    """The rescaled hard-sphere gas (eps = 1) on the periodic square of side ``length`` with
+    the plane ``modes``: the fast operator, RK4 with the conservative correction,
+    ds = :data:`DT`, WENO5 on ``cells``^2 cells, f stored every ``snapshot``."""
     return RunDescription(
-        title=f"vortices and clusters, e = {e:g}, square {length:g}, {cells}^2 cells, "
-              f"N = {n_modes}",
-        grid={"dimension": 2, "n_modes": n_modes, "support_radius": support},
+        title=title, grid={"dimension": dimension, "n_modes": n_modes,
+                           "support_radius": support},
         kernel="hard_spheres", restitution={"name": "constant", "value": e},
         initial={"name": "space_function", "function": MODES,
                  "params": {"lengths": [length, length], "modes": modes}},
         operator={"name": "fast_spectral"}, integrator="rk4", time_step=DT,
         final_time=final, rescaled=True, conservative=True, knudsen=1.0,
-        output={"snapshot_interval": min(2.0, final)},
+        output={"snapshot_interval": snapshot},
         space={"cells": [cells, cells], "length": [length, length],
                "reconstruction": "weno5", "bottom": "periodic", "top": "periodic"})
 
