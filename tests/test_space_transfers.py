@@ -184,3 +184,41 @@ def test_a_step_on_a_rectangle_makes_one_device_to_host_copy_and_no_upload():
     assert backend.counts()["to_host"] <= STEPS, collections.Counter(backend.log)  # measured: 3
     uploads = collections.Counter(entry for entry in backend.log if entry[0] == "to_device")
     assert not uploads, uploads
+
+
+def test_a_hybrid_step_on_a_rectangle_brings_one_vector_to_the_host():
+    """The hierarchy on a rectangle (four quadrants, walls on the four sides, a heat bath):
+    step by step one device->host copy, the record's, carrying the indicators of every
+    cell and the levels chosen ahead, and no copy from the host; the indicators with both
+    gradient components, the spread over the square and the cells of each level stay on
+    the device."""
+    import tomllib
+
+    data = tomllib.loads(HIERARCHY)
+    hierarchy = dict(data["space"]["hierarchy"], buffer=0)      # no reach: levels mixed
+    data["space"] = {"cells": [6, 5], "reconstruction": "muscl", "left": "specular",
+                     "right": {"name": "diffuse", "temperature": 0.9}, "bottom": "specular",
+                     "top": {"name": "diffuse", "velocity": 0.2}, "hierarchy": hierarchy}
+    data["initial"] = {"name": "quadrants",
+                       "upper_right": {"density": 1.0, "temperature": 1.0},
+                       "upper_left": {"density": 0.5, "velocity": [0.3, 0.0],
+                                      "temperature": 0.8},
+                       "lower_left": {"density": 1.0, "velocity": [0.3, 0.3],
+                                      "temperature": 1.0},
+                       "lower_right": {"density": 0.5, "velocity": [0.0, 0.3],
+                                       "temperature": 0.8}}
+    problem, backend = counting_problem(RunDescription.from_dict(data))
+    dt = data["time_step"]
+    state = problem.state(problem.f0)
+    for k in range(2):
+        state = problem.step(k * dt, state, dt)
+        problem.record(state)
+    used = set()
+    for k in range(2, 2 + STEPS):
+        before = len(backend.log)
+        state = problem.step(k * dt, state, dt)
+        problem.record(state)
+        used.add(len(numpy.unique(problem.hierarchy.owned_levels)))
+        assert backend.counts(since=before) == {"to_host": 1, "to_device": 0}, \
+            (k, backend.log[before:])
+    assert problem.hierarchy.levels.shape == (30,) and max(used) >= 2, used
