@@ -45,7 +45,7 @@ from granframe.run.runner import Simulation
 from granframe.space.transport import box_step_limit
 from granframe.theory.cells import conserved_block_average
 from granframe.theory.euler import LISKA_WENDROFF_4, euler_quadrants
-from granframe.tools.studykit import finish, mean_distances, number, numbers, write_csv
+from granframe.tools.studykit import finish, number, numbers, refinement_row, write_csv
 from granframe.velocity.grid import VelocityGrid
 
 GRID = {"dimension": 2, "n_modes": 48, "support_radius": 3.5}
@@ -125,15 +125,8 @@ def main(argv=None) -> int:
     rows, runs = [], {}
     for c in cells:
         runs[c], seconds = kinetic(c, out)
-        truth = averaged(fine, c)
         row = {"cells": c, "seconds": round(seconds, 1),
-               **{f"L1_{k}": v for k, v in mean_distances(runs[c], truth).items()},
-               **{f"reference_bar_{k}": v for k, v in
-                  mean_distances(averaged(coarse, c), truth).items()}}
-        if len(runs) > 1:
-            previous = max(k for k in runs if k < c)
-            change = mean_distances(runs[previous], averaged(runs[c], previous))
-            row.update({f"change_from_{k}": v for k, v in change.items()})
+               **refinement_row(runs, c, fine, coarse, averaged)}
         rows.append(row)
         print(row, flush=True)
     write_csv(out / "riemann_2d.csv", rows, list(rows[-1]))   # the last row has every key
@@ -146,7 +139,7 @@ def main(argv=None) -> int:
         lines.append(f"| {row['cells']}^2 | {row['L1_rho']:.4g} | {row['L1_u1']:.4g} | "
                      f"{row['L1_u2']:.4g} | {row['L1_T']:.4g} | "
                      f"{row['reference_bar_rho']:.2g} | "
-                     f"{row.get('change_from_rho', float('nan')):.4g} | {row['seconds']} |")
+                     f"{row.get('change_rho', float('nan')):.4g} | {row['seconds']} |")
     text = "\n".join(lines) + "\n"
     (out / "riemann_2d.md").write_text(text)
     print(text)

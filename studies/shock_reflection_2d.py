@@ -44,7 +44,7 @@ from granframe.run.runner import Simulation
 from granframe.space.transport import box_step_limit
 from granframe.theory.cells import conserved_block_average
 from granframe.theory.euler import euler_finite_volumes, shock_states
-from granframe.tools.studykit import finish, mean_distances, number, numbers, write_csv
+from granframe.tools.studykit import finish, number, numbers, refinement_row, write_csv
 from granframe.velocity.grid import VelocityGrid
 
 GRID = {"dimension": 2, "n_modes": 32, "support_radius": 4.0}
@@ -132,16 +132,9 @@ def main(argv=None) -> int:
     rows, runs = [], {}
     for c in cells:
         runs[c], seconds = kinetic(c, out)
-        truth = conserved_block_average(fine, c, 2)
         row = {"cells": c, "seconds": round(seconds, 1),
-               **{f"L1_{k}": v for k, v in mean_distances(runs[c], truth).items()},
-               **{f"reference_bar_{k}": v for k, v in
-                  mean_distances(conserved_block_average(coarse, c, 2), truth).items()}}
-        if len(runs) > 1:
-            previous = max(k for k in runs if k < c)
-            change = mean_distances(runs[previous], conserved_block_average(runs[c], previous,
-                                                                            2))
-            row.update({f"change_{k}": v for k, v in change.items()})
+               **refinement_row(runs, c, fine, coarse,
+                                lambda fields, n: conserved_block_average(fields, n, 2))}
         rows.append(row)
         print(row, flush=True)
     write_csv(out / "shock_reflection_2d.csv", rows, list(rows[-1]))  # the last has every key

@@ -207,6 +207,10 @@ def test_heated_state_sweep_quick_runs_on_one_and_two_workers(tmp_path):
      "--restitution [1.5]: each e must be in (0, 1]"),
     ("shock_reflection_2d.py", ["--cells", "16", "--reference", "100"],
      "--reference 100 must be a multiple of twice every --cells value ([16])"),
+    ("hierarchy_2d.py", ["--hierarchy", '{"buffer": -1}'],
+     "parameter 'buffer' = -1 is invalid; must be an integer >= 0 and <= 64"),
+    ("hierarchy_2d.py", ["--hierarchy", "[1]"],
+     "argument --hierarchy: '[1]' is not allowed: must be a JSON object"),
 ])
 def test_study_commands_refuse_bad_options_by_name_without_a_traceback(tmp_path, study, argv,
                                                                       message):
@@ -255,3 +259,27 @@ def test_the_plane_cooling_study_measures_what_it_names():
     s, amplitude = study.plane_amplitude(ds, "shear")
     assert amplitude[1] == pytest.approx(0.05, rel=1e-12)
 
+
+
+def test_a_refinement_row_measures_against_the_reference_and_the_coarser_run():
+    """studykit.refinement_row: the L1 error of a run against the fine reference averaged
+    onto its cells, the reference's own bar (its coarse run against its fine one) and the
+    change from the next coarser run, each checked against its hand-computed value on
+    fields along one axis averaged in pairs."""
+    from granframe.tools.studykit import refinement_row
+
+    def average(fields, cells):
+        return {k: v.reshape(cells, -1).mean(axis=1) for k, v in fields.items()}
+
+    x8 = (numpy.arange(8) + 0.5) / 8
+    fine = {"rho": numpy.repeat(1 + x8, 2)}                 # 16 cells, piecewise on 8
+    coarse = {"rho": numpy.repeat(1 + x8 + 0.01, 2)}
+    runs = {4: {"rho": average({"rho": 1 + x8}, 4)["rho"] + 0.1},
+            8: {"rho": 1 + x8 - 0.02}}
+    first = refinement_row({4: runs[4]}, 4, fine, coarse, average)
+    assert set(first) == {"L1_rho", "reference_bar_rho"}
+    assert first["L1_rho"] == pytest.approx(0.1) and first["reference_bar_rho"] == \
+        pytest.approx(0.01)
+    second = refinement_row(runs, 8, fine, coarse, average)
+    assert second["L1_rho"] == pytest.approx(0.02)
+    assert second["change_rho"] == pytest.approx(0.12)      # 0.1 - (-0.02), on 4 cells

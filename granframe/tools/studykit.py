@@ -226,6 +226,30 @@ def mean_distances(a: dict, b: dict) -> dict:
     return {name: float(numpy.abs(numpy.asarray(a[name]) - b[name]).mean()) for name in a}
 
 
+def refinement_row(runs: dict, cells: int, fine: dict, coarse: dict, average) -> dict:
+    """The errors of the run on ``cells`` among ``runs`` (cells -> fields, the coarser runs
+    in it already) against a reference on two meshes:
+
+    - ``L1_<field>``: :func:`mean_distances` from ``fine`` averaged onto its cells;
+    - ``reference_bar_<field>``: that of ``coarse`` from ``fine``, both averaged onto its
+      cells (the reference's own error, the bar of the first);
+    - ``change_<field>``: with a coarser run in ``runs``, the distance of the next coarser
+      one from this run averaged onto its cells (the refinement's change).
+
+    ``average(fields, cells)`` averages fields onto ``cells`` (a conservative block
+    average)."""
+    truth = average(fine, cells)
+    row = {**{f"L1_{k}": v for k, v in mean_distances(runs[cells], truth).items()},
+           **{f"reference_bar_{k}": v
+              for k, v in mean_distances(average(coarse, cells), truth).items()}}
+    coarser = [c for c in runs if c < cells]
+    if coarser:
+        previous = max(coarser)
+        change = mean_distances(runs[previous], average(runs[cells], previous))
+        row.update({f"change_{k}": v for k, v in change.items()})
+    return row
+
+
 def write_csv(path, rows: list[dict], fields=None) -> None:
     """Rows of dicts as a CSV table with a header (``fields``: the columns and their order)."""
     with open(path, "w", newline="") as stream:
