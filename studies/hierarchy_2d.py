@@ -39,6 +39,7 @@ rising), the all-kinetic steps about 70 s each, on two cores.
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import pathlib
 import time
@@ -68,18 +69,19 @@ FINAL = 0.25
 FIELDS = ("rho", "u1", "u2", "T")
 
 
-def description(cells: int, hierarchy: bool) -> RunDescription:
-    """The run on ``cells`` x ``cells`` cells, with the default hierarchy or all-kinetic."""
+def description(cells: int, hierarchy: dict | None) -> RunDescription:
+    """The run on ``cells`` x ``cells`` cells, with the hierarchy of the settings
+    ``hierarchy`` (the ``[space.hierarchy]`` table; {} its defaults) or all-kinetic (None)."""
     grid = VelocityGrid(**GRID)
     limit = box_step_limit(grid, (1.0 / cells, 1.0 / cells), 0.5)
     steps = 5 * math.ceil(FINAL / limit / 5 * (1 - 1e-12))      # five snapshots
     space = {"cells": [cells, cells], "reconstruction": "muscl", "left": "specular",
              "right": "specular", "bottom": "specular", "top": "specular"}
-    if hierarchy:
-        space["hierarchy"] = {}
+    if hierarchy is not None:
+        space["hierarchy"] = dict(hierarchy)
     return RunDescription.from_dict({
         "title": (f"Liska-Wendroff 4, 3D velocities, eps = {KNUDSEN:g}, {cells}^2 cells, "
-                  + ("hybrid" if hierarchy else "all-kinetic")),
+                  + ("all-kinetic" if hierarchy is None else f"hybrid {label(hierarchy)}")),
         "grid": GRID, "kernel": "maxwell", "restitution": {"name": "constant", "value": 1.0},
         "initial": {"name": "quadrants", **{
             name: {"density": r, "velocity": [u1, u2, 0.0], "temperature": p / r}
@@ -90,11 +92,42 @@ def description(cells: int, hierarchy: bool) -> RunDescription:
         "space": space})
 
 
-def run(cells: int, hierarchy: bool, out: pathlib.Path):
-    """The run's dataset (its store in ``out``) and its wall seconds."""
-    store = out / f"{'hybrid' if hierarchy else 'kinetic'}_{cells}.zarr"
+def label(hierarchy: dict) -> str:
+    """The settings ``hierarchy`` in a few characters: "default", or key=value pairs."""
+    return ("default" if not hierarchy else
+            " ".join(f"{k}={v}" for k, v in sorted(hierarchy.items())))
+
+
+def settings(text: str) -> dict:
+    """An argparse type: a ``[space.hierarchy]`` table as JSON (``{}``: the defaults); its
+    keys and values are checked when the run is described, by name."""
+    try:
+        value = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise argparse.ArgumentTypeError(f"{text!r} is not JSON: {error}") from None
+    if not isinstance(value, dict):
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed: must be a JSON object "
+                                         "of [space.hierarchy] settings, e.g. "
+                                         '\'{"buffer": 1}\'')
+    return value
+
+
+def run(cells: int, hierarchy: dict | None, out: pathlib.Path, name: str):
+    """The run's dataset and its wall seconds: its store ``out/<name>.zarr`` when that
+    holds the finished run of the same description (a study run again compares without
+    running it again; its seconds are the store's), else the run made there now."""
+    store = out / f"{name}.zarr"
+    wanted = description(cells, hierarchy)
+    if store.exists():
+        try:
+            ds = granframe.open_run(store)
+        except (OSError, ValueError, KeyError):
+            ds = None
+        if (ds is not None and ds.attrs.get("progress_status") == "finished"
+                and RunDescription.from_toml(ds.attrs["description_toml"]) == wanted):
+            return ds, float(ds.attrs["progress_wall_seconds"])
     began = time.perf_counter()
-    Simulation(description(cells, hierarchy)).run(store, progress=False, overwrite=True)
+    Simulation(wanted).run(store, progress=False, overwrite=True)
     return granframe.open_run(store), time.perf_counter() - began
 
 
@@ -107,7 +140,7 @@ def fields(ds) -> dict:
 
 def kinetic_step_seconds(cells: int, steps: int) -> float:
     """Seconds per step of the all-kinetic run: the mean of ``steps`` steps after one."""
-    d = description(cells, False)
+    d = description(cells, None)
     problem = Simulation(d).problem
     state, dt = problem.state(problem.f0), d.time_step
     state = problem.step(0.0, state, dt)                         # warm-up: plans
@@ -117,9 +150,10 @@ def kinetic_step_seconds(cells: int, steps: int) -> float:
     return (time.perf_counter() - began) / steps
 
 
-def first_steps(cells: int, hierarchy: bool, steps: int) -> tuple:
+def first_steps(cells: int, hierarchy: dict | None, steps: int) -> tuple:
     """The wall seconds of each of the first ``steps`` steps with its record, and (with a
-    hierarchy) the share of the cells at each level in each."""
+    hierarchy, the settings of :func:`description`) the share of the cells at each level
+    in each."""
     d = description(cells, hierarchy)
     problem = Simulation(d).problem
     state, dt = problem.state(problem.f0), d.time_step
@@ -129,7 +163,7 @@ def first_steps(cells: int, hierarchy: bool, steps: int) -> tuple:
         state = problem.step(k * dt, state, dt)
         problem.record(state)
         times.append(time.perf_counter() - began)
-        if hierarchy:
+        if hierarchy is not None:
             levels = problem.hierarchy.levels
             shares.append(numpy.bincount(levels, minlength=3) / levels.size)
     return times, shares
@@ -143,16 +177,24 @@ def main(argv=None) -> int:
     parser.add_argument("--kinetic-steps", type=number(1, low_open=False, kind=int),
                         default=3, help="all-kinetic steps timed after one (default 3)")
     parser.add_argument("--compare", action="store_true",
-                        help="run the all-kinetic run to the end and compare")
+                        help="run the all-kinetic run to the end too (or take its finished "
+                             "store in --out) and compare")
+    parser.add_argument("--hierarchy", type=settings, action="append",
+                        help="the [space.hierarchy] settings of a hybrid run as JSON, e.g. "
+                             '\'{"buffer": 1, "realizability": [0.002, 0.05]}\'; repeat for '
+                             "several runs (default: one run, {}, the defaults)")
     parser.add_argument("--first-steps", type=number(1, low_open=False, kind=int),
                         help="time only the first K steps of each run, one by one")
     args = parser.parse_args(argv)
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     c = args.cells
+    chosen = args.hierarchy or [{}]
+    for hierarchy in chosen:            # bad settings refused by name before any run
+        description(c, hierarchy)
     if args.first_steps:
-        hybrid, shares = first_steps(c, True, args.first_steps)
-        kinetic, _ = first_steps(c, False, args.first_steps)
+        hybrid, shares = first_steps(c, chosen[0], args.first_steps)
+        kinetic, _ = first_steps(c, None, args.first_steps)
         lines = ["| step | all-kinetic (s) | hybrid (s) | shares euler / esbgk / boltzmann |",
                  "|---|---|---|---|"]
         lines += [f"| {k + 1} | {a:.1f} | {b:.1f} | {' / '.join(f'{x:.0%}' for x in share)} |"
@@ -161,36 +203,86 @@ def main(argv=None) -> int:
         (out / f"hierarchy_2d_first_{c}.md").write_text(text)
         print(text)
         return 0
-    ds_h, seconds_h = run(c, True, out)
-    steps = int(ds_h.sizes["step_time"] - 1)
-    print(f"hybrid: {steps} steps in {seconds_h:.1f} s", flush=True)
-    kinetic_s = kinetic_step_seconds(c, args.kinetic_steps)
-    levels = ds_h.level.values[1:]
-    names = list(ds_h.level.attrs["levels"])
-    row = {"cells": c, "steps": steps, "kinetic_step_s": kinetic_s,
-           "hybrid_step_s": seconds_h / steps, "speedup": kinetic_s * steps / seconds_h,
-           **{f"share_{n}": float((levels == k).mean()) for k, n in enumerate(names)},
-           **{f"final_{n}": float((levels[-1] == k).mean()) for k, n in enumerate(names)}}
-    save_figure(plotting.figures(ds_h)[f"plane_{ds_h.sizes['time'] - 1}"],
-                out / f"levels_{c}.png")
+    kinetic = truth = None
     if args.compare:
-        ds_k, seconds_k = run(c, False, out)
-        row["kinetic_run_step_s"] = seconds_k / steps
-        row.update({f"diff_{k}": v for k, v in mean_distances(fields(ds_h), fields(ds_k)).items()})
+        ds_k, seconds_k = run(c, None, out, f"kinetic_{c}")
+        steps = int(ds_k.sizes["step_time"] - 1)
+        kinetic = {"step_s": seconds_k / steps, "fields": fields(ds_k)}
         truth = conserved_block_average(euler_quadrants(STATES, 8 * c, FINAL, dimension=3),
                                         c, dimension=3)
-        row.update({f"own_{k}": v for k, v in mean_distances(fields(ds_k), truth).items()})
-        row.update({f"ratio_{k}": row[f"diff_{k}"] / row[f"own_{k}"] for k in FIELDS})
-    print(row, flush=True)
-    write_csv(out / f"hierarchy_2d_{c}.csv", [row], list(row))
+        own = mean_distances(kinetic["fields"], truth)
+        print(f"all-kinetic: {steps} steps in {seconds_k:.1f} s; its own L1 error "
+              f"{own}", flush=True)
+    else:
+        kinetic = {"step_s": kinetic_step_seconds(c, args.kinetic_steps)}
+    rows = [compare(c, hierarchy, k, out, kinetic, truth) for k, hierarchy in enumerate(chosen)]
+    write_csv(out / f"hierarchy_2d_{c}.csv", rows, list(rows[0]))
+    if args.compare:
+        save_figure(cost_and_accuracy(rows), out / f"hierarchy_2d_{c}.png")
+    columns = [k for k in rows[0] if k not in ("cells",)]
     lines = [(f"Liska-Wendroff 4, 3D velocities N = {GRID['n_modes']}, eps = {KNUDSEN:g}, "
-              f"t = {FINAL}, {c}^2 cells"), "", "| quantity | value |", "|---|---|"]
-    lines += [f"| {k} | {v:.4g} |" if isinstance(v, float) else f"| {k} | {v} |"
-              for k, v in row.items()]
+              f"t = {FINAL}, {c}^2 cells; all-kinetic {kinetic['step_s']:.4g} s a step "
+              + ("over its whole run" if args.compare else
+                 f"(the mean of {args.kinetic_steps} steps after one)")), "",
+             "| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+    lines += ["| " + " | ".join(f"{row[k]:.4g}" if isinstance(row[k], float) else str(row[k])
+                                for k in columns) + " |" for row in rows]
     text = "\n".join(lines) + "\n"
     (out / f"hierarchy_2d_{c}.md").write_text(text)
     print(text)
     return 0
+
+
+def compare(cells: int, hierarchy: dict, index: int, out: pathlib.Path, kinetic: dict,
+            truth) -> dict:
+    """The row of the hybrid run of the settings ``hierarchy``: its seconds per step over
+    its whole run against the all-kinetic run's (``kinetic["step_s"]``), the mean and final
+    share of the cells at each level and, with the all-kinetic fields (``kinetic``'s
+    "fields") and the reference ``truth``, the mean L1 differences from the all-kinetic
+    run, its own (from the reference), and their ratios; its levels mapped at the end
+    (``levels_<C>_<index>.png``)."""
+    ds_h, seconds_h = run(cells, hierarchy, out, f"hybrid_{cells}_{index}")
+    steps = int(ds_h.sizes["step_time"] - 1)
+    levels = ds_h.level.values[1:]
+    names = list(ds_h.level.attrs["levels"])
+    row = {"cells": cells, "settings": label(hierarchy), "steps": steps,
+           "kinetic_step_s": kinetic["step_s"], "hybrid_step_s": seconds_h / steps,
+           "speedup": kinetic["step_s"] * steps / seconds_h,
+           **{f"share_{n}": float((levels == k).mean()) for k, n in enumerate(names)},
+           **{f"final_{n}": float((levels[-1] == k).mean()) for k, n in enumerate(names)}}
+    save_figure(plotting.figures(ds_h)[f"plane_{ds_h.sizes['time'] - 1}"],
+                out / f"levels_{cells}_{index}.png")
+    if truth is not None:
+        diff = mean_distances(fields(ds_h), kinetic["fields"])
+        own = mean_distances(kinetic["fields"], truth)
+        row.update({f"diff_{k}": v for k, v in diff.items()})
+        row.update({f"own_{k}": v for k, v in own.items()})
+        row.update({f"ratio_{k}": diff[k] / own[k] for k in FIELDS})
+        row["ratio_max"] = max(row[f"ratio_{k}"] for k in FIELDS)
+    print(row, flush=True)
+    return row
+
+
+def cost_and_accuracy(rows: list[dict]):
+    """The speed-up of each hybrid run against the largest ratio of its L1 difference from
+    the all-kinetic run to that run's own error (over rho, u_1, u_2, T), with the targets
+    (5x, 0.1) drawn."""
+    import matplotlib.pyplot as plt  # the Agg backend: studykit chose it on import
+
+    fig, ax = plt.subplots(figsize=(6.0, 4.2))
+    for k, row in enumerate(rows):
+        ax.plot(row["ratio_max"], row["speedup"], "o", color=f"C{k}",
+                label=f"{k}: {row['settings']}")
+    ax.axhline(5.0, color="0.5", ls="--", lw=0.8)
+    ax.axvline(0.1, color="0.5", ls="--", lw=0.8)
+    ax.set_xscale("log")
+    ax.set_xlabel("max over rho, u, T of L1(hybrid - kinetic) / L1(kinetic - Euler ref.)")
+    ax.set_ylabel("speed-up over the whole run")
+    ax.set_title(f"Liska-Wendroff 4, eps = {KNUDSEN:g}, {rows[0]['cells']}^2 cells",
+                 fontsize=10)
+    ax.legend(fontsize=7, loc="best")
+    fig.tight_layout()
+    return fig
 
 
 if __name__ == "__main__":
