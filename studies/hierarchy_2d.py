@@ -54,8 +54,7 @@ from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
 from granframe.space.transport import box_step_limit
 from granframe.theory.cells import conserved_block_average
-from granframe.theory.euler import LISKA_WENDROFF_4 as STATES
-from granframe.theory.euler import euler_quadrants
+from granframe.theory.euler import LISKA_WENDROFF_4, euler_quadrants
 from granframe.tools import plotting
 from granframe.tools.studykit import (
     finish,
@@ -68,13 +67,23 @@ from granframe.velocity.grid import VelocityGrid
 
 GRID = {"dimension": 3, "n_modes": 24, "support_radius": 3.75}
 KNUDSEN = 1e-3
+#: Lax & Liu's configuration 12 (SIAM J. Sci. Comput. 19 (1998) 319; two shocks and two
+#: contacts): (rho, u_1, u_2, p) of each quadrant, as LISKA_WENDROFF_4
+LAX_LIU_12 = {"upper_right": (0.5313, 0.0, 0.0, 0.4), "upper_left": (1.0, 0.7276, 0.0, 1.0),
+              "lower_left": (0.8, 0.0, 0.0, 1.0), "lower_right": (1.0, 0.0, 0.7276, 1.0)}
+#: --configuration -> (its name, its quadrants, the suffix of its files)
+CONFIGURATIONS = {"lw4": ("Liska-Wendroff 4", LISKA_WENDROFF_4, ""),
+                  "lax_liu_12": ("Lax-Liu 12", LAX_LIU_12, "_ll12")}
 FINAL = 0.25
 FIELDS = ("rho", "u1", "u2", "T")
 
 
-def description(cells: int, hierarchy: dict | None) -> RunDescription:
-    """The run on ``cells`` x ``cells`` cells, with the hierarchy of the settings
-    ``hierarchy`` (the ``[space.hierarchy]`` table; {} its defaults) or all-kinetic (None)."""
+def description(cells: int, hierarchy: dict | None, configuration: str = "lw4"
+                ) -> RunDescription:
+    """The run of the quadrants ``configuration`` (a key of CONFIGURATIONS) on ``cells`` x
+    ``cells`` cells, with the hierarchy of the settings ``hierarchy`` (the
+    ``[space.hierarchy]`` table; {} its defaults) or all-kinetic (None)."""
+    name, states, _ = CONFIGURATIONS[configuration]
     grid = VelocityGrid(**GRID)
     limit = box_step_limit(grid, (1.0 / cells, 1.0 / cells), 0.5)
     steps = 5 * math.ceil(FINAL / limit / 5 * (1 - 1e-12))      # five snapshots
@@ -83,12 +92,12 @@ def description(cells: int, hierarchy: dict | None) -> RunDescription:
     if hierarchy is not None:
         space["hierarchy"] = dict(hierarchy)
     return RunDescription.from_dict({
-        "title": (f"Liska-Wendroff 4, 3D velocities, eps = {KNUDSEN:g}, {cells}^2 cells, "
+        "title": (f"{name}, 3D velocities, eps = {KNUDSEN:g}, {cells}^2 cells, "
                   + ("all-kinetic" if hierarchy is None else f"hybrid {label(hierarchy)}")),
         "grid": GRID, "kernel": "maxwell", "restitution": {"name": "constant", "value": 1.0},
         "initial": {"name": "quadrants", **{
             name: {"density": r, "velocity": [u1, u2, 0.0], "temperature": p / r}
-            for name, (r, u1, u2, p) in STATES.items()}},
+            for name, (r, u1, u2, p) in states.items()}},
         "operator": {"name": "fast_spectral"}, "integrator": "penalised_ars222",
         "conservative": True, "knudsen": KNUDSEN, "time_step": FINAL / steps,
         "final_time": FINAL, "output": {"snapshot_interval": FINAL / 5},
@@ -115,12 +124,13 @@ def settings(text: str) -> dict:
     return value
 
 
-def run(cells: int, hierarchy: dict | None, out: pathlib.Path, name: str):
+def run(cells: int, hierarchy: dict | None, out: pathlib.Path, name: str,
+        configuration: str = "lw4"):
     """The run's dataset and its wall seconds: its store ``out/<name>.zarr`` when that
     holds the finished run of the same description (a study run again compares without
     running it again; its seconds are the store's), else the run made there now."""
     store = out / f"{name}.zarr"
-    wanted = description(cells, hierarchy)
+    wanted = description(cells, hierarchy, configuration)
     if store.exists():
         try:
             ds = granframe.open_run(store)
@@ -141,9 +151,9 @@ def fields(ds) -> dict:
             "T": ds.temperature.values[-1]}
 
 
-def kinetic_step_seconds(cells: int, steps: int) -> float:
+def kinetic_step_seconds(cells: int, steps: int, configuration: str = "lw4") -> float:
     """Seconds per step of the all-kinetic run: the mean of ``steps`` steps after one."""
-    d = description(cells, None)
+    d = description(cells, None, configuration)
     problem = Simulation(d).problem
     state, dt = problem.state(problem.f0), d.time_step
     state = problem.step(0.0, state, dt)                         # warm-up: plans
@@ -153,11 +163,12 @@ def kinetic_step_seconds(cells: int, steps: int) -> float:
     return (time.perf_counter() - began) / steps
 
 
-def first_steps(cells: int, hierarchy: dict | None, steps: int) -> tuple:
+def first_steps(cells: int, hierarchy: dict | None, steps: int,
+                configuration: str = "lw4") -> tuple:
     """The wall seconds of each of the first ``steps`` steps with its record, and (with a
     hierarchy, the settings of :func:`description`) the share of the cells at each level
     in each."""
-    d = description(cells, hierarchy)
+    d = description(cells, hierarchy, configuration)
     problem = Simulation(d).problem
     state, dt = problem.state(problem.f0), d.time_step
     times, shares = [], []
@@ -175,6 +186,9 @@ def first_steps(cells: int, hierarchy: dict | None, steps: int) -> tuple:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", required=True, help="folder of the tables and figures")
+    parser.add_argument("--configuration", choices=sorted(CONFIGURATIONS), default="lw4",
+                        help="the quadrants: Liska & Wendroff's configuration 4 (default) or "
+                             "Lax & Liu's configuration 12")
     parser.add_argument("--cells", type=number(8, low_open=False, kind=int), default=16,
                         help="cells a side (default 16)")
     parser.add_argument("--kinetic-steps", type=number(1, low_open=False, kind=int),
@@ -191,39 +205,41 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    c = args.cells
+    c, configuration = args.cells, args.configuration
+    name, states, suffix = CONFIGURATIONS[configuration]
     chosen = args.hierarchy or [{}]
     for hierarchy in chosen:            # bad settings refused by name before any run
-        description(c, hierarchy)
+        description(c, hierarchy, configuration)
     if args.first_steps:
-        hybrid, shares = first_steps(c, chosen[0], args.first_steps)
-        kinetic, _ = first_steps(c, None, args.first_steps)
+        hybrid, shares = first_steps(c, chosen[0], args.first_steps, configuration)
+        kinetic, _ = first_steps(c, None, args.first_steps, configuration)
         lines = ["| step | all-kinetic (s) | hybrid (s) | shares euler / esbgk / boltzmann |",
                  "|---|---|---|---|"]
         lines += [f"| {k + 1} | {a:.1f} | {b:.1f} | {' / '.join(f'{x:.0%}' for x in share)} |"
                   for k, (a, b, share) in enumerate(zip(kinetic, hybrid, shares))]
         text = "\n".join(lines) + "\n"
-        (out / f"hierarchy_2d_first_{c}.md").write_text(text)
+        (out / f"hierarchy_2d_first_{c}{suffix}.md").write_text(text)
         print(text)
         return 0
     kinetic = truth = None
     if args.compare:
-        ds_k, seconds_k = run(c, None, out, f"kinetic_{c}")
+        ds_k, seconds_k = run(c, None, out, f"kinetic_{c}{suffix}", configuration)
         steps = int(ds_k.sizes["step_time"] - 1)
         kinetic = {"step_s": seconds_k / steps, "fields": fields(ds_k)}
-        truth = conserved_block_average(euler_quadrants(STATES, 8 * c, FINAL, dimension=3),
+        truth = conserved_block_average(euler_quadrants(states, 8 * c, FINAL, dimension=3),
                                         c, dimension=3)
         own = mean_distances(kinetic["fields"], truth)
         print(f"all-kinetic: {steps} steps in {seconds_k:.1f} s; its own L1 error "
               f"{own}", flush=True)
     else:
-        kinetic = {"step_s": kinetic_step_seconds(c, args.kinetic_steps)}
-    rows = [compare(c, hierarchy, k, out, kinetic, truth) for k, hierarchy in enumerate(chosen)]
-    write_csv(out / f"hierarchy_2d_{c}.csv", rows, list(rows[0]))
+        kinetic = {"step_s": kinetic_step_seconds(c, args.kinetic_steps, configuration)}
+    rows = [compare(c, hierarchy, k, out, kinetic, truth, configuration)
+            for k, hierarchy in enumerate(chosen)]
+    write_csv(out / f"hierarchy_2d_{c}{suffix}.csv", rows, list(rows[0]))
     if args.compare:
-        save_figure(cost_and_accuracy(rows), out / f"hierarchy_2d_{c}.png")
+        save_figure(cost_and_accuracy(rows, name), out / f"hierarchy_2d_{c}{suffix}.png")
     columns = [k for k in rows[0] if k not in ("cells",)]
-    lines = [(f"Liska-Wendroff 4, 3D velocities N = {GRID['n_modes']}, eps = {KNUDSEN:g}, "
+    lines = [(f"{name}, 3D velocities N = {GRID['n_modes']}, eps = {KNUDSEN:g}, "
               f"t = {FINAL}, {c}^2 cells; all-kinetic {kinetic['step_s']:.4g} s a step "
               + ("over its whole run" if args.compare else
                  f"(the mean of {args.kinetic_steps} steps after one)")), "",
@@ -231,20 +247,22 @@ def main(argv=None) -> int:
     lines += ["| " + " | ".join(f"{row[k]:.4g}" if isinstance(row[k], float) else str(row[k])
                                 for k in columns) + " |" for row in rows]
     text = "\n".join(lines) + "\n"
-    (out / f"hierarchy_2d_{c}.md").write_text(text)
+    (out / f"hierarchy_2d_{c}{suffix}.md").write_text(text)
     print(text)
     return 0
 
 
 def compare(cells: int, hierarchy: dict, index: int, out: pathlib.Path, kinetic: dict,
-            truth) -> dict:
+            truth, configuration: str = "lw4") -> dict:
     """The row of the hybrid run of the settings ``hierarchy``: its seconds per step over
     its whole run against the all-kinetic run's (``kinetic["step_s"]``), the mean and final
     share of the cells at each level and, with the all-kinetic fields (``kinetic``'s
     "fields") and the reference ``truth``, the mean L1 differences from the all-kinetic
     run, its own (from the reference), and their ratios; its levels mapped at the end
     (``levels_<C>_<index>.png``)."""
-    ds_h, seconds_h = run(cells, hierarchy, out, f"hybrid_{cells}_{index}")
+    suffix = CONFIGURATIONS[configuration][2]
+    ds_h, seconds_h = run(cells, hierarchy, out, f"hybrid_{cells}_{index}{suffix}",
+                          configuration)
     steps = int(ds_h.sizes["step_time"] - 1)
     levels = ds_h.level.values[1:]
     names = list(ds_h.level.attrs["levels"])
@@ -254,7 +272,7 @@ def compare(cells: int, hierarchy: dict, index: int, out: pathlib.Path, kinetic:
            **{f"share_{n}": float((levels == k).mean()) for k, n in enumerate(names)},
            **{f"final_{n}": float((levels[-1] == k).mean()) for k, n in enumerate(names)}}
     save_figure(plotting.figures(ds_h)[f"plane_{ds_h.sizes['time'] - 1}"],
-                out / f"levels_{cells}_{index}.png")
+                out / f"levels_{cells}_{index}{suffix}.png")
     if truth is not None:
         diff = mean_distances(fields(ds_h), kinetic["fields"])
         own = mean_distances(kinetic["fields"], truth)
@@ -266,7 +284,7 @@ def compare(cells: int, hierarchy: dict, index: int, out: pathlib.Path, kinetic:
     return row
 
 
-def cost_and_accuracy(rows: list[dict]):
+def cost_and_accuracy(rows: list[dict], name: str):
     """The speed-up of each hybrid run against the largest ratio of its L1 difference from
     the all-kinetic run to that run's own error (over rho, u_1, u_2, T), with the targets
     (5x, 0.1) drawn."""
@@ -281,7 +299,7 @@ def cost_and_accuracy(rows: list[dict]):
     ax.set_xscale("log")
     ax.set_xlabel("max over rho, u, T of L1(hybrid - kinetic) / L1(kinetic - Euler ref.)")
     ax.set_ylabel("speed-up over the whole run")
-    ax.set_title(f"Liska-Wendroff 4, eps = {KNUDSEN:g}, {rows[0]['cells']}^2 cells",
+    ax.set_title(f"{name}, eps = {KNUDSEN:g}, {rows[0]['cells']}^2 cells",
                  fontsize=10)
     ax.legend(fontsize=7, loc="best")
     fig.tight_layout()
