@@ -221,19 +221,18 @@ def main(argv=None) -> int:
         (out / f"hierarchy_2d_first_{c}{suffix}.md").write_text(text)
         print(text)
         return 0
-    kinetic = truth = None
     if args.compare:
         ds_k, seconds_k = run(c, None, out, f"kinetic_{c}{suffix}", configuration)
         steps = int(ds_k.sizes["step_time"] - 1)
-        kinetic = {"step_s": seconds_k / steps, "fields": fields(ds_k)}
         truth = conserved_block_average(euler_quadrants(states, 8 * c, FINAL, dimension=3),
                                         c, dimension=3)
-        own = mean_distances(kinetic["fields"], truth)
+        kinetic = {"step_s": seconds_k / steps, "fields": fields(ds_k)}
+        kinetic["own"] = mean_distances(kinetic["fields"], truth)
         print(f"all-kinetic: {steps} steps in {seconds_k:.1f} s; its own L1 error "
-              f"{own}", flush=True)
+              f"{kinetic['own']}", flush=True)
     else:
         kinetic = {"step_s": kinetic_step_seconds(c, args.kinetic_steps, configuration)}
-    rows = [compare(c, hierarchy, k, out, kinetic, truth, configuration)
+    rows = [compare(c, hierarchy, k, out, kinetic, configuration)
             for k, hierarchy in enumerate(chosen)]
     write_csv(out / f"hierarchy_2d_{c}{suffix}.csv", rows, list(rows[0]))
     if args.compare:
@@ -253,13 +252,13 @@ def main(argv=None) -> int:
 
 
 def compare(cells: int, hierarchy: dict, index: int, out: pathlib.Path, kinetic: dict,
-            truth, configuration: str = "lw4") -> dict:
+            configuration: str = "lw4") -> dict:
     """The row of the hybrid run of the settings ``hierarchy``: its seconds per step over
     its whole run against the all-kinetic run's (``kinetic["step_s"]``), the mean and final
-    share of the cells at each level and, with the all-kinetic fields (``kinetic``'s
-    "fields") and the reference ``truth``, the mean L1 differences from the all-kinetic
-    run, its own (from the reference), and their ratios; its levels mapped at the end
-    (``levels_<C>_<index>.png``)."""
+    share of the cells at each level and, when ``kinetic`` holds the all-kinetic run's
+    "fields" and its "own" mean L1 error against the reference, the mean L1 differences
+    from the all-kinetic run, that own error, and their ratios; its levels mapped at the
+    end (``levels_<C>_<index>.png``)."""
     suffix = CONFIGURATIONS[configuration][2]
     ds_h, seconds_h = run(cells, hierarchy, out, f"hybrid_{cells}_{index}{suffix}",
                           configuration)
@@ -273,9 +272,8 @@ def compare(cells: int, hierarchy: dict, index: int, out: pathlib.Path, kinetic:
            **{f"final_{n}": float((levels[-1] == k).mean()) for k, n in enumerate(names)}}
     save_figure(plotting.figures(ds_h)[f"plane_{ds_h.sizes['time'] - 1}"],
                 out / f"levels_{cells}_{index}{suffix}.png")
-    if truth is not None:
-        diff = mean_distances(fields(ds_h), kinetic["fields"])
-        own = mean_distances(kinetic["fields"], truth)
+    if "own" in kinetic:
+        diff, own = mean_distances(fields(ds_h), kinetic["fields"]), kinetic["own"]
         row.update({f"diff_{k}": v for k, v in diff.items()})
         row.update({f"own_{k}": v for k, v in own.items()})
         row.update({f"ratio_{k}": diff[k] / own[k] for k in FIELDS})
