@@ -17,10 +17,11 @@ included: the distance of the uniform state and the relaxation rates). Without
 ``--compare`` the all-kinetic run (the full operator in every cell) is timed over
 ``--kinetic-steps`` steps after one. With ``--compare`` it goes to t = 0.25 too, timed
 over its whole run (its finished store in DIR is taken instead when it holds the same
-description), and each hybrid run's row gives the mean L1 difference (over the cells) of
-rho, u_1, u_2, T from it, the all-kinetic run's own distance from the Euler equations
-(gamma = 5/3, reflecting walls) solved by :func:`granframe.theory.euler.euler_quadrants`
-on 8C x 8C cells averaged onto the C x C cells, and their ratios: at eps = 1e-3 the shock
+description and the seconds written beside it), and each hybrid run's row gives the mean
+L1 difference (over the cells) of rho, u_1, u_2, T from it, the all-kinetic run's own
+distance from the Euler equations (gamma = 5/3, reflecting walls) solved by
+:func:`granframe.theory.euler.euler_quadrants` on 8C x 8C cells averaged onto the C x C
+cells, and their ratios: at eps = 1e-3 the shock
 layers (a few mean free paths, ~1e-2) are far thinner than a cell, so that distance is the
 kinetic scheme's discretisation error on C x C cells, up to O(eps). The figure charts
 each setting's speed-up against its largest ratio.
@@ -126,22 +127,27 @@ def settings(text: str) -> dict:
 
 def run(cells: int, hierarchy: dict | None, out: pathlib.Path, name: str,
         configuration: str = "lw4"):
-    """The run's dataset and its wall seconds: its store ``out/<name>.zarr`` when that
-    holds the finished run of the same description (a study run again compares without
-    running it again; its seconds are the store's), else the run made there now."""
-    store = out / f"{name}.zarr"
+    """The run's dataset and its wall seconds, set-up included: the run made in its store
+    ``out/<name>.zarr`` now, its seconds written beside it (``<name>.seconds``); or, when
+    that store holds the finished run of the same description and those seconds, the
+    store and the seconds of that run (a study run again compares without running it
+    again, and times the same thing)."""
+    store, timing = out / f"{name}.zarr", out / f"{name}.seconds"
     wanted = description(cells, hierarchy, configuration)
-    if store.exists():
+    if store.exists() and timing.exists():
         try:
             ds = granframe.open_run(store)
         except (OSError, ValueError, KeyError):
             ds = None
         if (ds is not None and ds.attrs.get("progress_status") == "finished"
                 and RunDescription.from_toml(ds.attrs["description_toml"]) == wanted):
-            return ds, float(ds.attrs["progress_wall_seconds"])
+            return ds, float(timing.read_text())
+    timing.unlink(missing_ok=True)
     began = time.perf_counter()
     Simulation(wanted).run(store, progress=False, overwrite=True)
-    return granframe.open_run(store), time.perf_counter() - began
+    seconds = time.perf_counter() - began
+    timing.write_text(f"{seconds!r}\n")
+    return granframe.open_run(store), seconds
 
 
 def fields(ds) -> dict:
