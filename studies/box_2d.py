@@ -17,8 +17,18 @@ the Maxwellian at rest at T = 1 (``--start maxwellian``) a run on C x C cells ne
 that grows with C to settle (12 x 12 cells: its mean T is 3e-3 below the exact one at
 t = 24, 1e-4 at t = 96). From the exact state, what a run moves away from it by t = 24 is
 the scheme's error at steady state. Reported for each C of ``--cells``: the mean over the
-cells of |rho - rho_exact|, |u_1 - ..|, |u_2 - ..|, |T - ..|, the observed orders between
-successive C, and the L1 change of f over the last 2.4 (how steady the run is).
+cells of |rho - rho_exact|, |u_1 - ..|, |u_2 - ..|, |T - ..| and of int |f - f_exact| dv,
+the observed orders between successive C, and the L1 change of f over the last 2.4 (how
+steady the run is). Two more measures tell a discontinuity smeared by the scheme from an
+error that stays:
+
+- ``bound_T``: the mean over the cells of sum_j |dT/df_j| |f_j - f_exact,j| (dT/df_j =
+  h^d (|v_j - u|^2 / d - T) / rho at the exact state), which bounds |T - T_exact| to first
+  order: the cells' T error cannot stay above it, nor fall slower than it once the
+  nodes' errors no longer cancel in T;
+- ``block<B>_<field>``: the fields of the run and of the exact state both averaged over
+  the same B x B blocks (B = 4, 8) before they are compared: the error in the mean over a
+  fixed region, which a smeared discontinuity leaves at first order.
 
     python studies/box_2d.py --out DIR [--cells 8,16,32] [--start exact]
 
@@ -49,6 +59,8 @@ FINAL = 24.0
 #: (T_w, U_w) of the walls left, right, bottom, top
 WALLS = ((1.0, 0.0), (1.5, 0.0), (1.2, 0.3), (0.8, -0.2))
 FIELDS = ("rho", "u1", "u2", "T")
+#: the fixed blocks a side the errors in the mean over a region are measured on
+BLOCKS = (4, 8)
 
 
 def description(cells: int, final: float = FINAL) -> RunDescription:
@@ -92,6 +104,22 @@ def fields(grid, f) -> dict:
             "u1": numpy.array([r["bulk_velocity"][0] for r in rows]).reshape(counts),
             "u2": numpy.array([r["bulk_velocity"][1] for r in rows]).reshape(counts),
             "T": numpy.array([r["temperature"] for r in rows]).reshape(counts)}
+
+
+def temperature_bound(grid, f, exact) -> float:
+    """The mean over the cells of sum_j |dT/df_j| |f_j - exact_j|, dT/df_j = h^d (|v_j - u|^2
+    / d - T) / rho at the fields of ``exact`` (cell averages (C, C, *grid) both): the first-
+    order bound of |T(f) - T(exact)| that the nodes' errors reach when they do not cancel."""
+    d, h = grid.dimension, grid.cell_volume
+    points = numpy.asarray(grid.points(), dtype=float)
+    mesh = numpy.meshgrid(*([points] * d), indexing="ij")
+    state = fields(grid, exact)
+    velocity = (state["u1"], state["u2"]) + (0.0,) * (d - 2)
+    spread = sum((m - numpy.asarray(u)[(...,) + (None,) * d]) ** 2
+                 for m, u in zip(mesh, velocity))
+    rho, temperature = (state[k][(...,) + (None,) * d] for k in ("rho", "T"))
+    weight = h * numpy.abs(spread / d - temperature) / rho
+    return float((weight * numpy.abs(f - exact)).sum(axis=tuple(range(2, 2 + d))).mean())
 
 
 def averaged(values, cells: int):
@@ -138,23 +166,49 @@ def main(argv=None) -> int:
         row.update({f"L1_{k}": v for k, v in mean_distances(fields(grid, runs[c]), truth).items()})
         row.update({f"exact_bar_{k}": v for k, v in
                     mean_distances(fields(grid, averaged(rough, c)), truth).items()})
+        exact_f = averaged(fine, c)
+        row["L1_f"] = float(numpy.abs(runs[c] - exact_f).sum(axis=(2, 3)).mean()
+                            * grid.cell_volume)
+        row["bound_T"] = temperature_bound(grid, runs[c], exact_f)
+        for b in BLOCKS:
+            if c % b == 0:
+                row.update({f"block{b}_{k}": v for k, v in mean_distances(
+                    fields(grid, averaged(runs[c], b)),
+                    fields(grid, averaged(fine, b))).items()})
+    measures = [f"L1_{k}" for k in FIELDS + ("f",)] + ["bound_T"] + [
+        f"block{b}_{k}" for b in BLOCKS for k in FIELDS]
     for previous, row in itertools.pairwise(rows):
         ratio = math.log(row["cells"] / previous["cells"])
-        row.update({f"order_{k}": math.log(previous[f"L1_{k}"] / row[f"L1_{k}"]) / ratio
-                    for k in FIELDS})
-    write_csv(out / "box_2d.csv", rows, list(rows[-1]))
+        row.update({f"order_{m}": math.log(previous[m] / row[m]) / ratio
+                    for m in measures if m in previous and m in row})
+    write_csv(out / "box_2d.csv", rows, sorted({k for row in rows for k in row},
+                                              key=list(rows[-1]).index))
     lines = [(f"collisionless box, walls (T, U) = {WALLS}, from the {args.start} state to "
               f"t = {FINAL}; exact state {exact_seconds:.0f} s"), "",
-             ("| cells | L1 rho | L1 u1 | L1 u2 | L1 T | orders rho, u1, u2, T | exact bar "
+             "Mean over the cells of the differences from the exact state (orders below):", "",
+             ("| cells | rho | u1 | u2 | T | int abs(f - f_exact) dv | bound on T | exact bar "
               "rho, T | change over the last 2.4 | seconds |"),
-             "|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    def orders(row, names):
+        return ", ".join(f"{row[f'order_{m}']:.2f}" if f"order_{m}" in row else "—"
+                         for m in names)
     for row in rows:
-        orders = (", ".join(f"{row[f'order_{k}']:.2f}" for k in FIELDS)
-                  if "order_rho" in row else "—")
         lines.append(f"| {row['cells']}^2 | {row['L1_rho']:.3g} | {row['L1_u1']:.3g} | "
-                     f"{row['L1_u2']:.3g} | {row['L1_T']:.3g} | {orders} | "
-                     f"{row['exact_bar_rho']:.1g}, {row['exact_bar_T']:.1g} | "
-                     f"{row['steady_change']:.1g} | {row['seconds']} |")
+                     f"{row['L1_u2']:.3g} | {row['L1_T']:.3g} | {row['L1_f']:.3g} | "
+                     f"{row['bound_T']:.3g} | {row['exact_bar_rho']:.1g}, "
+                     f"{row['exact_bar_T']:.1g} | {row['steady_change']:.1g} | "
+                     f"{row['seconds']} |")
+        if "order_L1_rho" in row:
+            names = [f"L1_{k}" for k in FIELDS + ("f",)] + ["bound_T"]
+            lines.append(f"| order | {orders(row, names).replace(', ', ' | ')} | | | |")
+    for b in BLOCKS:
+        lines += ["", f"The fields averaged over fixed {b} x {b} blocks, then compared:", "",
+                  "| cells | rho | u1 | u2 | T | orders rho, u1, u2, T |", "|---|---|---|---|---|---|"]
+        for row in rows:
+            if f"block{b}_rho" in row:
+                lines.append(f"| {row['cells']}^2 | " + " | ".join(
+                    f"{row[f'block{b}_{k}']:.3g}" for k in FIELDS) + " | " + orders(
+                    row, [f"block{b}_{k}" for k in FIELDS]) + " |")
     text = "\n".join(lines) + "\n"
     (out / "box_2d.md").write_text(text)
     print(text)

@@ -74,3 +74,32 @@ def test_the_state_holds_its_mass_and_a_transport_run_settles_on_it():
     # the state is not uniform: the walls' differences are far above those errors
     assert want["T"].max() - want["T"].min() > 0.1
     assert numpy.abs(want["u1"]).max() > 0.05
+
+
+def test_the_temperature_bound_is_the_first_order_change_of_t_when_the_nodes_agree():
+    """studies/box_2d.py's bound sum_j |dT/df_j| |f_j - g_j|: a perturbation of each node
+    by a small multiple of sign(dT/df_j) moves T by the bound to second order, and any
+    other perturbation of the same sizes moves it less."""
+    import pathlib
+    import sys
+
+    sys.path.insert(0, str(pathlib.Path(__file__).parents[1] / "studies"))
+    from box_2d import fields, temperature_bound
+
+    rng = numpy.random.default_rng(7)
+    base = numpy.stack([numpy.stack([numpy.asarray(GRID.maxwellian(
+        1.0 + 0.2 * rng.random(), [0.3 * rng.random() - 0.1, 0.2 * rng.random()],
+        0.8 + 0.5 * rng.random())) for _ in range(2)]) for _ in range(3)])   # (3, 2, *grid)
+    size = 1e-7 * rng.random(base.shape) * base.max()
+    p = numpy.asarray(GRID.points())
+    v1, v2 = numpy.meshgrid(p, p, indexing="ij")
+    state = fields(GRID, base)
+    weight = [[(v1 - state["u1"][i, j]) ** 2 + (v2 - state["u2"][i, j]) ** 2
+               - 2 * state["T"][i, j] for j in range(2)] for i in range(3)]
+    aligned = base + size * numpy.sign(numpy.asarray(weight))
+    bound = temperature_bound(GRID, aligned, base)
+    moved = numpy.abs(fields(GRID, aligned)["T"] - state["T"]).mean()
+    assert moved == pytest.approx(bound, rel=1e-5)
+    shuffled = base + size * rng.choice([-1.0, 1.0], base.shape)
+    assert numpy.abs(fields(GRID, shuffled)["T"] - state["T"]).mean() < 0.5 * bound
+    assert temperature_bound(GRID, shuffled, base) == pytest.approx(bound, rel=1e-12)
