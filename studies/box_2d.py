@@ -140,15 +140,17 @@ def main(argv=None) -> int:
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     cells = sorted(args.cells)
-    if any(512 % c for c in cells):
-        parser.error(f"--cells {cells}: each must divide 512 (the exact state's grid)")
+    finest = cells[-1]
+    if 256 % finest or any(finest % c for c in cells):
+        parser.error(f"--cells {cells}: each must divide the largest, and the largest 256 "
+                     "(the exact state's grids of 512 and 256 points a side)")
     grid = VelocityGrid(**GRID)
     rest = Simulation(description(cells[0])).problem.f0[0, 0]   # v = 0 keeps f0 there
     began = time.perf_counter()
     exact = FreeMolecularBox(grid, (1.0, 1.0), WALLS, 1.0, rest, panels=512)
-    fine = exact.cell_averages((512 // 16,) * 2, 16)            # 512 x 512 points
+    fine = exact.cell_averages((finest,) * 2, 512 // finest)    # 512 x 512 points
     coarse = FreeMolecularBox(grid, (1.0, 1.0), WALLS, 1.0, rest, panels=256)
-    rough = coarse.cell_averages((256 // 8,) * 2, 8)            # 256 x 256 points
+    rough = coarse.cell_averages((finest,) * 2, 256 // finest)  # 256 x 256 points
     exact_seconds = time.perf_counter() - began
     rows, runs = [], {}
     for c in cells:
