@@ -33,7 +33,7 @@ from granframe.run.runner import Simulation
 from granframe.theory.modes import (density_response, heat_critical_wavenumber, heat_mode,
                                     heat_mode_index, longitudinal_matrix, shear_mode)
 from granframe.theory.sonine import reference_frequency
-from granframe.tools.analysis import (cooling_state_rate, heat_and_sound, last_quarter,
+from granframe.tools.analysis import (cooling_state_rate, heat_mode_rates, last_quarter,
                                       relaxed_rate)
 from granframe.tools.studykit import (draw, finish, json_text, number, numbers,
                                       output_folder, parse_study, print_table, run_study,
@@ -154,28 +154,25 @@ def heat_comparison(ds, e: float, length: float, skip: float, knudsen: float = 1
     measure it)."""
     import scipy.optimize
 
-    temperature = float(ds.temperature.values[-1].mean())
-    nu0 = reference_frequency(knudsen, 1.0, temperature)
-    k_star = 2 * math.pi / length * math.sqrt(temperature) / nu0
-    zeta_g = 2 * cooling_rate(ds, skip) / nu0
-    values = numpy.linalg.eigvals(longitudinal_matrix(e, k_star, zeta_g)) * nu0
     s, amplitude = amplitude_history(ds, length, "heat")
-    fit = heat_and_sound(s, amplitude, complex(values[numpy.argmax(values.imag)]), skip)
+    rates, scales = heat_mode_rates(s, amplitude, e, 2 * math.pi / length,
+                                    float(ds.temperature.values[-1].mean()),
+                                    cooling_rate(ds, skip), skip, knudsen)
+    nu0, k_star, zeta_g = scales["nu0"], scales["k*"], scales["zeta*"]
     late = last_quarter(s, skip)
     projected = heat_projection(ds, e, length, k_star, zeta_g)
 
     def excess(factor):
-        return heat_mode(e, k_star, zeta_g, factor)[0] * nu0 - fit["rate"]
+        return heat_mode(e, k_star, zeta_g, factor)[0] * nu0 - rates["measured rate"]
 
     factor = (scipy.optimize.brentq(excess, 0.25, 4.0) if excess(0.25) * excess(4.0) < 0
               else math.nan)
-    return {"measured rate": fit["rate"],
-            "measured late": float(numpy.polyfit(s[late], numpy.log(amplitude[late]), 1)[0]),
+    return {"measured rate": rates["measured rate"], "measured late": rates["measured late"],
             "projected late": float(numpy.polyfit(s[late], numpy.log(numpy.abs(
                 projected[late])), 1)[0]),
-            "sound/heat": fit["sound/heat"], "fit rms": fit["rms"],
-            "Navier-Stokes rate": heat_mode(e, k_star)[0] * nu0,
-            "Navier-Stokes rate with zeta_g": heat_mode(e, k_star, zeta_g)[0] * nu0,
+            "sound/heat": rates["sound/heat"], "fit rms": rates["fit rms"],
+            "Navier-Stokes rate": rates["Navier-Stokes rate (Sonine zeta)"],
+            "Navier-Stokes rate with zeta_g": rates["Navier-Stokes rate with zeta_g"],
             "Burnett rate with zeta_g": heat_mode(e, k_star, zeta_g, burnett=True)[0] * nu0,
             "conduction": factor, "k_h/k_h Sonine": 1.0 / math.sqrt(factor)}
 

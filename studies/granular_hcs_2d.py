@@ -49,10 +49,10 @@ import numpy
 import granframe
 from granframe.run.description import RunDescription
 from granframe.run.runner import Simulation
-from granframe.theory.modes import heat_mode, longitudinal_matrix, shear_mode
+from granframe.theory.modes import heat_mode, shear_mode
 from granframe.theory.sonine import reference_frequency
-from granframe.tools.analysis import (cluster_monitors, cooling_state_rate, heat_and_sound,
-                                      last_quarter, relaxed_rate)
+from granframe.tools.analysis import (cluster_monitors, cooling_state_rate, heat_mode_rates,
+                                      relaxed_rate)
 from granframe.tools.studykit import (finish, json_text, number, numbers, print_table,
                                       run_study, run_to_stop, save_figure)
 
@@ -110,18 +110,7 @@ def compare_mode(ds, field: str, e: float, k: float, skip: float) -> dict:
                     "Navier-Stokes rate with zeta_g": half_zeta - predicted["eta"] * k * k,
                     "Navier-Stokes rate (Sonine zeta)": predicted["rate"]})
     else:
-        nu0 = reference_frequency(1.0, 1.0, temperature)
-        k_star = k * math.sqrt(temperature) / nu0
-        zeta_g = 2 * half_zeta / nu0
-        values = numpy.linalg.eigvals(longitudinal_matrix(e, k_star, zeta_g)) * nu0
-        fit = heat_and_sound(s, amplitude, complex(values[numpy.argmax(values.imag)]), skip)
-        late = last_quarter(s, skip)
-        row.update({"measured rate": fit["rate"],
-                    "measured late": float(numpy.polyfit(s[late], numpy.log(amplitude[late]),
-                                                         1)[0]),
-                    "sound/heat": fit["sound/heat"], "fit rms": fit["rms"],
-                    "Navier-Stokes rate with zeta_g": heat_mode(e, k_star, zeta_g)[0] * nu0,
-                    "Navier-Stokes rate (Sonine zeta)": heat_mode(e, k_star)[0] * nu0})
+        row.update(heat_mode_rates(s, amplitude, e, k, temperature, half_zeta, skip)[0])
     row["measured - NS(zeta_g)"] = row["measured rate"] - row["Navier-Stokes rate with zeta_g"]
     return row
 

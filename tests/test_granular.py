@@ -24,7 +24,7 @@ from granframe.theory.euler import granular_euler_piston, piston_speed, rankine_
 from granframe.theory.modes import (heat_critical_wavenumber, heat_mode, longitudinal_matrix,
                                     shear_mode)
 from granframe.theory.sonine import reference_frequency
-from granframe.tools.analysis import cluster_monitors
+from granframe.tools.analysis import cluster_monitors, heat_and_sound, heat_mode_rates
 from granframe.tools.studykit import finish, json_text
 
 STUDIES = pathlib.Path(__file__).parent.parent / "studies"
@@ -257,11 +257,37 @@ def test_the_heat_rate_is_read_past_the_sound_it_excites():
     sound, rate = complex(-0.085, 0.41), 0.0148
     amplitude = 0.02 * numpy.exp(rate * s) + numpy.exp(sound.real * s) * (
         -3.6e-4 * numpy.cos(sound.imag * s) + 3e-5 * numpy.sin(sound.imag * s))
-    fit = HCS.heat_and_sound(s, amplitude, sound, 1.0)
+    fit = heat_and_sound(s, amplitude, sound, 1.0)
     assert fit["rate"] == pytest.approx(rate, abs=1e-9) and fit["rms"] < 1e-12
     assert fit["sound/heat"] == pytest.approx(math.hypot(3.6e-4, 3e-5) / 0.02, rel=1e-6)
     keep = s >= 1.0
     assert abs(numpy.polyfit(s[keep], numpy.log(amplitude[keep]), 1)[0] - rate) > 1e-3
+
+
+def test_the_heat_rates_compare_with_navier_stokes_at_the_runs_own_scales():
+    """heat_mode_rates on an amplitude made of a heat rate and the Navier-Stokes sound pair
+    of the run's (k*, zeta*), k* = k sqrt(T_g)/nu_0(T_g), zeta* = zeta_g / nu_0(T_g): the
+    measured rate is the heat rate, and its Navier-Stokes rates are heat_mode's at those
+    scales times nu_0(T_g), with the run's zeta* and with the first Sonine one."""
+    e, k, temperature, half_zeta = 0.9, 0.18, 0.7, 0.02
+    nu0 = reference_frequency(1.0, 1.0, temperature)
+    k_star, zeta = k * math.sqrt(temperature) / nu0, 2 * half_zeta / nu0
+    values = numpy.linalg.eigvals(longitudinal_matrix(e, k_star, zeta)) * nu0
+    sound = complex(values[numpy.argmax(values.imag)])
+    s = numpy.arange(0.0, 4.0001, 0.05)
+    amplitude = 0.02 * numpy.exp(0.0151 * s) + 4e-4 * numpy.exp(sound.real * s) * numpy.cos(
+        sound.imag * s)
+    rates, scales = heat_mode_rates(s, amplitude, e, k, temperature, half_zeta, 1.0)
+    assert scales == pytest.approx({"nu0": nu0, "k*": k_star, "zeta*": zeta}, rel=1e-14)
+    assert rates["measured rate"] == pytest.approx(0.0151, abs=1e-9)
+    assert rates["sound/heat"] == pytest.approx(0.02, rel=1e-6)
+    assert rates["Navier-Stokes rate with zeta_g"] == pytest.approx(
+        heat_mode(e, k_star, zeta)[0] * nu0, rel=1e-14)
+    assert rates["Navier-Stokes rate (Sonine zeta)"] == pytest.approx(
+        heat_mode(e, k_star)[0] * nu0, rel=1e-14)
+    late = s >= 3.25
+    assert rates["measured late"] == pytest.approx(
+        numpy.polyfit(s[late], numpy.log(amplitude[late]), 1)[0], rel=1e-12)
 
 
 def test_the_heat_projection_removes_the_sound_pair():

@@ -186,6 +186,48 @@ def heat_and_sound(s, amplitude, sound: complex, skip: float) -> dict:
             "rms": math.sqrt(residual / s.size) / float(numpy.mean(numpy.abs(amplitude)))}
 
 
+def heat_mode_rates(s, amplitude, restitution: float, wavenumber: float,
+                    temperature: float, half_zeta: float, skip: float,
+                    knudsen: float = 1.0) -> tuple[dict, dict]:
+    r"""The heat mode's rate in s of a rescaled run of 3D hard spheres, measured from the
+    density's amplitude A(s) of its wave, against Navier-Stokes.
+
+    The Navier-Stokes rates are lambda_h(k*, zeta*) nu_0(T_g)
+    (:func:`~granframe.theory.modes.heat_mode`) at k* = k sqrt(T_g) / nu_0(T_g), T_g the
+    run's mean temperature at the end, with zeta* = 2 (zeta_g / 2) / nu_0(T_g) the run's own
+    cooling rate (``half_zeta``, :func:`cooling_state_rate`) and with the first Sonine
+    zeta*. The measured rate is :func:`heat_and_sound`'s, the sound pair taken from the
+    eigenvalues of :func:`~granframe.theory.modes.longitudinal_matrix` (k*, zeta*) of the
+    largest imaginary part; ``measured late`` the straight slope of ln A over the last
+    quarter of s >= ``skip``.
+
+    Returns
+    -------
+    rates : dict
+        ``measured rate``, ``measured late``, ``sound/heat``, ``fit rms``,
+        ``Navier-Stokes rate with zeta_g`` and ``Navier-Stokes rate (Sonine zeta)``.
+    scales : dict
+        ``nu0``, ``k*`` and ``zeta*`` (the run's) of the comparison.
+    """
+    from granframe.theory.modes import heat_mode, longitudinal_matrix
+    from granframe.theory.sonine import reference_frequency
+
+    nu0 = reference_frequency(knudsen, 1.0, temperature)
+    k_star = wavenumber * math.sqrt(temperature) / nu0
+    zeta = 2 * half_zeta / nu0
+    values = numpy.linalg.eigvals(longitudinal_matrix(restitution, k_star, zeta)) * nu0
+    fit = heat_and_sound(s, amplitude, complex(values[numpy.argmax(values.imag)]), skip)
+    s, amplitude = numpy.asarray(s), numpy.asarray(amplitude)
+    late = last_quarter(s, skip)
+    rates = {"measured rate": fit["rate"],
+             "measured late": float(numpy.polyfit(s[late], numpy.log(amplitude[late]),
+                                                  1)[0]),
+             "sound/heat": fit["sound/heat"], "fit rms": fit["rms"],
+             "Navier-Stokes rate with zeta_g": heat_mode(restitution, k_star, zeta)[0] * nu0,
+             "Navier-Stokes rate (Sonine zeta)": heat_mode(restitution, k_star)[0] * nu0}
+    return rates, {"nu0": nu0, "k*": k_star, "zeta*": zeta}
+
+
 def cluster_monitors(ds) -> dict:
     """What the run's monitors say: the largest mass drift, the smallest f, the largest
     negative mass share, the density contrast rho_max/rho_min and the coldest cell's
