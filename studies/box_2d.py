@@ -26,9 +26,11 @@ error that stays:
   h^d (|v_j - u|^2 / d - T) / rho at the exact state), which bounds |T - T_exact| to first
   order: the cells' T error cannot stay above it, nor fall slower than it once the
   nodes' errors no longer cancel in T;
-- ``block<B>_<field>``: the fields of the run and of the exact state both averaged over
-  the same B x B blocks (B = 4, 8) before they are compared: the error in the mean over a
-  fixed region, which a smeared discontinuity leaves at first order.
+- ``block<B>_<field>``: the fields of the run and of the exact state both averaged onto
+  the same fixed grid of B x B blocks (B = 4, 8 blocks a side, whatever the cells) before
+  they are compared: the error in the mean over a fixed region, which a conservative
+  scheme's smearing of a discontinuity moves only by the mass its band carries across the
+  region's edges.
 
     python studies/box_2d.py --out DIR [--cells 8,16,32] [--start exact]
 
@@ -59,7 +61,8 @@ FINAL = 24.0
 #: (T_w, U_w) of the walls left, right, bottom, top
 WALLS = ((1.0, 0.0), (1.5, 0.0), (1.2, 0.3), (0.8, -0.2))
 FIELDS = ("rho", "u1", "u2", "T")
-#: the fixed blocks a side the errors in the mean over a region are measured on
+#: the fixed grids of blocks (blocks a side) the errors of the means over regions are
+#: measured on
 BLOCKS = (4, 8)
 
 
@@ -128,6 +131,70 @@ def averaged(values, cells: int):
     return values.reshape((cells, k, cells, k) + values.shape[2:]).mean(axis=(1, 3))
 
 
+def errors(rows, runs, grid, fine, rough) -> None:
+    """Add to each row (``cells``) the errors of its run (``runs[cells]``, f at the end)
+    from the exact state's cell averages on the finest cells (``fine``; ``rough``: the
+    coarser exact state, for its bar): the fields' and f's mean L1 distances, the bound
+    on T's, the distances over the fixed blocks, and the orders between successive
+    rows."""
+    for row in rows:
+        c = row["cells"]
+        exact_f = averaged(fine, c)
+        truth = fields(grid, exact_f)
+        row.update({f"L1_{k}": v for k, v in mean_distances(fields(grid, runs[c]), truth).items()})
+        row.update({f"exact_bar_{k}": v for k, v in
+                    mean_distances(fields(grid, averaged(rough, c)), truth).items()})
+        row["L1_f"] = float(numpy.abs(runs[c] - exact_f).sum(axis=(2, 3)).mean()
+                            * grid.cell_volume)
+        row["bound_T"] = temperature_bound(grid, runs[c], exact_f)
+        for b in BLOCKS:
+            if c % b == 0:
+                row.update({f"block{b}_{k}": v for k, v in mean_distances(
+                    fields(grid, averaged(runs[c], b)),
+                    fields(grid, averaged(fine, b))).items()})
+    measures = [f"L1_{k}" for k in FIELDS + ("f",)] + ["bound_T"] + [
+        f"block{b}_{k}" for b in BLOCKS for k in FIELDS]
+    for previous, row in itertools.pairwise(rows):
+        ratio = math.log(row["cells"] / previous["cells"])
+        row.update({f"order_{m}": math.log(previous[m] / row[m]) / ratio
+                    for m in measures if m in previous and m in row})
+
+
+def _orders(row, names) -> str:
+    """The row's orders of the measures ``names``, "—" where it has none."""
+    return ", ".join(f"{row[f'order_{m}']:.2f}" if f"order_{m}" in row else "—"
+                     for m in names)
+
+
+def markdown(rows, start: str, exact_seconds: float) -> str:
+    """The rows of :func:`errors` as markdown tables: the cells' errors with their orders,
+    then those over each of :data:`BLOCKS`."""
+    lines = [(f"collisionless box, walls (T, U) = {WALLS}, from the {start} state to "
+              f"t = {FINAL}; exact state {exact_seconds:.0f} s"), "",
+             "Mean over the cells of the differences from the exact state (orders below):", "",
+             ("| cells | rho | u1 | u2 | T | int abs(f - f_exact) dv | bound on T | exact bar "
+              "rho, T | change over the last 2.4 | seconds |"),
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for row in rows:
+        lines.append(f"| {row['cells']}^2 | {row['L1_rho']:.3g} | {row['L1_u1']:.3g} | "
+                     f"{row['L1_u2']:.3g} | {row['L1_T']:.3g} | {row['L1_f']:.3g} | "
+                     f"{row['bound_T']:.3g} | {row['exact_bar_rho']:.1g}, "
+                     f"{row['exact_bar_T']:.1g} | {row['steady_change']:.1g} | "
+                     f"{row['seconds']} |")
+        if "order_L1_rho" in row:
+            names = [f"L1_{k}" for k in FIELDS + ("f",)] + ["bound_T"]
+            lines.append(f"| order | {_orders(row, names).replace(', ', ' | ')} | | | |")
+    for b in BLOCKS:
+        lines += ["", f"The fields averaged onto a fixed grid of {b} x {b} blocks, then compared:", "",
+                  "| cells | rho | u1 | u2 | T | orders rho, u1, u2, T |", "|---|---|---|---|---|---|"]
+        for row in rows:
+            if f"block{b}_rho" in row:
+                lines.append(f"| {row['cells']}^2 | " + " | ".join(
+                    f"{row[f'block{b}_{k}']:.3g}" for k in FIELDS) + " | " + _orders(
+                    row, [f"block{b}_{k}" for k in FIELDS]) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", required=True, help="folder of the table and the figure")
@@ -162,56 +229,9 @@ def main(argv=None) -> int:
         rows.append({"cells": c, "steps": steps, "seconds": round(time.perf_counter() - began, 1),
                      "steady_change": change})
         print(rows[-1], flush=True)
-    for row in rows:
-        c = row["cells"]
-        truth = fields(grid, averaged(fine, c))
-        row.update({f"L1_{k}": v for k, v in mean_distances(fields(grid, runs[c]), truth).items()})
-        row.update({f"exact_bar_{k}": v for k, v in
-                    mean_distances(fields(grid, averaged(rough, c)), truth).items()})
-        exact_f = averaged(fine, c)
-        row["L1_f"] = float(numpy.abs(runs[c] - exact_f).sum(axis=(2, 3)).mean()
-                            * grid.cell_volume)
-        row["bound_T"] = temperature_bound(grid, runs[c], exact_f)
-        for b in BLOCKS:
-            if c % b == 0:
-                row.update({f"block{b}_{k}": v for k, v in mean_distances(
-                    fields(grid, averaged(runs[c], b)),
-                    fields(grid, averaged(fine, b))).items()})
-    measures = [f"L1_{k}" for k in FIELDS + ("f",)] + ["bound_T"] + [
-        f"block{b}_{k}" for b in BLOCKS for k in FIELDS]
-    for previous, row in itertools.pairwise(rows):
-        ratio = math.log(row["cells"] / previous["cells"])
-        row.update({f"order_{m}": math.log(previous[m] / row[m]) / ratio
-                    for m in measures if m in previous and m in row})
-    write_csv(out / "box_2d.csv", rows, sorted({k for row in rows for k in row},
-                                              key=list(rows[-1]).index))
-    lines = [(f"collisionless box, walls (T, U) = {WALLS}, from the {args.start} state to "
-              f"t = {FINAL}; exact state {exact_seconds:.0f} s"), "",
-             "Mean over the cells of the differences from the exact state (orders below):", "",
-             ("| cells | rho | u1 | u2 | T | int abs(f - f_exact) dv | bound on T | exact bar "
-              "rho, T | change over the last 2.4 | seconds |"),
-             "|---|---|---|---|---|---|---|---|---|---|"]
-    def orders(row, names):
-        return ", ".join(f"{row[f'order_{m}']:.2f}" if f"order_{m}" in row else "—"
-                         for m in names)
-    for row in rows:
-        lines.append(f"| {row['cells']}^2 | {row['L1_rho']:.3g} | {row['L1_u1']:.3g} | "
-                     f"{row['L1_u2']:.3g} | {row['L1_T']:.3g} | {row['L1_f']:.3g} | "
-                     f"{row['bound_T']:.3g} | {row['exact_bar_rho']:.1g}, "
-                     f"{row['exact_bar_T']:.1g} | {row['steady_change']:.1g} | "
-                     f"{row['seconds']} |")
-        if "order_L1_rho" in row:
-            names = [f"L1_{k}" for k in FIELDS + ("f",)] + ["bound_T"]
-            lines.append(f"| order | {orders(row, names).replace(', ', ' | ')} | | | |")
-    for b in BLOCKS:
-        lines += ["", f"The fields averaged over fixed {b} x {b} blocks, then compared:", "",
-                  "| cells | rho | u1 | u2 | T | orders rho, u1, u2, T |", "|---|---|---|---|---|---|"]
-        for row in rows:
-            if f"block{b}_rho" in row:
-                lines.append(f"| {row['cells']}^2 | " + " | ".join(
-                    f"{row[f'block{b}_{k}']:.3g}" for k in FIELDS) + " | " + orders(
-                    row, [f"block{b}_{k}" for k in FIELDS]) + " |")
-    text = "\n".join(lines) + "\n"
+    errors(rows, runs, grid, fine, rough)
+    write_csv(out / "box_2d.csv", rows, list(rows[-1]))
+    text = markdown(rows, args.start, exact_seconds)
     (out / "box_2d.md").write_text(text)
     print(text)
     _figure(out / "box_2d.png", grid, runs[cells[-1]], averaged(fine, cells[-1]), cells[-1])

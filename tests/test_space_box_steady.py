@@ -50,7 +50,7 @@ def test_the_state_holds_its_mass_and_a_transport_run_settles_on_it():
     steady (the L1 change of f over the last 2.4 below 1e-5), and its density, velocity and
     temperature within the scheme's error on 6 x 6 cells of the exact state's cell averages
     (the exact state's own bar, panels and points halved, is 5e-5 there; the study
-    studies/box_2d.py refines the cells: about first order)."""
+    studies/box_2d.py refines the cells)."""
     import pathlib
     import sys
 
@@ -103,3 +103,35 @@ def test_the_temperature_bound_is_the_first_order_change_of_t_when_the_nodes_agr
     shuffled = base + size * rng.choice([-1.0, 1.0], base.shape)
     assert numpy.abs(fields(GRID, shuffled)["T"] - state["T"]).mean() < 0.5 * bound
     assert temperature_bound(GRID, shuffled, base) == pytest.approx(bound, rel=1e-12)
+
+
+def test_the_block_errors_see_through_a_shift_inside_the_blocks():
+    """studies/box_2d.py's errors on 8 x 8 cells: a run that is the exact state with two
+    cells exchanged inside every block of the 4 x 4 grid of blocks (2 x 2 cells each) has
+    errors in its cells and none (round-off) over those blocks, while on the 8 x 8 grid of
+    blocks (its cells) they are the cells' errors; a run off by a uniform factor has the
+    same error on both."""
+    import pathlib
+    import sys
+
+    sys.path.insert(0, str(pathlib.Path(__file__).parents[1] / "studies"))
+    from box_2d import errors, fields
+
+    rng = numpy.random.default_rng(3)
+    exact = numpy.stack([numpy.stack([numpy.asarray(GRID.maxwellian(
+        1.0 + rng.random(), [0.2 * rng.random(), 0.0], 0.8 + rng.random()))
+        for _ in range(8)]) for _ in range(8)])                       # (8, 8, *grid)
+    swapped = exact.copy()
+    swapped[0::2, 0::2], swapped[1::2, 1::2] = exact[1::2, 1::2], exact[0::2, 0::2]
+    rows = [{"cells": 8}]
+    errors(rows, {8: swapped}, GRID, exact, exact)
+    row = rows[0]
+    assert min(row[f"L1_{k}"] for k in ("rho", "u1", "T")) > 1e-3
+    assert row["L1_f"] > 1e-2 and row["bound_T"] >= row["L1_T"]
+    assert max(row[f"block4_{k}"] for k in ("rho", "u1", "u2", "T")) < 1e-13
+    assert all(row[f"block8_{k}"] == row[f"L1_{k}"] for k in ("rho", "u1", "u2", "T"))
+    scaled = [{"cells": 8}]
+    errors(scaled, {8: 1.01 * exact}, GRID, exact, exact)
+    rho = fields(GRID, exact)["rho"]
+    assert scaled[0]["L1_rho"] == pytest.approx(0.01 * rho.mean(), rel=1e-12)
+    assert scaled[0]["block4_rho"] == pytest.approx(0.01 * rho.mean(), rel=1e-12)
