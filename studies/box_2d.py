@@ -35,8 +35,8 @@ error that stays:
     python studies/box_2d.py --out DIR [--cells 8,16,32] [--start exact]
 
 writes ``box_2d.csv``, ``box_2d.md``, ``box_2d.png`` (rho, T and the speed of the finest
-run and of the exact state) and each run's f at t = 24 (``box_<C>.npy``). About 30 minutes
-on two cores for 8, 16, 32 cells, beside another study.
+run and of the exact state) and each run's f at t = 24 (``box_<C>.npy``). About 15 minutes
+for 8, 16, 32 cells, and 99 more for 64 (each run on one core, beside other jobs).
 """
 
 from __future__ import annotations
