@@ -32,7 +32,7 @@ error that stays:
   scheme's smearing of a discontinuity moves only by the mass its band carries across the
   region's edges.
 
-    python studies/box_2d.py --out DIR [--cells 8,16,32] [--start exact]
+    python studies/box_2d.py --out DIR [--cells 8,16,32] [--start exact] [--reconstruction muscl]
 
 writes ``box_2d.csv``, ``box_2d.md``, ``box_2d.png`` (rho, T and the speed of the finest
 run and of the exact state) and each run's f at t = 24 (``box_<C>.npy``). About 15 minutes
@@ -66,7 +66,8 @@ FIELDS = ("rho", "u1", "u2", "T")
 BLOCKS = (4, 8)
 
 
-def description(cells: int, final: float = FINAL) -> RunDescription:
+def description(cells: int, final: float = FINAL,
+                reconstruction: str = "muscl") -> RunDescription:
     """The collisionless run on ``cells`` x ``cells`` cells, ten snapshots."""
     grid = VelocityGrid(**GRID)
     limit = box_step_limit(grid, (1.0 / cells, 1.0 / cells), 0.5)
@@ -79,14 +80,15 @@ def description(cells: int, final: float = FINAL) -> RunDescription:
         "initial": {"name": "maxwellian"}, "operator": {"name": "fast_spectral"},
         "backend": {"name": "numpy", "threads": 1}, "time_step": final / steps,
         "final_time": final, "output": {"snapshot_interval": final / 10},
-        "space": {"cells": [cells, cells], "collisions": False, **walls}})
+        "space": {"cells": [cells, cells], "collisions": False,
+                  "reconstruction": reconstruction, **walls}})
 
 
-def stepped(cells: int, start=None) -> tuple:
+def stepped(cells: int, start=None, reconstruction: str = "muscl") -> tuple:
     """f at t = 24 of the run on ``cells`` x ``cells`` cells from ``start`` (cell averages;
     None: the description's Maxwellian), the relative L1 change of f over the last tenth
     of the run, and the steps."""
-    d = description(cells)
+    d = description(cells, reconstruction=reconstruction)
     problem = Simulation(d).problem
     state = problem.state(problem.f0 if start is None else start)
     steps = round(d.final_time / d.time_step)
@@ -166,11 +168,11 @@ def _orders(row, names) -> str:
                      for m in names)
 
 
-def markdown(rows, start: str, exact_seconds: float) -> str:
+def markdown(rows, start: str, reconstruction: str, exact_seconds: float) -> str:
     """The rows of :func:`errors` as markdown tables: the cells' errors with their orders,
     then those over each of :data:`BLOCKS`."""
     lines = [(f"collisionless box, walls (T, U) = {WALLS}, from the {start} state to "
-              f"t = {FINAL}; exact state {exact_seconds:.0f} s"), "",
+              f"t = {FINAL}, {reconstruction}; exact state {exact_seconds:.0f} s"), "",
              "Mean over the cells of the differences from the exact state (orders below):", "",
              ("| cells | rho | u1 | u2 | T | int abs(f - f_exact) dv | bound on T | exact bar "
               "rho, T | change over the last 2.4 | seconds |"),
@@ -203,6 +205,8 @@ def main(argv=None) -> int:
     parser.add_argument("--start", choices=("exact", "maxwellian"), default="exact",
                         help="the initial data: the exact state's cell averages (default) or "
                              "the Maxwellian at rest at T = 1")
+    parser.add_argument("--reconstruction", choices=("muscl", "weno5", "upwind"),
+                        default="muscl", help="the transport's reconstruction (default muscl)")
     args = parser.parse_args(argv)
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -223,7 +227,7 @@ def main(argv=None) -> int:
     for c in cells:
         began = time.perf_counter()
         start = averaged(fine, c) if args.start == "exact" else None
-        f, change, steps = stepped(c, start)
+        f, change, steps = stepped(c, start, args.reconstruction)
         runs[c] = f
         numpy.save(out / f"box_{c}.npy", f)
         rows.append({"cells": c, "steps": steps, "seconds": round(time.perf_counter() - began, 1),
@@ -231,7 +235,7 @@ def main(argv=None) -> int:
         print(rows[-1], flush=True)
     errors(rows, runs, grid, fine, rough)
     write_csv(out / "box_2d.csv", rows, list(rows[-1]))
-    text = markdown(rows, args.start, exact_seconds)
+    text = markdown(rows, args.start, args.reconstruction, exact_seconds)
     (out / "box_2d.md").write_text(text)
     print(text)
     _figure(out / "box_2d.png", grid, runs[cells[-1]], averaged(fine, cells[-1]), cells[-1])
